@@ -1,0 +1,5 @@
+"""``python -m odohil`` runs the command-line interface."""
+
+from odohil.cli.app import main
+
+main()

@@ -1,0 +1,1 @@
+"""Layer 5: typer commands and rich rendering only."""

@@ -1,0 +1,255 @@
+"""Encoder-measured paths: straight legs and in-place turns.
+
+A path is what the encoders say the robot did. In Martinelli's model the error
+grows with the distance driven only, so in-place turns are error free and every
+leg is a straight run at constant encoder heading.
+
+Reading of eq. (2) for legs driven backwards: the encoder distance of each
+segment, delta-rho-bar, is signed (negative when reversing), so the systematic
+terms E_T delta-rho-bar and E_R delta-rho-bar change sign with it; the
+variances (eqs. 10-14) grow with the distance driven, |delta-rho-bar|. For the
+``turn`` variant of the forth-and-back motion this is the paper's motion; for
+``reverse`` it means the systematic heading drift of the way out is undone on
+the way back.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from odohil.errors import ParameterError
+
+Variant = Literal["turn", "reverse"]
+VARIANTS: tuple[Variant, ...] = ("turn", "reverse")
+
+FloatArray = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Leg:
+    """A straight run at constant encoder heading.
+
+    Attributes:
+        length_m: encoder distance in metres; negative drives backwards
+            without turning.
+    """
+
+    length_m: float
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.length_m) or self.length_m == 0.0:
+            raise ParameterError(f"a leg needs a finite non-zero length, got {self.length_m!r} m")
+
+
+@dataclass(frozen=True)
+class Turn:
+    """An in-place turn (no distance driven), counter-clockwise positive.
+
+    Attributes:
+        angle_rad: encoder heading change in radians.
+    """
+
+    angle_rad: float
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.angle_rad):
+            raise ParameterError(f"a turn needs a finite angle, got {self.angle_rad!r} rad")
+
+
+Step = Leg | Turn
+
+
+@dataclass(frozen=True)
+class LegTable:
+    """The legs of a path as arrays, one entry per leg (turns folded in).
+
+    Attributes:
+        heading_rad: encoder heading during the leg, relative to the start.
+        sign: +1 driving forwards, -1 reversing.
+        length_m: distance driven, |encoder distance|, metres.
+        start_arc_m: distance driven before the leg starts, metres.
+        start_signed_m: signed encoder distance before the leg starts, metres
+            (what E_R multiplies).
+    """
+
+    heading_rad: FloatArray
+    sign: FloatArray
+    length_m: FloatArray
+    start_arc_m: FloatArray
+    start_signed_m: FloatArray
+
+
+@dataclass(frozen=True)
+class EncoderPath:
+    """A sequence of legs and in-place turns, as measured by the encoders."""
+
+    steps: tuple[Step, ...]
+    name: str = ""
+    _legs: LegTable = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        if not any(isinstance(step, Leg) for step in self.steps):
+            raise ParameterError("a path needs at least one leg")
+        heading, arc, signed = 0.0, 0.0, 0.0
+        rows: list[tuple[float, float, float, float, float]] = []
+        for step in self.steps:
+            if isinstance(step, Turn):
+                heading += step.angle_rad
+                continue
+            sign = 1.0 if step.length_m > 0 else -1.0
+            rows.append((heading, sign, abs(step.length_m), arc, signed))
+            arc += abs(step.length_m)
+            signed += step.length_m
+        table = np.array(rows, dtype=np.float64)
+        legs = LegTable(
+            heading_rad=table[:, 0].copy(),
+            sign=table[:, 1].copy(),
+            length_m=table[:, 2].copy(),
+            start_arc_m=table[:, 3].copy(),
+            start_signed_m=table[:, 4].copy(),
+        )
+        object.__setattr__(self, "_legs", legs)
+
+    @property
+    def legs(self) -> LegTable:
+        """The legs as arrays (see :class:`LegTable`)."""
+        return self._legs
+
+    @property
+    def distance_m(self) -> float:
+        """Total distance driven, rho-bar, metres."""
+        return float(self._legs.length_m.sum())
+
+    @property
+    def signed_distance_m(self) -> float:
+        """Sum of signed encoder distances, metres (what E_R multiplies in total)."""
+        return float((self._legs.sign * self._legs.length_m).sum())
+
+    @property
+    def net_turn_rad(self) -> float:
+        """Sum of the in-place turns, radians, not reduced modulo 2 pi."""
+        return float(sum(step.angle_rad for step in self.steps if isinstance(step, Turn)))
+
+    @property
+    def winding_rad(self) -> float:
+        """The multiple of 2 pi nearest to the net turn, radians.
+
+        Pose changes report the heading change minus this, so that a closed
+        path's heading change is near zero rather than near 2 pi m.
+        """
+        return 2.0 * math.pi * round(self.net_turn_rad / (2.0 * math.pi))
+
+    def encoder_end_pose(self) -> tuple[float, float, float]:
+        """Where the encoders say the path ends: (x m, y m, theta rad), theta
+        relative to the start and reduced by :attr:`winding_rad`."""
+        legs = self._legs
+        x = float((legs.sign * legs.length_m * np.cos(legs.heading_rad)).sum())
+        y = float((legs.sign * legs.length_m * np.sin(legs.heading_rad)).sum())
+        return (x, y, self.net_turn_rad - self.winding_rad)
+
+
+def _leg_count(k: float) -> int:
+    legs = 2.0 * k
+    if not math.isfinite(legs) or legs < 1 or abs(legs - round(legs)) > 1e-9:
+        raise ParameterError(f"k must be a positive multiple of 1/2, got {k!r}")
+    return round(legs)
+
+
+@dataclass(frozen=True)
+class Design:
+    """One forth-and-back experiment design: 2k legs of length l.
+
+    Attributes:
+        k: number of forth-and-back pairs; a multiple of 1/2 (k = 1/2 is a
+            one-way run).
+        l_m: leg length in metres.
+        variant: ``turn`` (180 degree turn in place at each end) or
+            ``reverse`` (drive back without turning).
+    """
+
+    k: float
+    l_m: float
+    variant: Variant = "turn"
+
+    def __post_init__(self) -> None:
+        _leg_count(self.k)
+        if not math.isfinite(self.l_m) or self.l_m <= 0:
+            raise ParameterError(f"l must be a positive length in metres, got {self.l_m!r}")
+        if self.variant not in VARIANTS:
+            raise ParameterError(f"variant must be one of {VARIANTS}, got {self.variant!r}")
+
+    @property
+    def n_legs(self) -> int:
+        """Number of legs, 2k."""
+        return _leg_count(self.k)
+
+    @property
+    def distance_m(self) -> float:
+        """Distance driven by one trial, 2kl, metres."""
+        return self.n_legs * self.l_m
+
+    def path(self) -> EncoderPath:
+        """The encoder path of one trial."""
+        return forth_and_back(self.k, self.l_m, self.variant)
+
+    def label(self) -> str:
+        """A short human-readable name, e.g. ``k=20 l=0.5 m turn``."""
+        return f"k={self.k:g} l={self.l_m:g} m {self.variant}"
+
+
+def forth_and_back(k: float, l_m: float, variant: Variant = "turn") -> EncoderPath:
+    """Straight forth and back k times over length l (section 4).
+
+    ``turn``: leg, 180 degree turn, leg, 180 degree turn, ...; with an even
+    number of legs the path ends with a turn, so the encoders report the start
+    pose. ``reverse``: +l, -l, +l, ... without turning. Half-integer k ends at
+    the far end (k = 1/2 is one straight run).
+    """
+    design = Design(k, l_m, variant)
+    n_legs = design.n_legs
+    steps: list[Step] = []
+    for index in range(n_legs):
+        if variant == "turn":
+            steps.append(Leg(l_m))
+            if index < n_legs - 1 or n_legs % 2 == 0:
+                steps.append(Turn(math.pi))
+        else:
+            steps.append(Leg(l_m if index % 2 == 0 else -l_m))
+    return EncoderPath(tuple(steps), name=f"forth-and-back {design.label()}")
+
+
+def square(side_m: float, counter_clockwise: bool = True) -> EncoderPath:
+    """A square of the given side, turning 90 degrees in place at each corner."""
+    return regular_polygon(4, side_m, counter_clockwise, name=f"square {side_m:g} m")
+
+
+def polygonal_circle(radius_m: float, n_sides: int, counter_clockwise: bool = True) -> EncoderPath:
+    """A regular polygon with n sides inscribed in a circle of the given radius."""
+    if n_sides < 3:
+        raise ParameterError(f"a polygon needs at least 3 sides, got {n_sides}")
+    if not math.isfinite(radius_m) or radius_m <= 0:
+        raise ParameterError(f"radius must be a positive length in metres, got {radius_m!r}")
+    side = 2.0 * radius_m * math.sin(math.pi / n_sides)
+    return regular_polygon(
+        n_sides, side, counter_clockwise, name=f"circle r={radius_m:g} m, {n_sides} sides"
+    )
+
+
+def regular_polygon(
+    n_sides: int, side_m: float, counter_clockwise: bool = True, name: str = ""
+) -> EncoderPath:
+    """A closed regular polygon: n legs, each followed by an exterior turn."""
+    if n_sides < 3:
+        raise ParameterError(f"a polygon needs at least 3 sides, got {n_sides}")
+    if not math.isfinite(side_m) or side_m <= 0:
+        raise ParameterError(f"side must be a positive length in metres, got {side_m!r}")
+    turn = (2.0 * math.pi / n_sides) * (1.0 if counter_clockwise else -1.0)
+    steps: list[Step] = []
+    for _ in range(n_sides):
+        steps += [Leg(side_m), Turn(turn)]
+    return EncoderPath(tuple(steps), name=name or f"polygon {n_sides}x{side_m:g} m")
