@@ -12,7 +12,7 @@ import typer
 
 from odohil import __version__
 
-COMMAND_MODULES: tuple[str, ...] = ()
+COMMAND_MODULES: tuple[str, ...] = ("emulate",)
 
 app = typer.Typer(
     name="odohil",

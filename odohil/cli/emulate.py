@@ -1,0 +1,62 @@
+"""``odohil emulate``: serve a fake Nomad 150 on a pseudo-terminal."""
+
+from __future__ import annotations
+
+import logging
+from typing import Annotated
+
+import typer
+
+from fakes.nomad.config import build_config
+from fakes.nomad.faults import FAULT_NAMES
+from fakes.nomad.pacing import DEFAULT_BAUD
+from fakes.nomad.run import run_emulator
+from odohil.errors import OdohilError
+from odohil.science.parameters import NOMAD150
+
+_PAPER = NOMAD150.to_paper_units()
+_FAULT_HELP = f"NAME[:CODE][@N], repeatable; NAME one of {', '.join(FAULT_NAMES)}."
+
+
+def emulate(
+    seed: int | None = typer.Option(None, "--seed", help="Seed of the odometry noise."),
+    e_r: float = typer.Option(_PAPER["E_R"], "--E-R", help="Systematic E_R, deg/m."),
+    e_t: float = typer.Option(_PAPER["E_T"], "--E-T", help="Systematic E_T (no unit)."),
+    k_theta: float = typer.Option(_PAPER["K_theta"], "--K-theta", help="K_theta, deg^2/m."),
+    k_rho: float = typer.Option(_PAPER["K_rho"], "--K-rho", help="K_rho, m."),
+    time_scale: float = typer.Option(
+        1.0, "--time-scale", help="Simulated seconds per wall second (motion, zr, timestamp)."
+    ),
+    baud: int = typer.Option(DEFAULT_BAUD, "--baud", help="Line rate for reply pacing."),
+    pacing: bool = typer.Option(
+        True, "--pacing/--no-pacing", help="Trickle replies out at the line rate."
+    ),
+    fault: Annotated[list[str] | None, typer.Option("--fault", help=_FAULT_HELP)] = None,
+    truth_socket: str | None = typer.Option(
+        None, "--truth-socket", help="UNIX socket path for the true pose (default: a temp path)."
+    ),
+    verbose: bool = typer.Option(False, "--verbose", help="Log protocol events to stderr."),
+) -> None:
+    """Serve a fake Nomad 150 on a pseudo-terminal until Ctrl-C.
+
+    Prints the device path (first line) and the truth socket path (second line).
+    """
+    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
+    try:
+        config = build_config(
+            seed=seed,
+            e_r_deg_per_m=e_r,
+            e_t=e_t,
+            k_theta_deg2_per_m=k_theta,
+            k_rho_m=k_rho,
+            time_scale=time_scale,
+            faults=fault or [],
+        )
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    run_emulator(config, baud=baud, pacing=pacing, truth_socket=truth_socket)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``emulate`` to the ``odohil`` app."""
+    app.command("emulate")(emulate)
