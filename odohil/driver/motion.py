@@ -1,0 +1,149 @@
+"""Forth-and-back runs on the robot: legs are ``pr(trans)``, turns ``pr(0, steer)``.
+
+After each step the encoders must end where the command says (within a
+tolerance in wire units); otherwise the robot is stopped and MotionError
+raised. Lengths and angles are realised in whole wire units; the record
+keeps what was actually commanded.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+from odohil.driver.robot import NomadRobot
+from odohil.driver.sample import EncoderSample
+from odohil.errors import MotionError, ParameterError
+from odohil.protocol.messages import Pr
+from odohil.science.paths import Design, Leg
+from odohil.units import (
+    WIRE_ANGLES_PER_TURN,
+    metres_to_wire,
+    radians_to_wire,
+    wire_to_radians,
+    wrap_angle,
+)
+
+DEFAULT_TOLERANCE_WIRE = 2
+DEFAULT_STEP_TIMEOUT_S = 120.0
+DEFAULT_SPEEDS = (0.5, math.radians(45.0))
+"""Translation m/s and steering rad/s for the run (within the N150 client maxima)."""
+DEFAULT_ACCELERATIONS = (0.5, math.radians(30.0))
+"""Translation m/s^2 and steering rad/s^2 for the run."""
+
+
+@dataclass(frozen=True)
+class MotionRecord:
+    """What one forth-and-back run commanded and what the encoders reported.
+
+    Attributes:
+        design: the experiment design run.
+        commands: the ``pr`` commands sent, wire units, in order.
+        samples: every encoder sample taken during the run, in time order.
+        step_ends: the encoder sample at the end of each step.
+        start, end: encoder samples before the first and after the last step.
+        end_pose: encoder end pose relative to the start, in the start frame
+            (x m, y m, heading change rad reduced to (-pi, pi]).
+        started_s, ended_s: host monotonic times of the run, s.
+    """
+
+    design: Design
+    commands: tuple[Pr, ...]
+    samples: tuple[EncoderSample, ...]
+    step_ends: tuple[EncoderSample, ...]
+    start: EncoderSample
+    end: EncoderSample
+    end_pose: tuple[float, float, float]
+    started_s: float
+    ended_s: float
+
+    @property
+    def duration_s(self) -> float:
+        """Wall time of the run, s."""
+        return self.ended_s - self.started_s
+
+
+def relative_pose(start: EncoderSample, end: EncoderSample) -> tuple[float, float, float]:
+    """``end`` in the frame of ``start``: (x m, y m, heading change rad in (-pi, pi])."""
+    dx, dy = end.x_m - start.x_m, end.y_m - start.y_m
+    c, s = math.cos(start.steer_rad), math.sin(start.steer_rad)
+    return (c * dx + s * dy, -s * dx + c * dy, wrap_angle(end.steer_rad - start.steer_rad))
+
+
+def _angle_diff_wire(a: int, b: int) -> int:
+    d = (a - b) % WIRE_ANGLES_PER_TURN
+    return d - WIRE_ANGLES_PER_TURN if d > WIRE_ANGLES_PER_TURN // 2 else d
+
+
+def _check_step(
+    robot: NomadRobot, before: EncoderSample, after: EncoderSample, cmd: Pr, tolerance: int
+) -> None:
+    heading = wire_to_radians(before.steer_wire)
+    want_x = before.x_wire + cmd.trans * math.cos(heading)
+    want_y = before.y_wire + cmd.trans * math.sin(heading)
+    want_steer = (before.steer_wire + cmd.steer) % WIRE_ANGLES_PER_TURN
+    errors = (
+        abs(after.x_wire - want_x),
+        abs(after.y_wire - want_y),
+        abs(_angle_diff_wire(after.steer_wire, want_steer)),
+    )
+    if max(errors) > tolerance:
+        robot.stop()
+        raise MotionError(
+            f"pr({cmd.trans}, {cmd.steer}, {cmd.turret}) ended at {after.pose_text()}, "
+            f"expected x={want_x:.1f} y={want_y:.1f} steer={want_steer} "
+            f"(tolerance {tolerance} wire units); robot stopped"
+        )
+
+
+def forth_and_back(
+    robot: NomadRobot,
+    design: Design,
+    *,
+    tolerance_wire: int = DEFAULT_TOLERANCE_WIRE,
+    step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
+    speeds: tuple[float, float] = DEFAULT_SPEEDS,
+    accelerations: tuple[float, float] = DEFAULT_ACCELERATIONS,
+) -> MotionRecord:
+    """Drive one trial of ``design`` and record the encoders (gs polling).
+
+    First sets ``speeds`` (translation m/s, steering rad/s) and
+    ``accelerations`` (m/s^2, rad/s^2); a ``pr`` with zero speed would not move.
+
+    Raises MotionError if a step ends off its commanded encoder pose, and
+    whatever the robot raises (after ``st``) on protocol errors or timeouts.
+    """
+    if tolerance_wire < 0:
+        raise ParameterError(f"tolerance must be >= 0 wire units, got {tolerance_wire}")
+    samples: list[EncoderSample] = []
+    commands: list[Pr] = []
+    step_ends: list[EncoderSample] = []
+    started = time.monotonic()
+    robot.set_accelerations(accelerations[0], accelerations[1], accelerations[1])
+    robot.set_speeds(speeds[0], speeds[1], speeds[1])
+    start = robot.state()
+    samples.append(start)
+    before = start
+    for step in design.path().steps:
+        if isinstance(step, Leg):
+            cmd = robot.move_relative_wire(metres_to_wire(step.length_m), 0, 0)
+        else:
+            cmd = robot.move_relative_wire(0, radians_to_wire(step.angle_rad), 0)
+        commands.append(cmd)
+        after = robot.poll_until_stopped(step_timeout_s, samples.append)
+        _check_step(robot, before, after, cmd, tolerance_wire)
+        step_ends.append(after)
+        before = after
+    end = before
+    return MotionRecord(
+        design=design,
+        commands=tuple(commands),
+        samples=tuple(samples),
+        step_ends=tuple(step_ends),
+        start=start,
+        end=end,
+        end_pose=relative_pose(start, end),
+        started_s=started,
+        ended_s=time.monotonic(),
+    )

@@ -1,0 +1,298 @@
+"""``NomadRobot``: one connection to a Nomad 150, with SI methods.
+
+Strict request/reply; a motion command is never resent (CHOICE C11). After
+any failed request the robot is resynchronised with ``gs`` and the error
+names the last encoder pose; any failure during a motion, and Ctrl-C, sends
+``st`` first.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from collections.abc import Callable, Iterator
+from types import TracebackType
+
+from odohil.driver.link import (
+    DEFAULT_BAUD,
+    NORMAL_TIMEOUT_S,
+    ZR_TIMEOUT_S,
+    Link,
+    Port,
+    open_port,
+)
+from odohil.driver.sample import EncoderSample
+from odohil.errors import (
+    ConnectionFailedError,
+    DisconnectedError,
+    OdohilError,
+    OdohilTimeoutError,
+    ParameterError,
+)
+from odohil.protocol import messages as m
+from odohil.protocol.codes import MOTION_CODES
+from odohil.protocol.replies import decode_reply
+from odohil.protocol.state import N150_MASK, RobotState, StateMask
+from odohil.units import WIRE_ANGLES_PER_TURN, metres_to_wire, radians_to_wire
+
+WS_MAX_S = 255
+S16_MAX = 0x7FFF
+U16_MAX = 0xFFFF
+
+
+def _wire_s16(value: int, what: str) -> int:
+    if abs(value) > S16_MAX:
+        raise ParameterError(f"{what} is {value} wire units, beyond the s16 range")
+    return value
+
+
+def _rate(value: float, to_wire: Callable[[float], int], what: str) -> int:
+    # Rates use the same factor as the quantity: 0.1 in/s, 0.1 deg/s, ...
+    if not math.isfinite(value) or value < 0:
+        raise ParameterError(f"{what} must be finite and >= 0, got {value!r}")
+    wire = to_wire(value)
+    if wire > U16_MAX:
+        raise ParameterError(f"{what} {value!r} is beyond the u16 wire range")
+    return wire
+
+
+class NomadRobot:
+    """A connected Nomad 150 (context manager; :meth:`close` sends ``st``)."""
+
+    def __init__(self, link: Link, mask: StateMask = N150_MASK) -> None:
+        self._link = link
+        self._mask = mask
+        self._last: EncoderSample | None = None
+        self._in_motion = False
+
+    @classmethod
+    def connect(cls, url: str, baud: int = DEFAULT_BAUD) -> NomadRobot:
+        """Open ``url`` and check that the robot answers ``gs``.
+
+        Raises ConnectionFailedError when the port does not open or the robot
+        does not answer (ParameterError for an unsupported baud).
+        """
+        return cls.from_port(open_port(url, baud))
+
+    @classmethod
+    def from_port(cls, port: Port) -> NomadRobot:
+        """Wrap an already open port and check that the robot answers ``gs``."""
+        robot = cls(Link(port))
+        try:
+            robot.state()
+        except OdohilError as exc:
+            robot._link.close()
+            raise ConnectionFailedError(f"the robot does not answer gs: {exc}") from exc
+        return robot
+
+    def __enter__(self) -> NomadRobot:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    @property
+    def last_sample(self) -> EncoderSample | None:
+        """The most recent encoder sample received, if any."""
+        return self._last
+
+    @property
+    def link(self) -> Link:
+        """The underlying request/reply link (for statistics)."""
+        return self._link
+
+    def close(self) -> None:
+        """Send ``st`` (best effort), then close the port. Idempotent."""
+        if self._link.closed:
+            return
+        with contextlib.suppress(OdohilError):
+            self._request(m.St())
+        self._link.close()
+
+    # -- requests -------------------------------------------------------
+
+    def _request(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> RobotState:
+        reply = decode_reply(
+            self._link.exchange(m.encode_request(request), first_byte_s), request, self._mask
+        )
+        if not isinstance(reply, RobotState):  # pragma: no cover - state requests only
+            raise TypeError(f"{request} does not answer with a state packet")
+        self._last = EncoderSample.from_state(reply, time.monotonic())
+        return reply
+
+    def _call(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> EncoderSample:
+        """One request; on failure stop if moving, resync with ``gs``, re-raise."""
+        try:
+            self._request(request, first_byte_s)
+        except OdohilError as exc:
+            raise self._recover(exc, request) from exc
+        except BaseException:
+            self._emergency_stop()
+            raise
+        assert self._last is not None
+        return self._last
+
+    def _recover(self, exc: OdohilError, request: m.Request) -> OdohilError:
+        stopped = ""
+        if self._in_motion or request.code in MOTION_CODES:
+            stopped = " st sent;" if self._try(m.St()) else " st failed;"
+        if isinstance(exc, DisconnectedError):
+            where = "no resync (disconnected)"
+        elif self._try(m.Gs()):
+            where = f"resynced with gs, encoders at {self._pose()}"
+        else:
+            where = f"gs resync failed, last known encoders {self._pose()}"
+        return type(exc)(f"{type(request).__name__} failed: {exc};{stopped} {where}")
+
+    def _pose(self) -> str:
+        return self._last.pose_text() if self._last else "unknown"
+
+    def _try(self, request: m.Request) -> bool:
+        if self._link.closed:
+            return False
+        try:
+            self._request(request)
+        except OdohilError:
+            return False
+        return True
+
+    def _emergency_stop(self) -> None:
+        self._try(m.St())
+
+    @contextlib.contextmanager
+    def _motion(self) -> Iterator[None]:
+        """Within: any exception (and Ctrl-C) sends ``st`` before propagating."""
+        self._in_motion = True
+        try:
+            yield
+        except BaseException:
+            self._emergency_stop()
+            raise
+        finally:
+            self._in_motion = False
+
+    # -- SI interface ---------------------------------------------------
+
+    def state(self) -> EncoderSample:
+        """One ``gs``: the current encoder sample."""
+        return self._call(m.Gs())
+
+    def set_watchdog(self, seconds: float) -> None:
+        """``conf_tm``: stop the robot after ``seconds`` (rounded up, 1..255)
+        without a command; 0 turns the watchdog off."""
+        if not math.isfinite(seconds) or not 0 <= seconds <= 255:
+            raise ParameterError(f"watchdog must be 0..255 s, got {seconds!r}")
+        self._call(m.ConfTm(math.ceil(seconds)))
+
+    def set_speeds(self, trans_m_s: float, steer_rad_s: float, turret_rad_s: float) -> None:
+        """``sp``: speeds for relative moves, m/s and rad/s."""
+        self._call(
+            m.Sp(
+                _rate(trans_m_s, metres_to_wire, "translation speed"),
+                _rate(steer_rad_s, radians_to_wire, "steering speed"),
+                _rate(turret_rad_s, radians_to_wire, "turret speed"),
+            )
+        )
+
+    def set_accelerations(
+        self, trans_m_s2: float, steer_rad_s2: float, turret_rad_s2: float
+    ) -> None:
+        """``ac``: accelerations, m/s^2 and rad/s^2."""
+        self._call(
+            m.Ac(
+                _rate(trans_m_s2, metres_to_wire, "translation acceleration"),
+                _rate(steer_rad_s2, radians_to_wire, "steering acceleration"),
+                _rate(turret_rad_s2, radians_to_wire, "turret acceleration"),
+            )
+        )
+
+    def define_pose(self, x_m: float, y_m: float) -> None:
+        """``dp``: call the current position (x, y), metres."""
+        self._call(m.Dp(_wire_s16(metres_to_wire(x_m), "x"), _wire_s16(metres_to_wire(y_m), "y")))
+
+    def define_angles(self, steer_rad: float, turret_rad: float) -> None:
+        """``da``: call the current steering and turret angles these, radians."""
+        self._call(
+            m.Da(
+                radians_to_wire(steer_rad) % WIRE_ANGLES_PER_TURN,
+                radians_to_wire(turret_rad) % WIRE_ANGLES_PER_TURN,
+            )
+        )
+
+    def move_relative_wire(self, trans: int, steer: int, turret: int = 0) -> m.Pr:
+        """``pr`` in wire units (0.1 in, 0.1 deg); returns what was sent.
+
+        The reply comes at once; wait with :meth:`wait_stopped` or
+        :meth:`poll_until_stopped`. Never resent.
+        """
+        request = m.Pr(
+            _wire_s16(trans, "translation"),
+            _wire_s16(steer, "steering"),
+            _wire_s16(turret, "turret"),
+        )
+        with self._motion():
+            self._call(request)
+        return request
+
+    def move_relative(self, trans_m: float, steer_rad: float, turret_rad: float = 0.0) -> m.Pr:
+        """``pr``: move by trans_m metres and turn by steer_rad / turret_rad,
+        rounded to whole wire units; returns the wire command actually sent."""
+        return self.move_relative_wire(
+            metres_to_wire(trans_m), radians_to_wire(steer_rad), radians_to_wire(turret_rad)
+        )
+
+    def wait_stopped(self, timeout_s: float) -> EncoderSample:
+        """``ws`` on all axes until they stop; OdohilTimeoutError (after ``st``)
+        if they still move after ``timeout_s``."""
+        if not math.isfinite(timeout_s) or timeout_s < 0:
+            raise ParameterError(f"timeout must be finite and >= 0 s, got {timeout_s!r}")
+        deadline = time.monotonic() + timeout_s
+        with self._motion():
+            while True:
+                left = max(0, math.ceil(deadline - time.monotonic()))
+                chunk = min(WS_MAX_S, left)
+                sample = self._call(m.Ws(True, True, True, chunk), first_byte_s=chunk + 1.0)
+                if not sample.moving:
+                    return sample
+                if time.monotonic() >= deadline:
+                    raise OdohilTimeoutError(
+                        f"still moving after {timeout_s:g} s; stopped at {sample.pose_text()}"
+                    )
+
+    def poll_until_stopped(
+        self, timeout_s: float, on_sample: Callable[[EncoderSample], None] | None = None
+    ) -> EncoderSample:
+        """Poll ``gs`` until no axis is active; each sample goes to
+        ``on_sample``. The polling also feeds the watchdog. OdohilTimeoutError
+        (after ``st``) if still moving after ``timeout_s``."""
+        deadline = time.monotonic() + timeout_s
+        with self._motion():
+            while True:
+                sample = self._call(m.Gs())
+                if on_sample is not None:
+                    on_sample(sample)
+                if not sample.moving:
+                    return sample
+                if time.monotonic() >= deadline:
+                    raise OdohilTimeoutError(
+                        f"still moving after {timeout_s:g} s; stopped at {sample.pose_text()}"
+                    )
+
+    def stop(self) -> EncoderSample:
+        """``st``: stop and hold position."""
+        return self._call(m.St())
+
+    def limp(self) -> EncoderSample:
+        """``lp``: motors unpowered."""
+        return self._call(m.Lp())
+
+    def zero(self) -> EncoderSample:
+        """``zr``: zero the robot; waits up to 120 s for the reply."""
+        with self._motion():
+            return self._call(m.Zr(), first_byte_s=ZR_TIMEOUT_S)
