@@ -81,3 +81,8 @@ class InconsistentMeasurementError(MeasurementError):
 
 class TrialFileError(MeasurementError):
     """A trial file with bad rows; the message lists each by line number."""
+
+
+class JournalError(OdohilError):
+    """A session journal that cannot be trusted: unreadable, or corrupt before
+    its last record (a torn last record is reported, not raised)."""

@@ -1,0 +1,187 @@
+"""A calibration plan: which forth-and-back designs, how many trials of each.
+
+Text syntax (``--plan``): designs separated by ``;``, each a comma-separated
+list of ``key=value``::
+
+    k=1,l=6,n=30;k=20,l=0.5,n=30,variant=reverse
+
+- ``k``: forth-and-back pairs, a multiple of 1/2 (``k=0.5`` is one straight run);
+- ``l``: leg length, metres;
+- ``n``: number of trials of this design, a positive integer;
+- ``variant`` (optional): ``turn`` (default, 180 degree turn at each end) or
+  ``reverse`` (drive back without turning).
+
+Trials are numbered 1, 2, ... in plan order: the n trials of the first design,
+then those of the second, and so on.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from odohil.errors import ParameterError
+from odohil.science.paths import VARIANTS, Design
+
+_KEYS = ("k", "l", "n", "variant")
+
+
+@dataclass(frozen=True)
+class PlanItem:
+    """One design and how many trials of it.
+
+    Attributes:
+        design: the forth-and-back design (k, l metres, variant).
+        n_trials: number of trials, at least 1.
+    """
+
+    design: Design
+    n_trials: int
+
+    def __post_init__(self) -> None:
+        if isinstance(self.n_trials, bool) or self.n_trials < 1:
+            raise ParameterError(f"n must be a positive number of trials, got {self.n_trials!r}")
+
+    def to_text(self) -> str:
+        """This item in the ``--plan`` syntax."""
+        d = self.design
+        return f"k={d.k:g},l={d.l_m:g},n={self.n_trials},variant={d.variant}"
+
+
+@dataclass(frozen=True)
+class Plan:
+    """The designs of a session, in order."""
+
+    items: tuple[PlanItem, ...]
+
+    def __post_init__(self) -> None:
+        if not self.items:
+            raise ParameterError("a plan needs at least one design")
+
+    @property
+    def n_trials(self) -> int:
+        """Total number of trials."""
+        return sum(item.n_trials for item in self.items)
+
+    @property
+    def distance_m(self) -> float:
+        """Total distance the plan drives, metres."""
+        return sum(item.n_trials * item.design.distance_m for item in self.items)
+
+    def design_index(self, trial: int) -> int:
+        """The index of the design that trial number ``trial`` (1-based) runs."""
+        if not 1 <= trial <= self.n_trials:
+            raise ParameterError(f"trial {trial} is outside the plan's 1..{self.n_trials}")
+        remaining = trial
+        for index, item in enumerate(self.items):
+            if remaining <= item.n_trials:
+                return index
+            remaining -= item.n_trials
+        raise AssertionError("unreachable")
+
+    def design_of(self, trial: int) -> Design:
+        """The design that trial number ``trial`` (1-based) runs."""
+        return self.items[self.design_index(trial)].design
+
+    def to_text(self) -> str:
+        """The plan in the ``--plan`` syntax."""
+        return ";".join(item.to_text() for item in self.items)
+
+    def to_json(self) -> dict[str, Any]:
+        """A JSON object: ``{"designs": [{"k", "l_m", "variant", "n"}, ...]}``."""
+        return {
+            "designs": [
+                {
+                    "k": item.design.k,
+                    "l_m": item.design.l_m,
+                    "variant": item.design.variant,
+                    "n": item.n_trials,
+                }
+                for item in self.items
+            ]
+        }
+
+    @classmethod
+    def from_json(cls, raw: Mapping[str, Any]) -> Plan:
+        """Inverse of :meth:`to_json`; ParameterError if malformed."""
+        designs = raw.get("designs")
+        if not isinstance(designs, list):
+            raise ParameterError("a plan object needs a list of designs")
+        items = []
+        for entry in designs:
+            if not isinstance(entry, dict):
+                raise ParameterError(f"a plan design must be an object, got {entry!r}")
+            try:
+                design = Design(float(entry["k"]), float(entry["l_m"]), entry["variant"])
+                items.append(PlanItem(design, int(entry["n"])))
+            except (KeyError, TypeError, ValueError) as exc:
+                if isinstance(exc, ParameterError):
+                    raise
+                raise ParameterError(f"malformed plan design {entry!r}: {exc}") from None
+        return cls(tuple(items))
+
+    @classmethod
+    def of(cls, designs: Sequence[tuple[Design, int]]) -> Plan:
+        """A plan from (design, n_trials) pairs, e.g. from the planner."""
+        return cls(tuple(PlanItem(design, n) for design, n in designs))
+
+
+def parse_plan(text: str) -> Plan:
+    """Parse the ``--plan`` syntax (see the module docstring).
+
+    Raises:
+        ParameterError: the message names the design (1-based) and the problem.
+    """
+    parts = [part.strip() for part in text.split(";")]
+    if not any(parts):
+        raise ParameterError('empty plan; expected e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30"')
+    items = []
+    for number, part in enumerate(parts, start=1):
+        if not part:
+            if number == len(parts):
+                continue  # a trailing ';' is harmless
+            raise ParameterError(f"plan design {number} is empty")
+        try:
+            items.append(_parse_item(part))
+        except ParameterError as exc:
+            raise ParameterError(f"plan design {number} ({part!r}): {exc}") from None
+    return Plan(tuple(items))
+
+
+def _parse_item(text: str) -> PlanItem:
+    values: dict[str, str] = {}
+    for field in text.split(","):
+        key, sep, value = field.partition("=")
+        key, value = key.strip().lower(), value.strip()
+        if not sep or not key or not value:
+            raise ParameterError(f"expected key=value, got {field.strip()!r}")
+        if key not in _KEYS:
+            raise ParameterError(f"unknown key {key!r}; keys are {', '.join(_KEYS)}")
+        if key in values:
+            raise ParameterError(f"{key} is given twice")
+        values[key] = value
+    missing = [key for key in ("k", "l", "n") if key not in values]
+    if missing:
+        raise ParameterError(f"missing {', '.join(missing)}")
+    k = _number(values["k"], "k")
+    l_m = _number(values["l"], "l")
+    try:
+        n = int(values["n"])
+    except ValueError:
+        raise ParameterError(f"n must be a whole number, got {values['n']!r}") from None
+    variant = values.get("variant", "turn").lower()
+    if variant not in VARIANTS:
+        raise ParameterError(f"variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
+    return PlanItem(Design(k, l_m, variant), n)
+
+
+def _number(text: str, key: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ParameterError(f"{key} must be a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise ParameterError(f"{key} must be finite, got {text!r}")
+    return value

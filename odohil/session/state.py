@@ -1,0 +1,350 @@
+"""The events of a session journal, and the session state they replay to.
+
+Event kinds, in the order a session writes them (``data`` members in brackets):
+
+- ``session`` (always record 1): format, robot description TOML text, the
+  measurement source, settings [``format``, ``robot_toml``, ``robot_path``,
+  ``measure``, ``settings``];
+- ``plan`` [the :meth:`Plan.to_json` object];
+- ``robot``: identity and settings of the robot, after each connect;
+- ``resumed``: a later process took the session over;
+- ``torn_record``: the torn last record found on resume was kept aside
+  [``file``, ``bytes``, ``reason``];
+- ``trial_start``: the robot was re-zeroed and the start marks made
+  [``trial``, ``attempt``, ``design``, ``start``: the source's start data];
+- ``motion_start`` [``trial``, ``attempt``];
+- ``motion_done``: the motion finished [``trial``, ``attempt``,
+  ``encoder_end_pose`` (x m, y m, theta rad), ``trajectory`` (rows t s, x m,
+  y m, theta rad), ``end``: the source's end data];
+- ``measurement``: one distance [``trial``, ``attempt``, ``index``, ``label``,
+  ``value_m``];
+- ``measurements_rejected``: the distances of this attempt are discarded and
+  taken again [``trial``, ``attempt``, ``reason``];
+- ``solved``: the pose change; the trial is complete [``trial``, ``attempt``,
+  ``pose_change``, ``cov``, ``chi2``, ``clear_cut``, ``reason``];
+- ``estimate`` [``n_trials``, ``result``: the estimate's JSON object];
+- ``void``: the attempt is discarded and the trial redone [``trial``,
+  ``attempt``, ``reason``];
+- ``stopped``: the process stopped early [``reason``, ``message``];
+- ``finished`` [``n_trials``].
+
+A trial is identified by its number in the plan (1-based); each try at it is
+an attempt (1, 2, ...). A trial counts once it has a ``solved`` record, and a
+second ``solved`` for the same trial is a :class:`JournalError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field, replace
+from enum import Enum
+from typing import Any
+
+from odohil.errors import JournalError, ParameterError
+from odohil.science.paths import Design
+from odohil.session.journal import Record
+from odohil.session.plan import Plan
+
+FORMAT = 1
+"""Version of the journal's event schema."""
+
+SESSION = "session"
+PLAN = "plan"
+ROBOT = "robot"
+RESUMED = "resumed"
+TORN_RECORD = "torn_record"
+TRIAL_START = "trial_start"
+MOTION_START = "motion_start"
+MOTION_DONE = "motion_done"
+MEASUREMENT = "measurement"
+MEASUREMENTS_REJECTED = "measurements_rejected"
+SOLVED = "solved"
+ESTIMATE = "estimate"
+VOID = "void"
+STOPPED = "stopped"
+FINISHED = "finished"
+
+_INFO_KINDS = frozenset({ROBOT, RESUMED, TORN_RECORD, STOPPED})
+
+
+class Phase(Enum):
+    """Where an open (not yet solved) trial attempt stands."""
+
+    MARKED = "marked"
+    """Re-zeroed and start marks made; the motion was not started."""
+    MOVING = "moving"
+    """The motion was started and did not report its end."""
+    MEASURING = "measuring"
+    """The motion finished; distances are being taken (maybe all are in)."""
+
+
+@dataclass(frozen=True)
+class OpenTrial:
+    """A trial attempt that is under way.
+
+    Attributes:
+        trial: trial number in the plan (1-based).
+        attempt: attempt number (1-based).
+        design_index: index of its design in the plan.
+        phase: where it stands.
+        start: the measurement source's start-mark data.
+        encoder_end_pose: (x m, y m, theta rad) once the motion is done.
+        end: the measurement source's end-mark data once the motion is done.
+        measurements: the distances taken so far, metres, in order.
+    """
+
+    trial: int
+    attempt: int
+    design_index: int
+    phase: Phase
+    start: Mapping[str, Any]
+    encoder_end_pose: tuple[float, float, float] | None = None
+    trajectory: tuple[tuple[float, ...], ...] = ()
+    end: Mapping[str, Any] = field(default_factory=dict)
+    measurements: tuple[float, ...] = ()
+
+
+@dataclass(frozen=True)
+class CompletedTrial:
+    """A trial with its solved pose change.
+
+    Attributes:
+        trial: trial number in the plan (1-based).
+        attempt: the attempt that completed it.
+        design: its design.
+        design_index: index of the design in the plan.
+        encoder_end_pose: (x m, y m, theta rad) the encoders reported.
+        measurements: the floor-mark distances, metres (same-screw then cross).
+        pose_change: solved (dx m, dy m, dtheta rad).
+        cov: 3x3 covariance of ``pose_change`` (m^2, m rad, rad^2), rows.
+        clear_cut: whether the solver was sure of its choice.
+        start: the measurement source's start data (e.g. the true start pose).
+        end: the measurement source's end data.
+    """
+
+    trial: int
+    attempt: int
+    design: Design
+    design_index: int
+    encoder_end_pose: tuple[float, float, float]
+    measurements: tuple[float, ...]
+    pose_change: tuple[float, float, float]
+    cov: tuple[tuple[float, float, float], ...]
+    clear_cut: bool
+    start: Mapping[str, Any]
+    end: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class SessionState:
+    """A session as its journal tells it.
+
+    Attributes:
+        header: the ``session`` record's data.
+        plan: the plan, once journaled.
+        completed: completed trials, in completion order.
+        open_trial: the attempt under way, if any.
+        voided: number of voided attempts.
+        last_estimate: the data of the latest ``estimate`` record.
+        finished: whether a ``finished`` record closes the session.
+        n_records: number of records replayed.
+    """
+
+    header: Mapping[str, Any]
+    plan: Plan | None = None
+    completed: tuple[CompletedTrial, ...] = ()
+    open_trial: OpenTrial | None = None
+    voided: int = 0
+    attempts: Mapping[int, int] = field(default_factory=dict)
+    last_estimate: Mapping[str, Any] | None = None
+    finished: bool = False
+    n_records: int = 0
+
+    @property
+    def done_trials(self) -> frozenset[int]:
+        """Numbers of the completed trials."""
+        return frozenset(t.trial for t in self.completed)
+
+    def next_trial(self) -> int | None:
+        """The lowest trial number not yet completed, or None when all are."""
+        if self.plan is None:
+            return None
+        done = self.done_trials
+        for trial in range(1, self.plan.n_trials + 1):
+            if trial not in done:
+                return trial
+        return None
+
+    def next_attempt(self, trial: int) -> int:
+        """The attempt number a new try at ``trial`` gets."""
+        return self.attempts.get(trial, 0) + 1
+
+
+def replay(records: Iterable[Record]) -> SessionState:
+    """Replay journal records into the session state.
+
+    Raises:
+        JournalError: the records do not tell a consistent session (the
+            message names the record's sequence number).
+    """
+    state: SessionState | None = None
+    for record in records:
+        if state is None:
+            if record.kind != SESSION:
+                raise JournalError(
+                    f"record {record.seq}: a journal must start with a session record"
+                )
+            fmt = record.data.get("format")
+            if fmt != FORMAT:
+                raise JournalError(
+                    f"record {record.seq}: journal format {fmt!r}, this odohil reads {FORMAT}"
+                )
+            state = SessionState(header=record.data, n_records=1)
+            continue
+        try:
+            state = _apply(state, record)
+        except (KeyError, TypeError, ValueError, IndexError) as exc:
+            if isinstance(exc, JournalError):
+                raise
+            raise JournalError(
+                f"record {record.seq} ({record.kind}) is malformed: {exc!r}"
+            ) from None
+        state = replace(state, n_records=state.n_records + 1)
+    if state is None:
+        raise JournalError("the journal holds no records")
+    return state
+
+
+def _apply(state: SessionState, record: Record) -> SessionState:
+    kind, data = record.kind, record.data
+    if kind in _INFO_KINDS:
+        return state
+    if kind == SESSION:
+        raise JournalError(f"record {record.seq}: a second session record")
+    if kind == PLAN:
+        if state.plan is not None:
+            raise JournalError(f"record {record.seq}: a second plan")
+        try:
+            return replace(state, plan=Plan.from_json(data))
+        except ParameterError as exc:
+            raise JournalError(f"record {record.seq}: bad plan: {exc}") from None
+    if kind == ESTIMATE:
+        return replace(state, last_estimate=data)
+    if kind == FINISHED:
+        return replace(state, finished=True)
+    if state.plan is None:
+        raise JournalError(f"record {record.seq}: {kind} before the plan")
+    if kind == TRIAL_START:
+        return _trial_start(state, record, state.plan)
+    opened = _current(state, record)
+    if kind == MOTION_START:
+        _expect(opened, record, Phase.MARKED)
+        return replace(state, open_trial=replace(opened, phase=Phase.MOVING))
+    if kind == MOTION_DONE:
+        _expect(opened, record, Phase.MOVING)
+        pose = _triple(data["encoder_end_pose"])
+        trajectory = tuple(tuple(float(v) for v in row) for row in data.get("trajectory", []))
+        return replace(
+            state,
+            open_trial=replace(
+                opened,
+                phase=Phase.MEASURING,
+                encoder_end_pose=pose,
+                trajectory=trajectory,
+                end=dict(data.get("end", {})),
+            ),
+        )
+    if kind == MEASUREMENT:
+        _expect(opened, record, Phase.MEASURING)
+        if int(data["index"]) != len(opened.measurements):
+            raise JournalError(
+                f"record {record.seq}: measurement {data['index']} where "
+                f"{len(opened.measurements)} was expected"
+            )
+        value = float(data["value_m"])
+        return replace(
+            state, open_trial=replace(opened, measurements=(*opened.measurements, value))
+        )
+    if kind == MEASUREMENTS_REJECTED:
+        _expect(opened, record, Phase.MEASURING)
+        return replace(state, open_trial=replace(opened, measurements=()))
+    if kind == VOID:
+        return replace(state, open_trial=None, voided=state.voided + 1)
+    if kind == SOLVED:
+        _expect(opened, record, Phase.MEASURING)
+        if opened.trial in state.done_trials:
+            raise JournalError(f"record {record.seq}: trial {opened.trial} solved twice")
+        assert opened.encoder_end_pose is not None
+        cov = tuple(_triple(row) for row in data["cov"])
+        if len(cov) != 3:
+            raise ValueError("cov must be 3x3")
+        done = CompletedTrial(
+            trial=opened.trial,
+            attempt=opened.attempt,
+            design=state.plan.items[opened.design_index].design,
+            design_index=opened.design_index,
+            encoder_end_pose=opened.encoder_end_pose,
+            measurements=opened.measurements,
+            pose_change=_triple(data["pose_change"]),
+            cov=cov,
+            clear_cut=bool(data["clear_cut"]),
+            start=opened.start,
+            end=opened.end,
+        )
+        return replace(state, completed=(*state.completed, done), open_trial=None)
+    raise JournalError(f"record {record.seq}: unknown event kind {kind!r}")
+
+
+def _trial_start(state: SessionState, record: Record, plan: Plan) -> SessionState:
+    data = record.data
+    if state.open_trial is not None:
+        raise JournalError(
+            f"record {record.seq}: trial {data.get('trial')} starts while trial "
+            f"{state.open_trial.trial} attempt {state.open_trial.attempt} is still open"
+        )
+    trial, attempt, design_index = int(data["trial"]), int(data["attempt"]), int(data["design"])
+    if trial in state.done_trials:
+        raise JournalError(f"record {record.seq}: trial {trial} started again after it completed")
+    if design_index != plan.design_index(trial):
+        raise JournalError(
+            f"record {record.seq}: trial {trial} runs design {design_index}, the plan says "
+            f"{plan.design_index(trial)}"
+        )
+    if attempt != state.next_attempt(trial):
+        raise JournalError(
+            f"record {record.seq}: attempt {attempt} of trial {trial}, expected "
+            f"{state.next_attempt(trial)}"
+        )
+    opened = OpenTrial(
+        trial=trial,
+        attempt=attempt,
+        design_index=design_index,
+        phase=Phase.MARKED,
+        start=dict(data.get("start", {})),
+    )
+    attempts = {**state.attempts, trial: attempt}
+    return replace(state, open_trial=opened, attempts=attempts)
+
+
+def _current(state: SessionState, record: Record) -> OpenTrial:
+    opened = state.open_trial
+    trial, attempt = int(record.data["trial"]), int(record.data["attempt"])
+    if opened is None or (opened.trial, opened.attempt) != (trial, attempt):
+        raise JournalError(
+            f"record {record.seq}: {record.kind} for trial {trial} attempt {attempt}, "
+            "which is not the open trial"
+        )
+    return opened
+
+
+def _expect(opened: OpenTrial, record: Record, phase: Phase) -> None:
+    if opened.phase is not phase:
+        raise JournalError(
+            f"record {record.seq}: {record.kind} while trial {opened.trial} is "
+            f"{opened.phase.value}, not {phase.value}"
+        )
+
+
+def _triple(value: Any) -> tuple[float, float, float]:
+    x, y, z = (float(v) for v in value)
+    return (x, y, z)
