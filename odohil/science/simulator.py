@@ -113,7 +113,15 @@ def drive_straight(
     segment, shape (n, n_segments, 3); otherwise it draws the translation
     noise of the whole call at once (exact, see the module docstring).
     """
-    if n_segments <= 0:
+    if not math.isfinite(signed_segment_m) or signed_segment_m == 0.0:
+        raise ParameterError(f"a segment needs a finite non-zero length, got {signed_segment_m!r}")
+    if n_segments < 0:
+        raise ParameterError(f"n_segments cannot be negative, got {n_segments}")
+    if not (x.shape == y.shape == theta.shape) or x.ndim != 1:
+        raise ParameterError(
+            f"x, y, theta must be 1-d arrays of one shape, got {x.shape}, {y.shape}, {theta.shape}"
+        )
+    if n_segments == 0:
         return np.empty((x.shape[0], 0, 3)) if trajectory else None
     if trajectory:
         return _drive_literal(x, y, theta, signed_segment_m, n_segments, params, rng)
