@@ -40,6 +40,16 @@ def rad2_per_m_to_deg2_per_m(value: float) -> float:
     return value * (180.0 / math.pi) ** 2
 
 
+def radians_to_degrees(angle_rad: float) -> float:
+    """An angle (e.g. phi1) from radians to degrees."""
+    return math.degrees(angle_rad)
+
+
+def rad2_to_deg2(value: float) -> float:
+    """A squared angle (e.g. the variance phi2) from rad^2 to deg^2."""
+    return value * (180.0 / math.pi) ** 2
+
+
 def metres_to_wire(length_m: float) -> int:
     """A length in metres to the nearest whole number of wire units (0.1 inch)."""
     return round(length_m / METRES_PER_WIRE_LENGTH)

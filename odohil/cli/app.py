@@ -12,7 +12,7 @@ import typer
 
 from odohil import __version__
 
-COMMAND_MODULES: tuple[str, ...] = ("emulate",)
+COMMAND_MODULES: tuple[str, ...] = ("emulate", "predict")
 
 app = typer.Typer(
     name="odohil",

@@ -167,7 +167,7 @@ def forth_and_back_means(design: Design, params: ErrorParameters) -> ObservableM
         signed = length if m % 2 else 0.0
     phi5 = params.k_rho * rho + 2.0 * gain**2 * length**2 * drift.real
     return ObservableMeans(
-        phi1=params.e_r * signed,
+        phi1=params.e_r * signed + 0.0,  # no -0.0 for a closed reverse path
         phi2=params.k_theta * rho,
         phi3=mean.real,
         phi4=mean.imag,

@@ -1,0 +1,125 @@
+"""``odohil predict``: expected observables of a forth-and-back design."""
+
+from __future__ import annotations
+
+import json
+from enum import StrEnum
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from odohil import units
+from odohil.errors import OdohilError
+from odohil.science.closed_forms import ObservableMeans, forth_and_back_means
+from odohil.science.parameters import NOMAD150, SI_UNITS, ErrorParameters
+from odohil.science.paths import Design
+
+_PAPER = NOMAD150.to_paper_units()
+
+SI_OBSERVABLE_UNITS = {
+    "phi1": "rad",
+    "phi2": "rad^2",
+    "phi3": "m",
+    "phi4": "m",
+    "phi5": "m^2",
+    "x": "m",
+    "y": "m",
+}
+
+_MEANING = {
+    "phi1": "mean heading change",
+    "phi2": "variance of the heading change",
+    "phi3": "mean x of the end point",
+    "phi4": "mean y of the end point",
+    "phi5": "mean squared distance start-end",
+    "x": "<x>",
+    "y": "<y>",
+}
+
+
+class VariantChoice(StrEnum):
+    """How the robot comes back: turn in place, or drive backwards."""
+
+    turn = "turn"
+    reverse = "reverse"
+
+
+def _degrees(key: str, value: float) -> str:
+    if key == "phi1":
+        return f"{units.radians_to_degrees(value):.6g} deg"
+    if key == "phi2":
+        return f"{units.rad2_to_deg2(value):.6g} deg^2"
+    return ""
+
+
+def _table(design: Design, params: ErrorParameters, means: ObservableMeans) -> Table:
+    paper = params.to_paper_units()
+    table = Table(
+        title=f"Expected observables, forth and back {design.label()} "
+        f"(rho = {design.distance_m:g} m)",
+        caption=f"E_R = {paper['E_R']:g} deg/m, E_T = {paper['E_T']:g} "
+        f"(1+E_T = {1.0 + paper['E_T']:g}), K_theta = {paper['K_theta']:g} deg^2/m, "
+        f"K_rho = {paper['K_rho']:g} m",
+    )
+    table.add_column("observable")
+    table.add_column("meaning")
+    table.add_column("value (SI)", justify="right")
+    table.add_column("unit")
+    table.add_column("in degrees", justify="right")
+    for key, value in means.as_dict().items():
+        unit = SI_OBSERVABLE_UNITS[key]
+        table.add_row(key, _MEANING[key], f"{value:.6g}", unit, _degrees(key, value))
+    return table
+
+
+def _json(design: Design, params: ErrorParameters, means: ObservableMeans) -> str:
+    document: dict[str, object] = dict(means.as_dict())
+    document["design"] = {"k": design.k, "l_m": design.l_m, "variant": design.variant}
+    document["parameters"] = params.to_si_dict()
+    document["units"] = {
+        **SI_OBSERVABLE_UNITS,
+        "parameters": dict(SI_UNITS),
+        "design": {"k": "1", "l_m": "m"},
+    }
+    return json.dumps(document, indent=2)
+
+
+def predict(
+    k: float = typer.Option(..., "--k", help="Forth-and-back pairs k, a multiple of 1/2."),
+    l_m: float = typer.Option(..., "--l", help="Leg length l, metres."),
+    variant: Annotated[
+        VariantChoice,
+        typer.Option("--variant", help="turn: 180 deg in place; reverse: drive back."),
+    ] = VariantChoice.turn,
+    e_r: float = typer.Option(_PAPER["E_R"], "--E-R", help="Systematic E_R, deg/m."),
+    e_t: float = typer.Option(
+        _PAPER["E_T"], "--E-T", help="Systematic E_T (no unit; the paper's 1+E_T = 0.98 is -0.02)."
+    ),
+    k_theta: float = typer.Option(_PAPER["K_theta"], "--K-theta", help="K_theta, deg^2/m."),
+    k_rho: float = typer.Option(_PAPER["K_rho"], "--K-rho", help="K_rho, m."),
+    as_json: bool = typer.Option(False, "--json", help="Print SI values as JSON."),
+) -> None:
+    """Predict phi1..phi5, <x>, <y> for k forth-and-back runs of length l.
+
+    Parameters are in the paper's units and default to the Nomad 150 values.
+    """
+    for option, value in (("--K-theta", k_theta), ("--K-rho", k_rho)):
+        if value < 0:
+            raise typer.BadParameter(f"{option} is a variance rate and cannot be negative: {value}")
+    try:
+        design = Design(k, l_m, variant.value)
+        params = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    means = forth_and_back_means(design, params)
+    if as_json:
+        typer.echo(_json(design, params, means))
+    else:
+        Console().print(_table(design, params, means))
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``predict`` to the ``odohil`` app."""
+    app.command("predict")(predict)
