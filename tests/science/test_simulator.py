@@ -55,12 +55,17 @@ def _segments(path: EncoderPath, segment_m: float) -> dict[str, FloatArray]:
     }
 
 
-def _mean_steps(path: EncoderPath, params: ErrorParameters, segment_m: float) -> np.ndarray:
+def _mean_steps(
+    path: EncoderPath, params: ErrorParameters, segment_m: float
+) -> npt.NDArray[np.complex128]:
     """<rho_i e^{i theta_i}> for every segment, eq. (28) with the K_theta per metre reading."""
     seg = _segments(path, segment_m)
     mean_heading = seg["encoder_heading"] + params.e_r * seg["signed_end"]
     decay = np.exp(-0.5 * params.k_theta * seg["arc_end"])
-    return seg["sign"] * (1.0 + params.e_t) * seg["delta"] * decay * np.exp(1j * mean_heading)
+    steps: npt.NDArray[np.complex128] = (
+        seg["sign"] * (1.0 + params.e_t) * seg["delta"] * decay * np.exp(1j * mean_heading)
+    )
+    return steps
 
 
 def discrete_mean_position(path: EncoderPath, params: ErrorParameters, segment_m: float) -> complex:
@@ -161,7 +166,7 @@ def test_mean_square_distance_is_the_exact_discrete_sum(name: str) -> None:
 def _straight_leg_limit(params: ErrorParameters, length_m: float) -> complex:
     """(1 + E_T) int_0^l e^{(i E_R - K_theta/2) s} ds: <x + i y> as N -> infinity."""
     a = 0.5 * params.k_theta - 1j * params.e_r
-    return (1.0 + params.e_t) * (1.0 - np.exp(-a * length_m)) / a
+    return complex((1.0 + params.e_t) * (1.0 - np.exp(-a * length_m)) / a)
 
 
 def test_noise_free_simulation_converges_linearly_in_the_segment_length() -> None:
