@@ -109,8 +109,8 @@ def test_disconnect_mid_motion_raises_disconnected() -> None:
     with fake_robot("seed=6&time_scale=50&fault=disconnect") as fake:
         _ready(fake)
         started = time.monotonic()
+        fake.robot.move_relative(1.0, 0.0)
         with pytest.raises(DisconnectedError):
-            fake.robot.move_relative(1.0, 0.0)
             fake.robot.poll_until_stopped(10.0)
         assert time.monotonic() - started < ERROR_BUDGET_S
         assert fake.commands("pr") == 1
