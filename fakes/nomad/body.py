@@ -35,7 +35,10 @@ POWER_ON_SPEED = (0, 0, 0)
 POWER_ON_ACCEL = MAX_ACCEL
 WIRE_LIMIT = 32767
 COUPLED_STEP_S = 0.02
-"""Largest simulated step while translation and steering move together, s."""
+"""Largest simulated step while translation and steering move together, s..."""
+MAX_COUPLED_STEPS = 64
+"""...unless one advance would need more steps than this (a high time scale): then
+the steps grow, so that the robot keeps up with the wall clock."""
 
 
 class Axis:
@@ -102,9 +105,10 @@ class RobotBody:
     # ---- time -------------------------------------------------------------
     def advance(self, t_end: float) -> None:
         """Run the physics up to simulated time ``t_end`` s."""
+        step = max(COUPLED_STEP_S, (t_end - self.t) / MAX_COUPLED_STEPS)
         while self.t < t_end:
             coupled = self.axes[TRANS].moving and self.axes[STEER].moving
-            step_end = min(t_end, self.t + COUPLED_STEP_S) if coupled else t_end
+            step_end = min(t_end, self.t + step) if coupled else t_end
             self._step(step_end)
 
     def _step(self, t1: float) -> None:

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-import selectors
+import os
+import select
 import subprocess
 import sys
 import time
@@ -45,7 +46,7 @@ class EmulatorProcess:
         self.stop_timeout_s = stop_timeout_s
         self.device = ""
         self.truth_socket = ""
-        self._proc: subprocess.Popen[str] | None = None
+        self._proc: subprocess.Popen[bytes] | None = None
 
     def __enter__(self) -> EmulatorProcess:
         self.start()
@@ -61,23 +62,24 @@ class EmulatorProcess:
 
     def start(self) -> None:
         """Start the process and wait for its two paths."""
-        proc = subprocess.Popen(self.command, stdout=subprocess.PIPE, text=True)
+        proc = subprocess.Popen(self.command, stdout=subprocess.PIPE)
         self._proc = proc
-        lines: list[str] = []
-        deadline = time.monotonic() + self.startup_timeout_s
         assert proc.stdout is not None
-        with selectors.DefaultSelector() as sel:
-            sel.register(proc.stdout, selectors.EVENT_READ)
-            while len(lines) < 2:
-                left = deadline - time.monotonic()
-                if left <= 0 or not sel.select(left):
-                    self.stop()
-                    raise ConnectionFailedError(f"fake robot did not start: {self.command}")
-                line = proc.stdout.readline()
-                if not line:
-                    self.stop()
-                    raise ConnectionFailedError(f"fake robot exited at start: {self.command}")
-                lines.append(line.strip())
+        fd = proc.stdout.fileno()
+        received = b""
+        deadline = time.monotonic() + self.startup_timeout_s
+        while received.count(b"\n") < 2:
+            left = deadline - time.monotonic()
+            ready, _, _ = select.select([fd], [], [], max(0.0, left))
+            if not ready:
+                self.stop()
+                raise ConnectionFailedError(f"fake robot did not start: {self.command}")
+            chunk = os.read(fd, 4096)
+            if not chunk:
+                self.stop()
+                raise ConnectionFailedError(f"fake robot exited at start: {self.command}")
+            received += chunk
+        lines = [line.strip() for line in received.decode().splitlines()[:2]]
         self.device, self.truth_socket = lines
 
     @property
