@@ -91,6 +91,7 @@ class OpenTrial:
         encoder_end_pose: (x m, y m, theta rad) once the motion is done.
         end: the measurement source's end-mark data once the motion is done.
         measurements: the distances taken so far, metres, in order.
+        rejections: how many times this attempt's distances were rejected.
     """
 
     trial: int
@@ -102,6 +103,7 @@ class OpenTrial:
     trajectory: tuple[tuple[float, ...], ...] = ()
     end: Mapping[str, Any] = field(default_factory=dict)
     measurements: tuple[float, ...] = ()
+    rejections: int = 0
 
 
 @dataclass(frozen=True)
@@ -201,18 +203,25 @@ def replay(records: Iterable[Record]) -> SessionState:
                 )
             state = SessionState(header=record.data, n_records=1)
             continue
-        try:
-            state = _apply(state, record)
-        except (KeyError, TypeError, ValueError, IndexError) as exc:
-            if isinstance(exc, JournalError):
-                raise
-            raise JournalError(
-                f"record {record.seq} ({record.kind}) is malformed: {exc!r}"
-            ) from None
-        state = replace(state, n_records=state.n_records + 1)
+        state = apply(state, record)
     if state is None:
         raise JournalError("the journal holds no records")
     return state
+
+
+def apply(state: SessionState, record: Record) -> SessionState:
+    """The state after one more record (not the first, ``session``, record).
+
+    Raises:
+        JournalError: the record does not fit the state.
+    """
+    try:
+        new = _apply(state, record)
+    except (KeyError, TypeError, ValueError, IndexError) as exc:
+        if isinstance(exc, JournalError):
+            raise
+        raise JournalError(f"record {record.seq} ({record.kind}) is malformed: {exc!r}") from None
+    return replace(new, n_records=new.n_records + 1)
 
 
 def _apply(state: SessionState, record: Record) -> SessionState:
@@ -267,7 +276,10 @@ def _apply(state: SessionState, record: Record) -> SessionState:
         )
     if kind == MEASUREMENTS_REJECTED:
         _expect(opened, record, Phase.MEASURING)
-        return replace(state, open_trial=replace(opened, measurements=()))
+        return replace(
+            state,
+            open_trial=replace(opened, measurements=(), rejections=opened.rejections + 1),
+        )
     if kind == VOID:
         return replace(state, open_trial=None, voided=state.voided + 1)
     if kind == SOLVED:

@@ -1,0 +1,492 @@
+"""The calibration session engine: the trial loop, journaled step by step.
+
+One trial attempt:
+
+1. the robot is brought to rest and re-zeroed in the odometry frame
+   (``dp 0 0``, ``da 0 0``);
+2. the source makes the start marks (the fake source reads the true start
+   pose); journaled as ``trial_start``;
+3. ``motion_start`` is journaled, the forth-and-back motion runs (driver);
+4. the source makes the end marks; the encoder end pose and trajectory are
+   journaled as ``motion_done``;
+5. each distance is taken and journaled (``measurement``);
+6. the pose change is solved from the floor marks (``solved``; distances no
+   rigid motion explains are rejected and taken again, ``measurements_rejected``);
+7. the live estimate is updated (``estimate``).
+
+Every record is on disk (fsync) before the next step starts, so after a crash
+:func:`resume_session` continues exactly where the journal stops: an attempt
+cut off before or during its motion is voided and the trial redone; one whose
+motion finished resumes at its next missing distance. On any failure or
+Ctrl-C the engine asks the robot to stop, journals ``stopped`` (and ``void``
+for an attempt cut off before its motion ended) and re-raises.
+
+Rendering and estimation are pluggable: a :class:`SessionObserver` sees every
+record with the state it leads to; a :class:`LiveEstimator` turns completed
+trials into the estimate's JSON object.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Any, Protocol
+
+from odohil import __version__
+from odohil.driver.motion import (
+    DEFAULT_ACCELERATIONS,
+    DEFAULT_SPEEDS,
+    DEFAULT_STEP_TIMEOUT_S,
+    DEFAULT_TOLERANCE_WIRE,
+    MotionRecord,
+    forth_and_back,
+)
+from odohil.driver.robot import NomadRobot
+from odohil.driver.sample import EncoderSample
+from odohil.errors import InconsistentMeasurementError, JournalError, MeasurementError, OdohilError
+from odohil.science.floor_marks import MarkDistances, distance_labels, solve_marks
+from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.session import state as ev
+from odohil.session.journal import Journal, Record, TornRecord
+from odohil.session.plan import Plan
+from odohil.session.sources import MeasurementSource, TrialContext, check_distance
+from odohil.session.state import CompletedTrial, OpenTrial, Phase, SessionState, apply, replay
+
+MAX_REJECTIONS = 3
+"""How many times one attempt's distances may be rejected before giving up."""
+
+
+class SessionObserver(Protocol):
+    """Sees the session unfold (a progress bar, the wizard, a report)."""
+
+    def record(self, record: Record, state: SessionState) -> None:
+        """``record`` was journaled; ``state`` is the session after it."""
+        ...
+
+
+class LiveEstimator(Protocol):
+    """Turns completed trials into the current estimate."""
+
+    def add(self, trial: CompletedTrial) -> Mapping[str, Any] | None:
+        """Fold one trial in; the estimate's JSON object, or None while too
+        few trials make an estimate."""
+        ...
+
+
+@dataclass(frozen=True)
+class MotionSettings:
+    """How the robot drives each trial.
+
+    Attributes:
+        speeds: translation m/s, steering rad/s.
+        accelerations: translation m/s^2, steering rad/s^2.
+        tolerance_wire: how far (0.1 in / 0.1 deg) a step may end off its command.
+        step_timeout_s: longest wall time of one step, s.
+        watchdog_s: the robot's watchdog (``conf_tm``), s; it stops the robot
+            when the host dies mid-motion; 0 leaves it off.
+        settle_timeout_s: how long to wait for a robot found moving to stop, s.
+    """
+
+    speeds: tuple[float, float] = DEFAULT_SPEEDS
+    accelerations: tuple[float, float] = DEFAULT_ACCELERATIONS
+    tolerance_wire: int = DEFAULT_TOLERANCE_WIRE
+    step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S
+    watchdog_s: float = 2.0
+    settle_timeout_s: float = 60.0
+
+    def to_json(self) -> dict[str, Any]:
+        """The settings as a JSON object (SI units)."""
+        return {
+            "speeds": list(self.speeds),
+            "accelerations": list(self.accelerations),
+            "tolerance_wire": self.tolerance_wire,
+            "step_timeout_s": self.step_timeout_s,
+            "watchdog_s": self.watchdog_s,
+        }
+
+
+def start_session(
+    folder: str | Path,
+    description_toml: str,
+    plan: Plan,
+    *,
+    measure: str,
+    settings: Mapping[str, Any],
+    robot_path: str = "",
+) -> tuple[Journal, SessionState]:
+    """Create a session folder and journal its header and plan.
+
+    Args:
+        folder: the new session folder (must hold no journal).
+        description_toml: the robot description's TOML text (journaled whole,
+            so the session can be re-solved and re-estimated offline).
+        plan: the designs and their trial counts.
+        measure: the measurement source (``fake``, ``file:PATH``, ``operator``).
+        settings: anything else worth keeping (port, seed, time scale...).
+        robot_path: where the description was read from.
+
+    Raises:
+        JournalError: the folder already holds a session or cannot be written.
+        RobotDescriptionError: the TOML is not a valid robot description.
+    """
+    parse_robot_description(description_toml, robot_path or "robot description")
+    journal = Journal.create(folder)
+    try:
+        header = journal.append(
+            ev.SESSION,
+            {
+                "format": ev.FORMAT,
+                "odohil": __version__,
+                "robot_toml": description_toml,
+                "robot_path": robot_path,
+                "measure": measure,
+                "settings": dict(settings),
+            },
+        )
+        state = replay([header, journal.append(ev.PLAN, plan.to_json())])
+    except BaseException:
+        journal.close()
+        raise
+    return journal, state
+
+
+@dataclass(frozen=True)
+class ResumedSession:
+    """An existing session opened for appending.
+
+    Attributes:
+        journal: the open journal.
+        state: the session as journaled.
+        torn: the torn last record that was kept aside, if any.
+    """
+
+    journal: Journal
+    state: SessionState
+    torn: TornRecord | None
+
+
+def resume_session(folder: str | Path, note: Mapping[str, Any] | None = None) -> ResumedSession:
+    """Open a session to continue it; a torn last record is kept aside and journaled.
+
+    Raises:
+        JournalError: no journal, in use, corrupt, or already finished.
+    """
+    journal, contents = Journal.open(folder)
+    try:
+        state = replay(contents.records)
+        if state.finished:
+            raise JournalError(f"the session in {folder} is finished; nothing to resume")
+        if state.plan is None:
+            raise JournalError(f"the session in {folder} has no plan")
+        if contents.torn is not None:
+            torn = contents.torn
+            record = journal.append(
+                ev.TORN_RECORD,
+                {
+                    "file": torn.set_aside.name if torn.set_aside else "",
+                    "line": torn.line_number,
+                    "bytes": torn.size,
+                    "reason": torn.reason,
+                },
+            )
+            state = apply(state, record)
+        state = apply(state, journal.append(ev.RESUMED, dict(note or {})))
+    except BaseException:
+        journal.close()
+        raise
+    return ResumedSession(journal, state, contents.torn)
+
+
+def description_of(state: SessionState) -> RobotDescription:
+    """The robot description journaled in the session header."""
+    return parse_robot_description(
+        str(state.header["robot_toml"]), str(state.header.get("robot_path") or "session")
+    )
+
+
+class SessionEngine:
+    """Runs the trials of one session (see the module docstring).
+
+    Args:
+        journal: the session's open journal.
+        state: its state (from :func:`start_session` or :func:`resume_session`).
+        robot: the connected robot.
+        source: where the distances come from.
+        estimator: the live estimator, or None.
+        observer: sees every record, or None.
+        motion: how the robot drives.
+        connection: what to journal about the connection (port, baud...).
+    """
+
+    def __init__(
+        self,
+        journal: Journal,
+        state: SessionState,
+        robot: NomadRobot,
+        source: MeasurementSource,
+        *,
+        estimator: LiveEstimator | None = None,
+        observer: SessionObserver | None = None,
+        motion: MotionSettings | None = None,
+        connection: Mapping[str, Any] | None = None,
+        max_rejections: int = MAX_REJECTIONS,
+    ) -> None:
+        if state.plan is None:
+            raise JournalError("the session has no plan")
+        self.journal = journal
+        self.state = state
+        self.plan: Plan = state.plan
+        self.robot = robot
+        self.source = source
+        self.estimator = estimator
+        self.observer = observer
+        self.motion = motion or MotionSettings()
+        self.connection = dict(connection or {})
+        self.max_rejections = max_rejections
+        self.description = description_of(state)
+        self.labels = distance_labels(self.description)
+        self.latest_estimate: Mapping[str, Any] | None = None
+        self._estimated = 0
+
+    # -- journal ---------------------------------------------------------
+
+    def _log(self, kind: str, data: Mapping[str, Any]) -> Record:
+        record = self.journal.append(kind, data)
+        self.state = apply(self.state, record)
+        if self.observer is not None:
+            self.observer.record(record, self.state)
+        return record
+
+    # -- the loop --------------------------------------------------------
+
+    def run(self, max_trials: int | None = None) -> SessionState:
+        """Run trials until the plan is done (or ``max_trials`` more completed).
+
+        Returns the final state. On any exception (Ctrl-C included) the robot
+        is asked to stop, ``stopped`` is journaled and the exception re-raised.
+        """
+        try:
+            self._catch_up_estimate()
+            self._connect()
+            self._finish_open_trial()
+            completed = 0
+            while (trial := self.state.next_trial()) is not None:
+                if max_trials is not None and completed >= max_trials:
+                    return self.state
+                self._run_trial(trial)
+                completed += 1
+            self._log(ev.FINISHED, {"n_trials": len(self.state.completed)})
+        except BaseException as exc:
+            self._stopped(exc)
+            raise
+        return self.state
+
+    def _stopped(self, exc: BaseException) -> None:
+        with contextlib.suppress(OdohilError):
+            self.robot.stop()
+        reason = "interrupted" if isinstance(exc, KeyboardInterrupt) else "error"
+        message = str(exc) or type(exc).__name__
+        with contextlib.suppress(JournalError, OSError, ValueError):
+            opened = self.state.open_trial
+            if opened is not None and opened.phase in (Phase.MARKED, Phase.MOVING):
+                self._log(
+                    ev.VOID,
+                    {
+                        "trial": opened.trial,
+                        "attempt": opened.attempt,
+                        "reason": f"{reason} before the motion ended: {message}",
+                    },
+                )
+            self._log(ev.STOPPED, {"reason": reason, "message": message})
+
+    def _catch_up_estimate(self) -> None:
+        """Feed the trials completed in earlier processes to the estimator."""
+        if self.estimator is None:
+            return
+        for trial in self.state.completed[self._estimated :]:
+            self.latest_estimate = self.estimator.add(trial)
+        self._estimated = len(self.state.completed)
+
+    def _connect(self) -> None:
+        sample = self.robot.state()
+        if self.motion.watchdog_s > 0:
+            self.robot.set_watchdog(self.motion.watchdog_s)
+        self._log(
+            ev.ROBOT,
+            {
+                "connection": self.connection,
+                "motion": self.motion.to_json(),
+                "state": _sample_json(sample),
+            },
+        )
+
+    def _finish_open_trial(self) -> None:
+        opened = self.state.open_trial
+        if opened is None:
+            return
+        if opened.phase is Phase.MEASURING:
+            self._measure_and_solve()
+            return
+        where = "before its motion" if opened.phase is Phase.MARKED else "during its motion"
+        self._log(
+            ev.VOID,
+            {
+                "trial": opened.trial,
+                "attempt": opened.attempt,
+                "reason": f"the session stopped {where}; the trial is redone",
+            },
+        )
+
+    def _context(self, opened: OpenTrial) -> TrialContext:
+        return TrialContext(
+            trial=opened.trial,
+            attempt=opened.attempt,
+            n_trials=self.plan.n_trials,
+            design=self.plan.items[opened.design_index].design,
+            labels=self.labels,
+            start=opened.start,
+            end=opened.end,
+            encoder_end_pose=opened.encoder_end_pose,
+            measurements=opened.measurements,
+            rejections=opened.rejections,
+        )
+
+    def _settle(self) -> EncoderSample:
+        sample = self.robot.state()
+        if sample.moving:
+            self.robot.stop()
+            sample = self.robot.poll_until_stopped(self.motion.settle_timeout_s)
+        return sample
+
+    def _run_trial(self, trial: int) -> None:
+        attempt = self.state.next_attempt(trial)
+        design_index = self.plan.design_index(trial)
+        design = self.plan.items[design_index].design
+        self._settle()
+        self.robot.define_pose(0.0, 0.0)
+        self.robot.define_angles(0.0, 0.0)
+        zeroed = self.robot.state()
+        ctx = TrialContext(
+            trial=trial,
+            attempt=attempt,
+            n_trials=self.plan.n_trials,
+            design=design,
+            labels=self.labels,
+        )
+        start = dict(self.source.mark_start(ctx))
+        ids = {"trial": trial, "attempt": attempt}
+        self._log(
+            ev.TRIAL_START,
+            {**ids, "design": design_index, "zeroed": _sample_json(zeroed), "start": start},
+        )
+        self._log(ev.MOTION_START, ids)
+        record = forth_and_back(
+            self.robot,
+            design,
+            tolerance_wire=self.motion.tolerance_wire,
+            step_timeout_s=self.motion.step_timeout_s,
+            speeds=self.motion.speeds,
+            accelerations=self.motion.accelerations,
+        )
+        opened = self.state.open_trial
+        assert opened is not None
+        ctx = replace(self._context(opened), encoder_end_pose=record.end_pose)
+        end = dict(self.source.mark_end(ctx))
+        self._log(
+            ev.MOTION_DONE,
+            {
+                **ids,
+                "encoder_end_pose": list(record.end_pose),
+                "duration_s": record.duration_s,
+                "trajectory": _trajectory(record),
+                "end": end,
+            },
+        )
+        self._measure_and_solve()
+
+    def _measure_and_solve(self) -> None:
+        while True:
+            opened = self.state.open_trial
+            assert opened is not None
+            ids = {"trial": opened.trial, "attempt": opened.attempt}
+            for index in range(len(opened.measurements), len(self.labels)):
+                ctx = self._context(opened)
+                value = check_distance(self.source.distance(ctx, index), self.labels[index])
+                self._log(
+                    ev.MEASUREMENT,
+                    {**ids, "index": index, "label": self.labels[index], "value_m": value},
+                )
+                opened = self.state.open_trial
+                assert opened is not None
+            n_same = len(self.description.screws)
+            marks = MarkDistances(
+                same_m=opened.measurements[:n_same], cross_m=opened.measurements[n_same:]
+            )
+            end_pose = opened.encoder_end_pose
+            assert end_pose is not None
+            try:
+                solution = solve_marks(self.description, marks, end_pose)
+            except InconsistentMeasurementError as exc:
+                if opened.rejections >= self.max_rejections:
+                    raise MeasurementError(
+                        f"trial {opened.trial}: the distances were rejected "
+                        f"{opened.rejections + 1} times; last: {exc}"
+                    ) from exc
+                self.source.rejected(self._context(opened), str(exc))
+                self._log(ev.MEASUREMENTS_REJECTED, {**ids, "reason": str(exc)})
+                continue
+            break
+        self._log(
+            ev.SOLVED,
+            {
+                **ids,
+                "pose_change": [float(v) for v in solution.pose_change],
+                "cov": [[float(v) for v in row] for row in solution.cov],
+                "chi2": float(solution.chi2),
+                "clear_cut": bool(solution.clear_cut),
+                "reason": solution.reason,
+            },
+        )
+        if self.estimator is not None:
+            result = self.estimator.add(self.state.completed[-1])
+            self._estimated = len(self.state.completed)
+            self.latest_estimate = result
+            if result is not None:
+                self._log(ev.ESTIMATE, {"n_trials": len(self.state.completed), "result": result})
+
+
+def _sample_json(sample: EncoderSample) -> dict[str, Any]:
+    return {
+        "x_m": sample.x_m,
+        "y_m": sample.y_m,
+        "steer_rad": sample.steer_rad,
+        "robot_time_s": sample.robot_time_s,
+        "motor_status": sample.motor_status,
+    }
+
+
+def _trajectory(record: MotionRecord) -> list[list[float]]:
+    """Rows (t s since the run's first sample, x m, y m, steering rad)."""
+    t0 = record.samples[0].robot_time_s if record.samples else 0.0
+    return [
+        [round(s.robot_time_s - t0, 3), s.x_m, s.y_m, s.steer_rad]
+        for s in record.samples
+        if math.isfinite(s.robot_time_s)
+    ]
+
+
+ObserverCallback = Callable[[Record, SessionState], None]
+
+
+class CallbackObserver:
+    """A :class:`SessionObserver` from a plain function."""
+
+    def __init__(self, callback: ObserverCallback) -> None:
+        self.callback = callback
+
+    def record(self, record: Record, state: SessionState) -> None:
+        """Pass the record on."""
+        self.callback(record, state)

@@ -1,0 +1,281 @@
+"""Measurement sources: where a trial's floor-mark distances come from.
+
+The engine asks a :class:`MeasurementSource` three things per trial attempt:
+``mark_start`` once the robot is re-zeroed (the operator marks the floor under
+every screw), ``mark_end`` once the motion is done (the end marks), then one
+``distance`` per tape reading, in the robot description's order (same-screw
+distances, then cross distances). Whatever ``mark_start``/``mark_end`` return
+is journaled with the trial, so a resumed session hands the same data back in
+:class:`TrialContext`.
+
+Sources here:
+
+- :class:`OperatorSource`: a person with a tape, through an
+  :class:`OperatorPrompts` implementation (the interactive wizard's);
+- :class:`FakeTruthSource`: the fake robot's true pose (its side channel,
+  behind the :class:`TruthReader` protocol), turned into distances by the
+  forward model plus seeded Gaussian tape noise, for unattended runs and CI;
+- :class:`RecordedSource`: distances recorded beforehand, one row per trial
+  in trial order (e.g. from a trial file).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from odohil.errors import MeasurementError
+from odohil.science.floor_marks import distance_labels, marks_from_pose
+from odohil.science.paths import Design
+from odohil.science.robot_description import RobotDescription
+
+
+@dataclass(frozen=True)
+class TrialContext:
+    """What a source may know about the trial attempt it measures.
+
+    Attributes:
+        trial: trial number in the plan (1-based).
+        attempt: attempt number (1-based).
+        n_trials: trials in the plan.
+        design: the design driven.
+        labels: names of the distances, in the order they are asked for.
+        start: the data ``mark_start`` returned (journaled).
+        end: the data ``mark_end`` returned (journaled; empty before).
+        encoder_end_pose: (x m, y m, theta rad) once the motion is done.
+        measurements: the distances already taken, metres.
+        rejections: how many times this attempt's distances were rejected.
+    """
+
+    trial: int
+    attempt: int
+    n_trials: int
+    design: Design
+    labels: tuple[str, ...]
+    start: Mapping[str, Any] = field(default_factory=dict)
+    end: Mapping[str, Any] = field(default_factory=dict)
+    encoder_end_pose: tuple[float, float, float] | None = None
+    measurements: tuple[float, ...] = ()
+    rejections: int = 0
+
+
+class MeasurementSource(Protocol):
+    """Where distances come from (see the module docstring)."""
+
+    def mark_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """The start marks are made now (the robot stands still, re-zeroed).
+
+        Returns JSON data to journal with the trial (may be empty)."""
+        ...
+
+    def mark_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """The motion is over: the end marks are made now. Returns JSON data."""
+        ...
+
+    def distance(self, ctx: TrialContext, index: int) -> float:
+        """Distance number ``index`` (label ``ctx.labels[index]``), metres.
+
+        Raises MeasurementError when it cannot be had."""
+        ...
+
+    def rejected(self, ctx: TrialContext, reason: str) -> None:
+        """The distances of this attempt explain no rigid motion; they will be
+        asked for again (raise MeasurementError to give up instead)."""
+        ...
+
+
+class OperatorPrompts(Protocol):
+    """The operator's side of a measurement (implemented by a user interface)."""
+
+    def confirm_start_marks(self, ctx: TrialContext) -> None:
+        """Ask the operator to mark the floor under every screw; return when done."""
+        ...
+
+    def confirm_end_marks(self, ctx: TrialContext) -> None:
+        """Ask the operator to mark the end positions; return when done."""
+        ...
+
+    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
+        """Ask for distance ``ctx.labels[index]`` in metres; return what was typed.
+
+        ``problem`` is empty, or says why the previous answer was refused."""
+        ...
+
+    def show_rejection(self, ctx: TrialContext, reason: str) -> None:
+        """Tell the operator the distances are inconsistent and will be retaken."""
+        ...
+
+
+class OperatorSource:
+    """A person with a tape, through :class:`OperatorPrompts`; answers are
+    checked (a finite, non-negative number of metres) and asked again if bad."""
+
+    def __init__(self, prompts: OperatorPrompts) -> None:
+        self.prompts = prompts
+
+    def mark_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Wait for the operator's start marks."""
+        self.prompts.confirm_start_marks(ctx)
+        return {}
+
+    def mark_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Wait for the operator's end marks."""
+        self.prompts.confirm_end_marks(ctx)
+        return {}
+
+    def distance(self, ctx: TrialContext, index: int) -> float:
+        """Ask until the answer is a usable distance in metres."""
+        problem = ""
+        while True:
+            answer = self.prompts.ask_distance(ctx, index, problem)
+            try:
+                return check_distance(answer, ctx.labels[index])
+            except MeasurementError as exc:
+                problem = str(exc)
+
+    def rejected(self, ctx: TrialContext, reason: str) -> None:
+        """Tell the operator."""
+        self.prompts.show_rejection(ctx, reason)
+
+
+def check_distance(value: object, label: str) -> float:
+    """``value`` as a distance in metres: finite and non-negative.
+
+    Raises:
+        MeasurementError: not a number, not finite, or negative.
+    """
+    try:
+        number = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise MeasurementError(f"{label}: {value!r} is not a number of metres") from None
+    if not math.isfinite(number):
+        raise MeasurementError(f"{label}: {value!r} is not a finite number")
+    if number < 0:
+        raise MeasurementError(f"{label}: a distance cannot be negative ({number} m)")
+    return number
+
+
+class TruthReader(Protocol):
+    """The fake robot's side channel: its true pose now."""
+
+    def true_pose(self) -> tuple[float, float, float]:
+        """True (x m, y m, heading rad) in the robot's power-on frame."""
+        ...
+
+
+def relative_true_pose(
+    start: Sequence[float], end: Sequence[float], winding_rad: float
+) -> tuple[float, float, float]:
+    """The true pose change from two true poses (x m, y m, heading rad): the end
+    point in the start frame, and the heading change minus ``winding_rad``."""
+    x0, y0, th0 = (float(v) for v in start)
+    x1, y1, th1 = (float(v) for v in end)
+    c, s = math.cos(th0), math.sin(th0)
+    dx, dy = x1 - x0, y1 - y0
+    return (c * dx + s * dy, -s * dx + c * dy, th1 - th0 - winding_rad)
+
+
+class FakeTruthSource:
+    """Distances from the fake robot's true pose, with simulated tape noise.
+
+    At ``mark_start`` and ``mark_end`` the true pose is read from the side
+    channel and journaled (``true_pose``). Distances are the forward model of
+    the true pose change plus independent N(0, ``sigma_m``^2) noise (the
+    robot description's tape sigma by default), folded at 0. The noise of a
+    trial attempt is drawn from a generator seeded by (seed, trial, attempt,
+    rejections), so a resumed session measures exactly what the interrupted
+    one would have.
+    """
+
+    def __init__(
+        self,
+        truth: TruthReader,
+        description: RobotDescription,
+        seed: int = 0,
+        sigma_m: float | None = None,
+    ) -> None:
+        self.truth = truth
+        self.description = description
+        self.seed = seed
+        self.sigma_m = description.sigma_m if sigma_m is None else sigma_m
+
+    def mark_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Journal the true start pose."""
+        return {"true_pose": list(self.truth.true_pose())}
+
+    def mark_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Journal the true end pose."""
+        return {"true_pose": list(self.truth.true_pose())}
+
+    def true_pose_change(self, ctx: TrialContext) -> tuple[float, float, float]:
+        """The attempt's true (dx m, dy m, dtheta rad), dtheta minus the winding."""
+        try:
+            start, end = ctx.start["true_pose"], ctx.end["true_pose"]
+        except KeyError:
+            raise MeasurementError(
+                f"trial {ctx.trial}: no true start and end pose were journaled"
+            ) from None
+        return relative_true_pose(start, end, ctx.design.path().winding_rad)
+
+    def distance(self, ctx: TrialContext, index: int) -> float:
+        """The noisy forward-model distance number ``index``, metres."""
+        exact = marks_from_pose(self.description, self.true_pose_change(ctx)).as_array()
+        rng = np.random.default_rng([self.seed, ctx.trial, ctx.attempt, ctx.rejections])
+        noisy = np.abs(exact + rng.normal(0.0, self.sigma_m, exact.size))
+        return float(noisy[index])
+
+    def rejected(self, ctx: TrialContext, reason: str) -> None:
+        """Nothing to do: the next draw differs (``rejections`` is in the seed)."""
+
+
+class RecordedSource:
+    """Distances taken beforehand: row k (0-based) serves the k-th trial attempt
+    that is measured, in session order; ``start_row`` skips rows already used.
+
+    Each row holds the distances in the robot description's order.
+    """
+
+    def __init__(
+        self, rows: Sequence[Sequence[float]], description: RobotDescription, origin: str
+    ) -> None:
+        labels = distance_labels(description)
+        for number, row in enumerate(rows, start=1):
+            if len(row) != len(labels):
+                raise MeasurementError(
+                    f"{origin}: row {number} has {len(row)} distances, "
+                    f"the robot description needs {len(labels)} ({', '.join(labels)})"
+                )
+        self.rows = [tuple(float(v) for v in row) for row in rows]
+        self.origin = origin
+
+    def row_for(self, ctx: TrialContext) -> int:
+        """The row used by trial ``ctx.trial`` (trial k uses row k - 1)."""
+        return ctx.trial - 1
+
+    def mark_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Nothing to mark; journal which row serves the trial."""
+        return {"row": self.row_for(ctx) + 1, "origin": self.origin}
+
+    def mark_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Nothing to mark."""
+        return {}
+
+    def distance(self, ctx: TrialContext, index: int) -> float:
+        """Distance ``index`` of the trial's row."""
+        row = self.row_for(ctx)
+        if row >= len(self.rows):
+            raise MeasurementError(
+                f"{self.origin}: trial {ctx.trial} needs row {row + 1}, "
+                f"the file has {len(self.rows)}"
+            )
+        return check_distance(self.rows[row][index], ctx.labels[index])
+
+    def rejected(self, ctx: TrialContext, reason: str) -> None:
+        """Recorded distances cannot be retaken."""
+        raise MeasurementError(
+            f"{self.origin}: row {self.row_for(ctx) + 1} (trial {ctx.trial}): {reason}"
+        )
