@@ -9,6 +9,7 @@ after which 1 s of silence aborts the reply.
 from __future__ import annotations
 
 import contextlib
+import termios
 import time
 from dataclasses import dataclass
 from typing import Protocol
@@ -30,6 +31,8 @@ DEFAULT_BAUD = 38400
 NORMAL_TIMEOUT_S = 1.0
 """First-byte wait for ordinary requests, and the silence that aborts a reply."""
 ZR_TIMEOUT_S = 120.0
+_IO_ERRORS = (serial.SerialException, OSError, termios.error)
+"""What a vanished line raises: EIO from read/write, or from tcflush on a pty."""
 READ_SLICE_S = 0.05
 """pyserial read timeout: how often the link checks its own deadlines."""
 
@@ -112,7 +115,7 @@ class Link:
         """Close the port (idempotent)."""
         if not self._closed:
             self._closed = True
-            with contextlib.suppress(serial.SerialException, OSError):
+            with contextlib.suppress(*_IO_ERRORS):
                 self._port.close()
 
     def exchange(self, packet: bytes, first_byte_s: float = NORMAL_TIMEOUT_S) -> Packet:
@@ -130,8 +133,8 @@ class Link:
             self._drain()
             self._port.write(packet)
             self._port.flush()
-        except (serial.SerialException, OSError) as exc:
-            raise DisconnectedError(f"serial write failed: {exc}") from exc
+        except _IO_ERRORS as exc:
+            raise DisconnectedError(f"serial line failed: {exc}") from exc
         self.stats.requests += 1
         self.stats.bytes_out += len(packet)
         return self._read_reply(first_byte_s)
@@ -148,7 +151,7 @@ class Link:
         while True:
             try:
                 data = self._port.read(max(1, self._port.in_waiting))
-            except (serial.SerialException, OSError) as exc:
+            except _IO_ERRORS as exc:
                 raise DisconnectedError(f"serial read failed: {exc}") from exc
             now = time.monotonic()
             if data:
