@@ -1,0 +1,279 @@
+"""The robot description: where the marking screws are, how good a tape reading is,
+which cross distances are measured, and how to reach the robot.
+
+Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_file`)::
+
+    [screws]                 # positions in the robot frame (x forward, y left), metres
+    A = [0.20, 0.0]
+    B = [-0.10, 0.173]
+    C = [-0.10, -0.173]
+    [measurement]
+    sigma_m = 0.001          # standard deviation of one tape reading, metres
+    cross = [["A", "B"]]     # cross distances: start mark of A to end mark of B
+    [serial]                 # optional, for the driver
+    port = "/dev/ttyUSB0"    # or any pyserial URL
+    baud = 38400             # 4800, 9600, 19200 or 38400
+    timeout_s = 1.0
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from odohil.errors import RobotDescriptionError
+
+FloatArray = npt.NDArray[np.float64]
+
+BAUD_RATES: tuple[int, ...] = (4800, 9600, 19200, 38400)
+DEFAULT_BAUD = 38400
+DEFAULT_TIMEOUT_S = 1.0
+MAX_CROSS_PAIRS = 2
+MIN_SCREW_SEPARATION_M = 0.01
+"""Two screws closer than this (metres) count as coincident."""
+MIN_SPREAD_RATIO = 0.1
+"""Screws count as (near-)collinear when their spread across their best-fit line
+is less than this fraction of their spread along it (ratio of the singular
+values of the centred positions); the pose from such marks is ill-conditioned."""
+
+_TOP_KEYS = ("screws", "measurement", "serial")
+_MEASUREMENT_KEYS = ("sigma_m", "cross")
+_SERIAL_KEYS = ("port", "baud", "timeout_s")
+
+
+@dataclass(frozen=True)
+class Screw:
+    """A marking screw on the robot's base.
+
+    Attributes:
+        name: the key in the ``[screws]`` table.
+        x_m: position along the robot's forward axis, metres.
+        y_m: position along the robot's left axis, metres.
+    """
+
+    name: str
+    x_m: float
+    y_m: float
+
+
+@dataclass(frozen=True)
+class SerialSettings:
+    """How the driver reaches the robot.
+
+    Attributes:
+        port: device path or any pyserial URL; None when not configured.
+        baud: line speed in baud, one of :data:`BAUD_RATES`.
+        timeout_s: reply timeout in seconds.
+    """
+
+    port: str | None = None
+    baud: int = DEFAULT_BAUD
+    timeout_s: float = DEFAULT_TIMEOUT_S
+
+
+@dataclass(frozen=True)
+class RobotDescription:
+    """A validated robot description (SI units).
+
+    Attributes:
+        screws: the marking screws, in file order (at least three, not collinear).
+        sigma_m: standard deviation of one tape reading, metres.
+        cross_pairs: (i, j) screw names, at most two: the distance from the start
+            mark of screw i to the end mark of screw j is measured.
+        serial: serial-line settings for the driver.
+    """
+
+    screws: tuple[Screw, ...]
+    sigma_m: float
+    cross_pairs: tuple[tuple[str, str], ...] = ()
+    serial: SerialSettings = field(default_factory=SerialSettings)
+
+    def __post_init__(self) -> None:
+        _check_screws(self.screws)
+        if not math.isfinite(self.sigma_m) or self.sigma_m <= 0:
+            raise RobotDescriptionError(
+                f"measurement.sigma_m must be a positive number of metres, got {self.sigma_m!r}"
+            )
+        _check_cross_pairs(self.cross_pairs, tuple(s.name for s in self.screws))
+        _check_serial(self.serial)
+
+    @property
+    def screw_names(self) -> tuple[str, ...]:
+        """Screw names in file order."""
+        return tuple(screw.name for screw in self.screws)
+
+    def positions(self) -> FloatArray:
+        """Screw positions in the robot frame, shape (n, 2), metres."""
+        return np.array([[s.x_m, s.y_m] for s in self.screws], dtype=np.float64)
+
+    def cross_indices(self) -> tuple[tuple[int, int], ...]:
+        """The cross pairs as (i, j) indices into :attr:`screws`."""
+        names = self.screw_names
+        return tuple((names.index(i), names.index(j)) for i, j in self.cross_pairs)
+
+
+def parse_robot_description(text: str, source: str = "robot description") -> RobotDescription:
+    """Parse and validate a robot description from TOML text.
+
+    Raises:
+        RobotDescriptionError: the text is not TOML, or a key is unknown,
+            missing, of the wrong type or out of range; the message names the
+            key (prefixed by ``source``) and the problem.
+    """
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise RobotDescriptionError(f"{source}: not valid TOML: {exc}") from exc
+    try:
+        return _from_mapping(data)
+    except RobotDescriptionError as exc:
+        raise RobotDescriptionError(f"{source}: {exc}") from None
+
+
+def _from_mapping(data: dict[str, Any]) -> RobotDescription:
+    _reject_unknown(data, _TOP_KEYS, "")
+    screws_table = _table(data, "screws", required=True)
+    screws = tuple(_screw(name, value, f"screws.{name}") for name, value in screws_table.items())
+    measurement = _table(data, "measurement", required=True)
+    _reject_unknown(measurement, _MEASUREMENT_KEYS, "measurement.")
+    if "sigma_m" not in measurement:
+        raise RobotDescriptionError("measurement.sigma_m is missing")
+    sigma_m = _number(measurement["sigma_m"], "measurement.sigma_m")
+    cross_pairs = _cross_pairs(measurement.get("cross", []))
+    serial_table = _table(data, "serial", required=False)
+    _reject_unknown(serial_table, _SERIAL_KEYS, "serial.")
+    serial = _serial(serial_table)
+    return RobotDescription(screws=screws, sigma_m=sigma_m, cross_pairs=cross_pairs, serial=serial)
+
+
+def _reject_unknown(table: dict[str, Any], known: tuple[str, ...], prefix: str) -> None:
+    unknown = [key for key in table if key not in known]
+    if unknown:
+        listed = ", ".join(f"{prefix}{key}" for key in unknown)
+        raise RobotDescriptionError(
+            f"unknown key(s) {listed}; allowed here: {', '.join(prefix + k for k in known)}"
+        )
+
+
+def _table(data: dict[str, Any], key: str, required: bool) -> dict[str, Any]:
+    if key not in data:
+        if required:
+            raise RobotDescriptionError(f"the [{key}] table is missing")
+        return {}
+    value = data[key]
+    if not isinstance(value, dict):
+        raise RobotDescriptionError(f"{key} must be a table ([{key}]), got {value!r}")
+    return value
+
+
+def _number(value: Any, key: str) -> float:
+    # bool is an int subclass in Python; `true` is not a length.
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise RobotDescriptionError(f"{key} must be a number, got {value!r}")
+    result = float(value)
+    if not math.isfinite(result):
+        raise RobotDescriptionError(f"{key} must be a finite number, got {value!r}")
+    return result
+
+
+def _screw(name: str, value: Any, key: str) -> Screw:
+    if not isinstance(value, list) or len(value) != 2:
+        raise RobotDescriptionError(f"{key} must be [x, y] in metres, got {value!r}")
+    return Screw(name, _number(value[0], f"{key}[0]"), _number(value[1], f"{key}[1]"))
+
+
+def _cross_pairs(value: Any) -> tuple[tuple[str, str], ...]:
+    key = "measurement.cross"
+    if not isinstance(value, list):
+        raise RobotDescriptionError(f"{key} must be a list of [start, end] screw names")
+    pairs: list[tuple[str, str]] = []
+    for index, pair in enumerate(value):
+        if (
+            not isinstance(pair, list)
+            or len(pair) != 2
+            or not all(isinstance(name, str) for name in pair)
+        ):
+            raise RobotDescriptionError(
+                f'{key}[{index}] must be a pair of screw names like ["A", "B"], got {pair!r}'
+            )
+        pairs.append((pair[0], pair[1]))
+    return tuple(pairs)
+
+
+def _serial(table: dict[str, Any]) -> SerialSettings:
+    port = table.get("port")
+    if port is not None and (not isinstance(port, str) or not port):
+        raise RobotDescriptionError(f"serial.port must be a non-empty string, got {port!r}")
+    baud_value = table.get("baud", DEFAULT_BAUD)
+    if isinstance(baud_value, bool) or not isinstance(baud_value, int):
+        raise RobotDescriptionError(f"serial.baud must be an integer, got {baud_value!r}")
+    timeout_s = _number(table.get("timeout_s", DEFAULT_TIMEOUT_S), "serial.timeout_s")
+    return SerialSettings(port=port, baud=baud_value, timeout_s=timeout_s)
+
+
+def _check_screws(screws: tuple[Screw, ...]) -> None:
+    if len(screws) < 3:
+        raise RobotDescriptionError(
+            f"screws: at least three screws are needed to fix a planar pose, got {len(screws)}"
+        )
+    names = [s.name for s in screws]
+    for screw in screws:
+        if not screw.name:
+            raise RobotDescriptionError("screws: a screw needs a non-empty name")
+        if not (math.isfinite(screw.x_m) and math.isfinite(screw.y_m)):
+            raise RobotDescriptionError(f"screws.{screw.name} must be finite")
+    if len(set(names)) != len(names):
+        raise RobotDescriptionError(f"screws: names must be unique, got {names}")
+    points = np.array([[s.x_m, s.y_m] for s in screws], dtype=np.float64)
+    for i in range(len(screws)):
+        for j in range(i + 1, len(screws)):
+            gap = float(np.hypot(*(points[i] - points[j])))
+            if gap < MIN_SCREW_SEPARATION_M:
+                raise RobotDescriptionError(
+                    f"screws.{names[i]} and screws.{names[j]} coincide ({gap:.4g} m apart; "
+                    f"at least {MIN_SCREW_SEPARATION_M} m needed)"
+                )
+    spread = np.linalg.svd(points - points.mean(axis=0), compute_uv=False)
+    if spread[1] < MIN_SPREAD_RATIO * spread[0]:
+        raise RobotDescriptionError(
+            "screws are (nearly) collinear: their spread across the line they lie on is "
+            f"{spread[1] / spread[0]:.3g} of the spread along it (at least {MIN_SPREAD_RATIO} "
+            "needed), so the floor marks cannot fix the heading"
+        )
+
+
+def _check_cross_pairs(pairs: tuple[tuple[str, str], ...], names: tuple[str, ...]) -> None:
+    key = "measurement.cross"
+    if len(pairs) > MAX_CROSS_PAIRS:
+        raise RobotDescriptionError(
+            f"{key}: at most {MAX_CROSS_PAIRS} cross distances are used, got {len(pairs)}"
+        )
+    for index, (start, end) in enumerate(pairs):
+        for name in (start, end):
+            if name not in names:
+                raise RobotDescriptionError(
+                    f"{key}[{index}] names unknown screw {name!r}; screws are {list(names)}"
+                )
+        if start == end:
+            raise RobotDescriptionError(
+                f"{key}[{index}] names screw {start!r} twice; a cross distance joins the start "
+                "mark of one screw to the end mark of another"
+            )
+    if len(set(pairs)) != len(pairs):
+        raise RobotDescriptionError(f"{key}: the same pair is listed twice: {list(pairs)}")
+
+
+def _check_serial(serial: SerialSettings) -> None:
+    if serial.baud not in BAUD_RATES:
+        raise RobotDescriptionError(
+            f"serial.baud must be one of {list(BAUD_RATES)}, got {serial.baud!r}"
+        )
+    if not math.isfinite(serial.timeout_s) or serial.timeout_s <= 0:
+        raise RobotDescriptionError(
+            f"serial.timeout_s must be a positive number of seconds, got {serial.timeout_s!r}"
+        )

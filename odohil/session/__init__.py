@@ -1,0 +1,1 @@
+"""Layer 4: trials, journal, measurement sources, live estimates."""

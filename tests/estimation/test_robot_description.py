@@ -1,0 +1,159 @@
+"""Robot description: parsing the TOML format and rejecting bad descriptions."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from odohil.errors import InitError, RobotDescriptionError
+from odohil.science.robot_description import (
+    RobotDescription,
+    Screw,
+    SerialSettings,
+    parse_robot_description,
+)
+from odohil.session.robot_file import load_robot_description
+
+EXAMPLE = """
+[screws]                 # positions in the robot frame (x forward, y left), metres
+A = [0.20, 0.0]
+B = [-0.10, 0.173]
+C = [-0.10, -0.173]
+[measurement]
+sigma_m = 0.001          # standard deviation of one tape reading, metres
+cross = [["A", "B"]]     # cross distances: start mark of A to end mark of B
+[serial]                 # optional, for the driver
+port = "/dev/ttyUSB0"    # or any pyserial URL
+baud = 38400             # 4800, 9600, 19200 or 38400
+timeout_s = 1.0
+"""
+
+MINIMAL = """
+[screws]
+A = [0.20, 0.0]
+B = [-0.10, 0.173]
+C = [-0.10, -0.173]
+[measurement]
+sigma_m = 0.001
+"""
+
+
+def test_example_parses_to_the_documented_values() -> None:
+    description = parse_robot_description(EXAMPLE)
+    assert description.screws == (
+        Screw("A", 0.20, 0.0),
+        Screw("B", -0.10, 0.173),
+        Screw("C", -0.10, -0.173),
+    )
+    assert description.sigma_m == 0.001
+    assert description.cross_pairs == (("A", "B"),)
+    assert description.serial == SerialSettings(port="/dev/ttyUSB0", baud=38400, timeout_s=1.0)
+    assert description.cross_indices() == ((0, 1),)
+    assert description.positions().shape == (3, 2)
+
+
+def test_example_in_the_docs_is_the_tested_one() -> None:
+    docs = Path(__file__).resolve().parents[2] / "docs" / "measurements.md"
+    assert EXAMPLE.strip() in docs.read_text()
+
+
+def test_optional_parts_take_defaults_and_screws_keep_file_order() -> None:
+    text = MINIMAL.replace("A = [0.20, 0.0]\n", "").replace(
+        "[measurement]", "Z = [0.2, 0]\n[measurement]"
+    )
+    description = parse_robot_description(text)
+    assert description.screw_names == ("B", "C", "Z")
+    assert description.cross_pairs == ()
+    assert description.serial == SerialSettings(port=None, baud=38400, timeout_s=1.0)
+
+
+def test_integers_are_accepted_as_metres() -> None:
+    description = parse_robot_description(MINIMAL.replace("[0.20, 0.0]", "[1, 0]"))
+    assert description.screws[0] == Screw("A", 1.0, 0.0)
+
+
+def test_loading_from_a_file(tmp_path: Path) -> None:
+    path = tmp_path / "robot.toml"
+    path.write_text(EXAMPLE, encoding="utf-8")
+    assert load_robot_description(path) == parse_robot_description(EXAMPLE)
+
+
+def test_a_missing_file_is_a_robot_description_error(tmp_path: Path) -> None:
+    with pytest.raises(RobotDescriptionError, match="cannot read"):
+        load_robot_description(tmp_path / "absent.toml")
+
+
+def test_errors_from_a_file_name_the_file(tmp_path: Path) -> None:
+    path = tmp_path / "robot.toml"
+    path.write_text(MINIMAL.replace("0.001", "-1"), encoding="utf-8")
+    with pytest.raises(RobotDescriptionError, match=r"robot\.toml.*sigma_m"):
+        load_robot_description(path)
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        ("C = [-0.10, -0.173]\n", "", r"at least three screws"),
+        ("C = [-0.10, -0.173]", "C = [0.2, 0.005]", r"A and screws\.C coincide"),
+        ("C = [-0.10, -0.173]", "C = [0.5, -0.173]", r"collinear"),
+        (
+            "B = [-0.10, 0.173]\nC = [-0.10, -0.173]",
+            "B = [-0.10, 0.01]\nC = [0.05, 0.005]\nD = [0.1, -0.003]",
+            r"collinear",
+        ),
+        ("sigma_m = 0.001", "sigma_m = 0.001\nsigma = 2", r"unknown key.*measurement\.sigma"),
+        ("[measurement]", "colour = 'red'\n[measurement]", r"screws\.colour must be \[x, y\]"),
+        ("[screws]", "[robot]\nname = 'n150'\n[screws]", r"unknown key.*robot"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\n[serial]\nspeed = 9600", r"serial\.speed"),
+        ("A = [0.20, 0.0]", "A = [0.20, '0.0']", r"screws\.A\[1\] must be a number"),
+        ("A = [0.20, 0.0]", "A = [true, 0.0]", r"screws\.A\[0\] must be a number"),
+        ("A = [0.20, 0.0]", "A = [0.20, nan]", r"screws\.A\[1\] must be a finite"),
+        ("A = [0.20, 0.0]", "A = [0.20]", r"screws\.A must be \[x, y\]"),
+        ("sigma_m = 0.001", "sigma_m = '1 mm'", r"measurement\.sigma_m must be a number"),
+        ("sigma_m = 0.001", "sigma_m = 0", r"sigma_m must be a positive"),
+        ("sigma_m = 0.001", "sigma_m = -0.001", r"sigma_m must be a positive"),
+        ("sigma_m = 0.001\n", "", r"measurement\.sigma_m is missing"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\ncross = [['A', 'Q']]", r"unknown screw 'Q'"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\ncross = [['B', 'B']]", r"screw 'B' twice"),
+        (
+            "sigma_m = 0.001",
+            "sigma_m = 0.001\ncross = [['A', 'B'], ['B', 'C'], ['C', 'A']]",
+            r"at most 2 cross",
+        ),
+        ("sigma_m = 0.001", "sigma_m = 0.001\ncross = [['A', 'B'], ['A', 'B']]", r"twice"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\ncross = [['A']]", r"cross\[0\] must be a pair"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\ncross = 'AB'", r"cross must be a list"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\n[serial]\nbaud = 115200", r"serial\.baud"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\n[serial]\nbaud = 9600.0", r"serial\.baud"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\n[serial]\ntimeout_s = 0", r"serial\.timeout_s"),
+        ("sigma_m = 0.001", "sigma_m = 0.001\n[serial]\nport = 3", r"serial\.port"),
+        ("[measurement]\nsigma_m = 0.001\n", "", r"\[measurement\] table is missing"),
+        (
+            "[screws]\nA = [0.20, 0.0]\nB = [-0.10, 0.173]\nC = [-0.10, -0.173]\n",
+            "screws = 3\n",
+            r"screws must be a table",
+        ),
+        ("[screws]", "[screws", r"not valid TOML"),
+    ],
+)
+def test_invalid_descriptions_name_the_key_and_the_problem(
+    old: str, new: str, message: str
+) -> None:
+    assert old in MINIMAL
+    with pytest.raises(RobotDescriptionError, match=message):
+        parse_robot_description(MINIMAL.replace(old, new))
+
+
+def test_robot_description_errors_are_init_errors() -> None:
+    with pytest.raises(InitError):
+        parse_robot_description("")
+
+
+def test_the_dataclass_validates_when_built_directly() -> None:
+    screws = (Screw("A", 0.0, 0.0), Screw("B", 1.0, 0.0), Screw("C", 0.0, 1.0))
+    RobotDescription(screws, sigma_m=0.001)
+    with pytest.raises(RobotDescriptionError, match="sigma_m"):
+        RobotDescription(screws, sigma_m=float("nan"))
+    with pytest.raises(RobotDescriptionError, match="unique"):
+        RobotDescription((*screws[:2], Screw("A", 0.0, 1.0)), sigma_m=0.001)
