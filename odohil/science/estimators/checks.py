@@ -1,0 +1,263 @@
+"""The model check and the sufficiency check of an estimate.
+
+Model check: with the fitted parameters, each trial's pose change should be a
+draw from N(mu_d, Sigma_d + C_i). Its squared Mahalanobis distance is then
+chi^2(3); a trial beyond the 1 % level after a Bonferroni correction for n
+trials is an outlier, and the sum over trials, chi^2(3n - 4) approximately, gives
+an overall goodness-of-fit p-value.
+
+Sufficiency check: a parameter is identified when its standard error meets a
+target (:class:`Criteria`). For each one that does not, the Fisher information
+of one more trial of each design in the data
+(:func:`odohil.science.fisher.fisher_information`) tells how many more trials
+of that design would get it there: the result's standard error is scaled by
+sqrt([(I + m I_d)^-1]_pp / [I^-1]_pp), so an inefficient estimator (the paper's
+method) keeps its inefficiency.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from odohil import units
+from odohil.errors import ParameterError
+from odohil.science.estimators.observations import DesignSummary, Observation, wrap
+from odohil.science.estimators.result import (
+    ModelCheck,
+    Outlier,
+    ParameterEstimate,
+    Sufficiency,
+    Suggestion,
+)
+from odohil.science.fisher import fisher_information
+from odohil.science.moments import pose_moments
+from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
+from odohil.science.paths import Design, FloatArray
+
+OUTLIER_LEVEL = 0.01
+"""Family-wise level of the outlier test (Bonferroni over the trials)."""
+FIT_LEVEL = 0.01
+"""Level of the overall goodness-of-fit test."""
+MAX_EXTRA_TRIALS = 100_000
+
+
+@dataclass(frozen=True)
+class Criteria:
+    """Precision targets of the sufficiency check.
+
+    Attributes:
+        e_r_relative: largest stderr / |E_R|.
+        e_r_floor: stderr of E_R always accepted, rad/m (E_R may be 0).
+        e_t_absolute: largest stderr of E_T (no unit).
+        k_relative: largest stderr / K for K_theta and K_rho.
+    """
+
+    e_r_relative: float = 0.25
+    e_r_floor: float = units.deg_per_m_to_rad_per_m(0.005)
+    e_t_absolute: float = 0.05
+    k_relative: float = 0.5
+
+    def targets(self, params: ErrorParameters) -> FloatArray:
+        """Largest acceptable stderr of each parameter, SI."""
+        return np.array(
+            [
+                max(self.e_r_relative * abs(params.e_r), self.e_r_floor),
+                self.e_t_absolute,
+                self.k_relative * params.k_theta,
+                self.k_relative * params.k_rho,
+            ]
+        )
+
+
+def mahalanobis2(observations: Sequence[Observation], params: ErrorParameters) -> FloatArray:
+    """Each trial's squared Mahalanobis distance from the model (Delta residual
+    taken modulo 2 pi)."""
+    moments = {}
+    out = np.empty(len(observations))
+    for i, obs in enumerate(observations):
+        if obs.design not in moments:
+            moments[obs.design] = pose_moments(obs.design.path(), params)
+        m = moments[obs.design]
+        resid = obs.pose_change - m.mean
+        resid[2] = float(wrap(resid[2]))
+        total = m.cov + obs.measurement_cov
+        total = 0.5 * (total + total.T)
+        out[i] = float(resid @ np.linalg.lstsq(total, resid, rcond=1e-15)[0])
+    return out
+
+
+def _join(labels: Sequence[str]) -> str:
+    if len(labels) <= 1:
+        return "".join(labels)
+    return ", ".join(labels[:-1]) + " and " + labels[-1]
+
+
+def model_check(observations: Sequence[Observation], params: ErrorParameters) -> ModelCheck:
+    """The model check of ``params`` against the trials (see the module docstring)."""
+    d2 = mahalanobis2(observations, params)
+    n = len(observations)
+    p_each = stats.chi2.sf(d2, 3)
+    outliers = tuple(
+        Outlier(i, observations[i].line, float(d2[i]), float(p_each[i]))
+        for i in (int(j) for j in np.flatnonzero(p_each < OUTLIER_LEVEL / n))
+    )
+    dof = max(1, 3 * n - 4)
+    chi2 = float(d2.sum())
+    p_value = float(stats.chi2.sf(chi2, dof))
+    if outliers:
+        labels = [o.label() for o in outliers]
+        noun = "trials at" if len(labels) > 1 else "the trial at"
+        verb = "are outliers" if len(labels) > 1 else "is an outlier"
+        verdict = (
+            f"{noun} {_join(labels)} {verb}: the model puts them beyond its "
+            f"{100 * (1 - OUTLIER_LEVEL):g} % range (check the marks, or the run)"
+        )
+    elif p_value < FIT_LEVEL:
+        verdict = (
+            f"the data do not fit the model (goodness-of-fit p = {p_value:.2g}), "
+            "though no single trial stands out"
+        )
+    else:
+        verdict = f"the data fit the model (goodness-of-fit p = {p_value:.2g})"
+    return ModelCheck(
+        fits=not outliers and p_value >= FIT_LEVEL,
+        verdict=verdict,
+        chi2=chi2,
+        dof=dof,
+        p_value=p_value,
+        outliers=outliers,
+        mahalanobis2=tuple(float(v) for v in d2),
+    )
+
+
+def _variances(info: FloatArray) -> FloatArray:
+    """diag(I^-1), inf for parameters the information does not determine."""
+    out = np.full(4, math.inf)
+    ok = np.diag(info) > 0
+    if not ok.any():
+        return out
+    sub = info[np.ix_(ok, ok)]
+    scale = np.sqrt(np.diag(sub))
+    scaled = sub / np.outer(scale, scale)
+    eigen = np.linalg.eigvalsh(scaled)
+    if eigen[0] > 1e-12 * eigen[-1]:
+        out[ok] = np.diag(np.linalg.inv(scaled)) / scale**2
+    return out
+
+
+def _information(
+    summaries: Sequence[DesignSummary], params: ErrorParameters
+) -> tuple[FloatArray, dict[Design, FloatArray]]:
+    """Total information of the data and per-trial information of each design, SI."""
+    measurement = {s.design: s.measurement_cov for s in summaries}
+
+    def per_design(design: Design) -> FloatArray:
+        return measurement[design]
+
+    per_trial = {
+        s.design: fisher_information([(s.design, 1)], params, per_design) for s in summaries
+    }
+    total = sum((s.n * per_trial[s.design] for s in summaries), np.zeros((4, 4)))
+    return total, per_trial
+
+
+def _extra_trials(
+    info: FloatArray,
+    one: FloatArray,
+    ratio_base: FloatArray,
+    stderr: FloatArray,
+    targets: FloatArray,
+    flagged: list[int],
+) -> int | None:
+    """Fewest m with every flagged stderr, scaled by the information ratio, on target."""
+
+    def ok(m: int) -> bool:
+        var = _variances(info + m * one)
+        for p in flagged:
+            if not math.isfinite(var[p]):
+                return False
+            if math.isfinite(ratio_base[p]) and math.isfinite(stderr[p]):
+                predicted = stderr[p] * math.sqrt(var[p] / ratio_base[p])
+            else:
+                predicted = math.sqrt(var[p])
+            if predicted > targets[p]:
+                return False
+        return True
+
+    high = 1
+    while not ok(high):
+        high *= 2
+        if high > MAX_EXTRA_TRIALS:
+            return None
+    low = high // 2
+    while high - low > 1:
+        mid = (low + high) // 2
+        if ok(mid):
+            high = mid
+        else:
+            low = mid
+    return high
+
+
+def sufficiency(
+    estimates: Sequence[ParameterEstimate],
+    params: ErrorParameters,
+    summaries: Sequence[DesignSummary],
+    criteria: Criteria | None = None,
+) -> Sufficiency:
+    """Which parameters miss their precision target, and what would fix that."""
+    criteria = criteria or Criteria()
+    targets = criteria.targets(params)
+    stderr = np.array([e.stderr for e in estimates])
+    flagged: list[int] = []
+    reasons: list[str] = []
+    for p, name in enumerate(PARAMETER_NAMES):
+        value = estimates[p].value
+        if not math.isfinite(stderr[p]):
+            flagged.append(p)
+            reasons.append(f"{name} is not identifiable from these trials (no information)")
+        elif name in ("K_theta", "K_rho") and value <= 0:
+            flagged.append(p)
+            reasons.append(f"{name} is not distinguishable from zero")
+        elif stderr[p] > targets[p]:
+            flagged.append(p)
+            if name == "E_T":
+                reasons.append(
+                    f"E_T has standard error {stderr[p]:.2g} (target {targets[p]:.2g}); "
+                    "closed paths pin E_T only weakly, about as 1/|E_R|"
+                )
+            else:
+                reasons.append(
+                    f"{name} has relative standard error {stderr[p] / abs(value):.0%} "
+                    f"(target {targets[p] / max(abs(value), 1e-300):.0%})"
+                )
+    if not flagged:
+        return Sufficiency(True, "enough trials: every parameter meets its target", (), (), ())
+    names = tuple(PARAMETER_NAMES[p] for p in flagged)
+    suggestions: list[Suggestion] = []
+    computable = [p for p in flagged if targets[p] > 0]
+    try:
+        info, per_trial = _information(summaries, params)
+    except ParameterError:
+        info, per_trial = np.zeros((4, 4)), {}
+    base = _variances(info)
+    for summary in summaries:
+        one = per_trial.get(summary.design)
+        more = (
+            _extra_trials(info, one, base, stderr, targets, computable)
+            if one is not None and computable
+            else None
+        )
+        d = summary.design
+        suggestions.append(Suggestion(d.label(), d.k, d.l_m, d.variant, more))
+    doable = [s for s in suggestions if s.more_trials is not None]
+    verdict = f"not enough trials for {_join(list(names))}"
+    if doable:
+        best = min(doable, key=lambda s: (s.more_trials or 0) * s.l_m * 2 * s.k)
+        verdict += f": about {best.more_trials} more trials of {best.design_label} would do"
+    return Sufficiency(False, verdict, names, tuple(reasons), tuple(suggestions))

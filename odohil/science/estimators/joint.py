@@ -1,0 +1,222 @@
+"""Joint maximum likelihood on every trial's (x, y, Delta).
+
+The likelihood is the Gaussian one of :mod:`odohil.science.estimators.likelihood`
+(model mean and covariance per design plus each trial's measurement
+covariance), in phi = (E_R, E_T, log K_theta, log K_rho). It is maximised by
+Fisher scoring with Levenberg damping (each step solves
+(I + lambda diag I) step = -score, and is kept only if the likelihood rises);
+from the paper-method start this converges in a few steps. If it does not,
+``scipy.optimize.minimize`` (L-BFGS-B on the exact score) takes over from the
+best point. Standard errors come from the expected information at the optimum.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import optimize
+
+from odohil.science.estimators.likelihood import (
+    LikelihoodValue,
+    ModelPoint,
+    evaluate,
+    from_phi,
+    model_point,
+    phi_jacobian,
+    to_phi,
+    with_moments,
+)
+from odohil.science.estimators.observations import TrialGroup
+from odohil.science.parameters import ErrorParameters
+from odohil.science.paths import Design, FloatArray
+
+DECREMENT_TOLERANCE = 1e-8
+"""Converged when score^T I^-1 score (the squared step in standard errors) is below this."""
+_MAX_ITERATIONS = 60
+_MAX_LOG_STEP = 2.0
+"""Largest change of log K in one step (a factor e^2)."""
+_LOG_K_FLOOR = math.log(1e-14)
+_LOG_K_CEILING = math.log(1e2)
+_FALLBACK_SCALE = np.array([1e-3, 1e-2, 1.0, 1.0])
+
+
+@dataclass(frozen=True)
+class JointFit:
+    """The optimum of the likelihood.
+
+    Attributes:
+        params: the estimate, SI.
+        covariance: (4, 4) inverse expected information, SI (inf where singular).
+        point: the model at the optimum, with derivatives (for warm starts).
+        value: the likelihood there.
+        iterations: scoring steps taken.
+        converged: whether the Newton decrement fell below the tolerance.
+    """
+
+    params: ErrorParameters
+    covariance: FloatArray
+    point: ModelPoint
+    value: LikelihoodValue
+    iterations: int
+    converged: bool
+
+
+def designs_of(groups: Sequence[TrialGroup]) -> list[Design]:
+    """The distinct designs of the groups, in order."""
+    return list(dict.fromkeys(g.design for g in groups if g.n > 0))
+
+
+def start_phi(params: ErrorParameters, floor: ErrorParameters | None = None) -> FloatArray:
+    """phi of a start point, with variance rates raised to at least ``floor``'s
+    (or 1e-12) so that their logarithms exist."""
+    k_theta = max(params.k_theta, floor.k_theta if floor else 0.0, 1e-12)
+    k_rho = max(params.k_rho, floor.k_rho if floor else 0.0, 1e-12)
+    return to_phi(ErrorParameters(params.e_r, params.e_t, k_theta, k_rho))
+
+
+def _solve(info: FloatArray, rhs: FloatArray, damping: float) -> FloatArray:
+    diag = np.diag(info).copy()
+    diag[diag <= 0] = 1.0
+    system = info + damping * np.diag(diag)
+    scale = 1.0 / np.sqrt(diag)
+    scaled = system * np.outer(scale, scale)
+    step = np.linalg.lstsq(scaled, rhs * scale, rcond=1e-13)[0]
+    result: FloatArray = step * scale
+    return result
+
+
+def _limit(phi: FloatArray, step: FloatArray) -> FloatArray:
+    step = step.copy()
+    largest = float(np.max(np.abs(step[2:])))
+    if largest > _MAX_LOG_STEP:
+        step *= _MAX_LOG_STEP / largest
+    new = phi + step
+    new[2:] = np.clip(new[2:], _LOG_K_FLOOR, _LOG_K_CEILING)
+    new[1] = max(new[1], -0.99)
+    return new
+
+
+def decrement(value: LikelihoodValue) -> float:
+    """score^T I^-1 score: the squared length of the remaining Newton step in
+    standard-error units."""
+    assert value.gradient is not None
+    assert value.information is not None
+    step = _solve(value.information, value.gradient, 0.0)
+    return float(abs(value.gradient @ step))
+
+
+def covariance_si(point: ModelPoint, value: LikelihoodValue) -> FloatArray:
+    """Inverse of the expected information, converted from phi to SI (inf rows
+    for parameters the information does not determine)."""
+    assert value.information is not None
+    info = value.information
+    scale = np.sqrt(np.clip(np.diag(info), 0.0, None))
+    if np.any(scale == 0):
+        cov_phi = np.full((4, 4), math.inf)
+    else:
+        scaled = info / np.outer(scale, scale)
+        eigen = np.linalg.eigvalsh(scaled)
+        if eigen[0] <= 1e-12 * eigen[-1]:
+            cov_phi = np.full((4, 4), math.inf)
+        else:
+            cov_phi = np.linalg.inv(scaled) / np.outer(scale, scale)
+    jac = phi_jacobian(from_phi(point.phi))
+    with np.errstate(invalid="ignore"):
+        cov: FloatArray = jac @ cov_phi @ jac.T
+    cov[~np.isfinite(cov)] = math.inf
+    return 0.5 * (cov + cov.T)
+
+
+def _distance(value: LikelihoodValue, delta: FloatArray) -> float:
+    """Length of a phi displacement in standard errors, sqrt(delta^T I delta)."""
+    assert value.information is not None
+    return math.sqrt(max(0.0, float(delta @ value.information @ delta)))
+
+
+def refine(
+    groups: Sequence[TrialGroup],
+    start: ModelPoint,
+    max_iterations: int = _MAX_ITERATIONS,
+    reuse_within: float = 0.0,
+) -> JointFit:
+    """Fisher scoring from ``start`` (a point with derivatives for every design).
+
+    ``reuse_within`` > 0: keep the derivatives of the model (the costly part)
+    while the point stays within that many standard errors of where they were
+    evaluated; the moments themselves are always exact. The optimum then
+    solves the likelihood equations with derivatives that are off by a
+    relative amount of that order, which moves it by a negligible fraction
+    of a standard error.
+    """
+    designs = designs_of(groups)
+    point = start
+    value = evaluate(groups, point)
+    if not math.isfinite(value.nll):
+        raise FloatingPointError("the start point gives a singular covariance")
+    damping = 0.0
+    iterations = 0
+    converged = False
+    while iterations < max_iterations:
+        assert value.gradient is not None
+        assert value.information is not None
+        if decrement(value) < DECREMENT_TOLERANCE:
+            converged = True
+            break
+        iterations += 1
+        step = _solve(value.information, -value.gradient, damping)
+        trial_phi = _limit(point.phi, step)
+        moved = model_point(trial_phi, designs, derivatives=False)
+        trial = evaluate(groups, moved)
+        if trial.nll <= value.nll + 1e-12 * abs(value.nll):
+            if reuse_within > 0 and _distance(value, trial_phi - point.anchor) < reuse_within:
+                point = with_moments(point, moved)
+            else:
+                point = model_point(trial_phi, designs, derivatives=True)
+            value = evaluate(groups, point)
+            damping = 0.0 if damping <= 1e-3 else damping / 10.0
+        else:
+            damping = 1e-3 if damping == 0.0 else damping * 10.0
+            if damping > 1e8:
+                break
+    return JointFit(
+        from_phi(point.phi), covariance_si(point, value), point, value, iterations, converged
+    )
+
+
+def _scipy_fit(groups: Sequence[TrialGroup], start: FloatArray) -> FloatArray:
+    """L-BFGS-B on the NLL in scaled phi (the fallback)."""
+    designs = designs_of(groups)
+    first = evaluate(groups, model_point(start, designs, derivatives=True))
+    assert first.information is not None
+    diag = np.diag(first.information)
+    scale = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)), _FALLBACK_SCALE)
+
+    def fun(u: FloatArray) -> tuple[float, FloatArray]:
+        value = evaluate(groups, model_point(start + scale * u, designs, derivatives=True))
+        if value.gradient is None:
+            return 1e300, np.zeros(4)
+        return value.nll, value.gradient * scale
+
+    bounds = [(None, None), ((-0.99 - start[1]) / scale[1], None)] + [
+        ((_LOG_K_FLOOR - start[i]) / scale[i], (_LOG_K_CEILING - start[i]) / scale[i])
+        for i in (2, 3)
+    ]
+    result = optimize.minimize(
+        fun, np.zeros(4), jac=True, method="L-BFGS-B", bounds=bounds, options={"maxiter": 500}
+    )
+    best: FloatArray = start + scale * np.asarray(result.x, dtype=np.float64)
+    return best
+
+
+def joint_estimate(groups: Sequence[TrialGroup], start: FloatArray) -> JointFit:
+    """Maximum-likelihood estimate from phi ``start`` (see :func:`start_phi`)."""
+    designs = designs_of(groups)
+    fit = refine(groups, model_point(start, designs, derivatives=True))
+    if fit.converged:
+        return fit
+    rescue = _scipy_fit(groups, fit.point.phi)
+    second = refine(groups, model_point(rescue, designs, derivatives=True))
+    return second if second.value.nll <= fit.value.nll else fit

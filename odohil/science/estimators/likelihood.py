@@ -1,0 +1,166 @@
+"""The Gaussian likelihood of grouped trials, its score and Fisher information.
+
+Each trial's v = (x, y, Delta) is modelled as N(mu_d, Sigma_d + C): the model's
+exact mean and covariance for its design d
+(:func:`odohil.science.moments.pose_moments`) plus the trial's measurement
+covariance C. The parameters are handled as
+
+    phi = (E_R rad/m, E_T, log K_theta, log K_rho)
+
+so that the variance rates stay positive and their errors are relative.
+For a group of n trials with sums s = sum v and T = sum v v^T (and
+R = T - s mu^T - mu s^T + n mu mu^T):
+
+    NLL   = 1/2 [n log det S + tr(S^-1 R)] + 3n/2 log 2 pi
+    dNLL  = -dmu^T S^-1 (s - n mu) + 1/2 tr(S^-1 dS (n I - S^-1 R))
+    I     = n [dmu_a^T S^-1 dmu_b + 1/2 tr(S^-1 dS_a S^-1 dS_b)]
+
+(the last is the expected information, used as the Hessian in Fisher scoring).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from odohil.science.estimators.observations import TrialGroup, align_heading
+from odohil.science.fisher import moment_derivatives
+from odohil.science.moments import pose_moments
+from odohil.science.parameters import ErrorParameters
+from odohil.science.paths import Design, FloatArray
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+def to_phi(params: ErrorParameters) -> FloatArray:
+    """(E_R, E_T, log K_theta, log K_rho) of positive-rate parameters."""
+    return np.array([params.e_r, params.e_t, math.log(params.k_theta), math.log(params.k_rho)])
+
+
+def from_phi(phi: FloatArray) -> ErrorParameters:
+    """The parameters (SI) of phi = (E_R, E_T, log K_theta, log K_rho)."""
+    return ErrorParameters(
+        float(phi[0]), float(phi[1]), math.exp(float(phi[2])), math.exp(float(phi[3]))
+    )
+
+
+def phi_jacobian(params: ErrorParameters) -> FloatArray:
+    """d(SI parameters)/d(phi): diag(1, 1, K_theta, K_rho)."""
+    return np.diag([1.0, 1.0, params.k_theta, params.k_rho])
+
+
+@dataclass(frozen=True)
+class ModelPoint:
+    """The model's moments of every design at one phi, with derivatives in phi.
+
+    Attributes:
+        phi: (4,) the point.
+        means: per design, (3,) mean of v.
+        covs: per design, (3, 3) model covariance of v.
+        d_means: per design, (4, 3) d mean / d phi (None when not computed).
+        d_covs: per design, (4, 3, 3) d cov / d phi (None when not computed).
+        anchor: the phi where the derivatives were evaluated (``phi`` unless
+            they were carried over from a nearby point by :func:`with_moments`).
+    """
+
+    phi: FloatArray
+    means: dict[Design, FloatArray]
+    covs: dict[Design, FloatArray]
+    d_means: dict[Design, FloatArray] | None
+    d_covs: dict[Design, FloatArray] | None
+    anchor: FloatArray
+
+
+def with_moments(point: ModelPoint, moved: ModelPoint) -> ModelPoint:
+    """``moved``'s phi and moments with ``point``'s derivatives (and anchor)."""
+    return ModelPoint(moved.phi, moved.means, moved.covs, point.d_means, point.d_covs, point.anchor)
+
+
+def model_point(phi: FloatArray, designs: Iterable[Design], derivatives: bool) -> ModelPoint:
+    """Evaluate the moments (and, if asked, their phi-derivatives) of each design."""
+    params = from_phi(phi)
+    scale = np.array([1.0, 1.0, params.k_theta, params.k_rho])
+    means: dict[Design, FloatArray] = {}
+    covs: dict[Design, FloatArray] = {}
+    d_means: dict[Design, FloatArray] = {}
+    d_covs: dict[Design, FloatArray] = {}
+    for design in designs:
+        if derivatives:
+            d = moment_derivatives(design.path(), params)
+            means[design], covs[design] = d.mean, d.cov
+            d_means[design] = d.d_mean * scale[:, None]
+            d_covs[design] = d.d_cov * scale[:, None, None]
+        else:
+            m = pose_moments(design.path(), params)
+            means[design], covs[design] = m.mean, m.cov
+    here = np.array(phi, dtype=np.float64)
+    return ModelPoint(
+        here,
+        means,
+        covs,
+        d_means if derivatives else None,
+        d_covs if derivatives else None,
+        here,
+    )
+
+
+@dataclass(frozen=True)
+class LikelihoodValue:
+    """Negative log-likelihood at a point, with score and information if derivatives exist.
+
+    Attributes:
+        nll: negative log-likelihood (inf where a covariance is singular).
+        gradient: (4,) d NLL / d phi, or None.
+        information: (4, 4) expected Fisher information in phi, or None.
+    """
+
+    nll: float
+    gradient: FloatArray | None
+    information: FloatArray | None
+
+
+def _stack(groups: Sequence[TrialGroup], point: ModelPoint) -> tuple[FloatArray, ...]:
+    n = np.array([g.n for g in groups], dtype=np.float64)
+    s = np.array([g.total for g in groups])
+    t = np.array([g.outer for g in groups])
+    mu = np.array([align_heading(point.means[g.design], g.reference) for g in groups])
+    cov = np.array([point.covs[g.design] + g.measurement_cov for g in groups])
+    return n, s, t, mu, cov
+
+
+def evaluate(groups: Sequence[TrialGroup], point: ModelPoint) -> LikelihoodValue:
+    """NLL of the grouped trials at ``point``; score and information too when
+    ``point`` carries derivatives."""
+    groups = [g for g in groups if g.n > 0]
+    n, s, t, mu, cov = _stack(groups, point)
+    cov = 0.5 * (cov + np.swapaxes(cov, 1, 2))
+    sign, logdet = np.linalg.slogdet(cov)
+    if np.any(sign <= 0) or not np.all(np.isfinite(logdet)):
+        return LikelihoodValue(math.inf, None, None)
+    inv = np.linalg.inv(cov)
+    r = (
+        t
+        - np.einsum("gi,gj->gij", s, mu)
+        - np.einsum("gi,gj->gij", mu, s)
+        + n[:, None, None] * np.einsum("gi,gj->gij", mu, mu)
+    )
+    inv_r = np.einsum("gij,gjk->gik", inv, r)
+    nll = 0.5 * float((n * logdet).sum() + np.einsum("gii->", inv_r) + 3.0 * n.sum() * _LOG_2PI)
+    if point.d_means is None or point.d_covs is None:
+        return LikelihoodValue(nll, None, None)
+    d_mu = np.array([point.d_means[g.design] for g in groups])  # (G, 4, 3)
+    d_cov = np.array([point.d_covs[g.design] for g in groups])  # (G, 4, 3, 3)
+    resid = s - n[:, None] * mu
+    w = np.einsum("gij,gajk->gaik", inv, d_cov)  # S^-1 dS_a
+    grad = (
+        -np.einsum("gai,gij,gj->a", d_mu, inv, resid)
+        + 0.5 * np.einsum("g,gaii->a", n, w)
+        - 0.5 * np.einsum("gaij,gji->a", w, inv_r)
+    )
+    info = np.einsum("g,gai,gij,gbj->ab", n, d_mu, inv, d_mu) + 0.5 * np.einsum(
+        "g,gaij,gbji->ab", n, w, w
+    )
+    return LikelihoodValue(nll, grad, 0.5 * (info + info.T))

@@ -1,0 +1,238 @@
+"""Trials as the estimators see them, and their per-design sufficient statistics.
+
+For a Gaussian model, the trials of one design that share a measurement
+covariance enter the likelihood only through n, sum(v) and sum(v v^T), with
+v = (x m, y m, Delta rad). A :class:`TrialGroup` keeps exactly those, so the
+cost of an estimate grows with the number of groups, not of trials.
+
+Headings are known modulo 2 pi. Each group keeps a reference heading c (the
+circular mean of its first trials) and stores every Delta unwrapped to within
+pi of c; the model mean is later moved by a multiple of 2 pi to within pi of c
+(:func:`align_heading`). While the spread of Delta is well below pi this is the
+same as unwrapping every trial relative to the model mean.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from odohil.errors import MeasurementError
+from odohil.science.paths import Design, FloatArray
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One trial: a design, its measured pose change and the measurement's covariance.
+
+    Attributes:
+        design: the forth-and-back design driven.
+        pose_change: (3,): x (m), y (m) of the end point in the start frame and
+            heading change Delta (rad) minus the path's winding; Delta may be
+            given modulo 2 pi.
+        measurement_cov: (3, 3) covariance of the measured pose change (m^2,
+            m rad, rad^2); zeros when the pose is exact.
+        line: where the trial came from (line number in a trial file), or None.
+    """
+
+    design: Design
+    pose_change: FloatArray
+    measurement_cov: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
+    line: int | None = None
+
+    def __post_init__(self) -> None:
+        pose = np.asarray(self.pose_change, dtype=np.float64).reshape(-1)
+        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+            raise MeasurementError(
+                f"{self.where()}: the pose change must be 3 finite numbers, "
+                f"got {self.pose_change!r}"
+            )
+        cov = np.asarray(self.measurement_cov, dtype=np.float64)
+        if cov.shape != (3, 3) or not np.all(np.isfinite(cov)):
+            raise MeasurementError(f"{self.where()}: the measurement covariance must be finite 3x3")
+        cov = 0.5 * (cov + cov.T)
+        if np.linalg.eigvalsh(cov)[0] < -1e-12 * max(1.0, float(np.abs(cov).max())):
+            raise MeasurementError(
+                f"{self.where()}: the measurement covariance is not positive semi-definite"
+            )
+        object.__setattr__(self, "pose_change", pose)
+        object.__setattr__(self, "measurement_cov", cov)
+
+    def where(self) -> str:
+        """``line N`` when the line is known, else ``a trial``."""
+        return f"line {self.line}" if self.line is not None else "a trial"
+
+
+def wrap(angle: FloatArray | float) -> FloatArray:
+    """Angles reduced to [-pi, pi), radians."""
+    return np.asarray((np.asarray(angle) + math.pi) % (2.0 * math.pi) - math.pi)
+
+
+def circular_mean(angles: FloatArray) -> float:
+    """The circular mean of angles (rad), in [-pi, pi]."""
+    return float(math.atan2(float(np.sin(angles).mean()), float(np.cos(angles).mean())))
+
+
+def align_heading(mean: FloatArray, reference: float) -> FloatArray:
+    """A copy of a model mean (x, y, Delta) with Delta moved by a multiple of
+    2 pi to within pi of ``reference`` (rad)."""
+    out = np.array(mean, dtype=np.float64)
+    out[2] = reference - float(wrap(reference - out[2]))
+    return out
+
+
+@dataclass
+class TrialGroup:
+    """Sufficient statistics of the trials of one design with one measurement covariance.
+
+    Mutable on purpose: :class:`~odohil.science.estimators.incremental.IncrementalEstimator`
+    adds trials one at a time.
+
+    Attributes:
+        design: the design.
+        reference: heading every Delta is unwrapped near, rad.
+        n: number of trials.
+        total: sum of v, (3,).
+        outer: sum of v v^T, (3, 3).
+        measurement_total: sum of the trials' measurement covariances, (3, 3).
+    """
+
+    design: Design
+    reference: float
+    n: int = 0
+    total: FloatArray = field(default_factory=lambda: np.zeros(3))
+    outer: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
+    measurement_total: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
+
+    def unwrapped(self, pose_change: FloatArray) -> FloatArray:
+        """The pose change with Delta within pi of the reference."""
+        return align_heading(pose_change, self.reference)
+
+    def add(self, observation: Observation) -> None:
+        """Fold one trial in."""
+        v = self.unwrapped(observation.pose_change)
+        self.n += 1
+        self.total = self.total + v
+        self.outer = self.outer + np.outer(v, v)
+        self.measurement_total = self.measurement_total + observation.measurement_cov
+
+    @property
+    def mean(self) -> FloatArray:
+        """Mean of v."""
+        return self.total / self.n
+
+    @property
+    def measurement_cov(self) -> FloatArray:
+        """Mean measurement covariance of the group's trials, (3, 3)."""
+        return self.measurement_total / self.n
+
+
+def measurement_key(cov: FloatArray, relative_bin: float | None) -> tuple[float, ...]:
+    """A grouping key for a measurement covariance.
+
+    ``relative_bin=None``: the exact values (trials share a group only when
+    their covariances are identical). Otherwise standard deviations are binned
+    on a log scale with bins ``relative_bin`` wide (0.1: 10 %) and
+    correlations in steps of ``relative_bin`` (0 variances form their own bin).
+    """
+    if relative_bin is None:
+        return tuple(float(v) for v in cov.reshape(-1))
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    sd_bins = tuple(
+        -math.inf if s == 0.0 else float(round(math.log(s) / math.log1p(relative_bin))) for s in sd
+    )
+    corr_bins: list[float] = []
+    for i, j in ((0, 1), (0, 2), (1, 2)):
+        denom = sd[i] * sd[j]
+        corr = float(cov[i, j] / denom) if denom > 0 else 0.0
+        corr_bins.append(float(round(corr / relative_bin)))
+    return sd_bins + tuple(corr_bins)
+
+
+def group_trials(
+    observations: Sequence[Observation], relative_bin: float | None = None
+) -> list[TrialGroup]:
+    """Sufficient statistics of the trials, one group per design and measurement key.
+
+    Every design's reference heading is the circular mean of its trials' Delta.
+    """
+    references: dict[Design, float] = {}
+    for design in _designs(observations):
+        angles = np.array([o.pose_change[2] for o in observations if o.design == design])
+        references[design] = circular_mean(angles)
+    groups: dict[tuple[Design, tuple[float, ...]], TrialGroup] = {}
+    for obs in observations:
+        key = (obs.design, measurement_key(obs.measurement_cov, relative_bin))
+        if key not in groups:
+            groups[key] = TrialGroup(obs.design, references[obs.design])
+        groups[key].add(obs)
+    return list(groups.values())
+
+
+def _designs(observations: Iterable[Observation]) -> list[Design]:
+    seen: dict[Design, None] = {}
+    for obs in observations:
+        seen.setdefault(obs.design, None)
+    return list(seen)
+
+
+@dataclass(frozen=True)
+class DesignSummary:
+    """The pooled statistics of one design (all its groups).
+
+    Attributes:
+        design: the design.
+        n: number of trials.
+        mean: mean of v = (x, y, Delta), Delta unwrapped near the reference.
+        scatter: sum of (v - mean)(v - mean)^T, (3, 3).
+        measurement_cov: mean measurement covariance, (3, 3).
+        reference: the reference heading, rad.
+    """
+
+    design: Design
+    n: int
+    mean: FloatArray
+    scatter: FloatArray
+    measurement_cov: FloatArray
+    reference: float
+
+    @property
+    def mean_square_distance(self) -> float:
+        """Mean of x^2 + y^2, m^2 (phi5)."""
+        second = (self.scatter + self.n * np.outer(self.mean, self.mean)) / self.n
+        return float(second[0, 0] + second[1, 1])
+
+    @property
+    def heading_variance(self) -> float:
+        """Sample variance of Delta with n - 1 (phi2), rad^2; nan for one trial."""
+        return float(self.scatter[2, 2] / (self.n - 1)) if self.n > 1 else math.nan
+
+
+def summarise(groups: Sequence[TrialGroup]) -> list[DesignSummary]:
+    """Pool the groups of each design (Delta re-aligned to the design's first reference)."""
+    by_design: dict[Design, list[TrialGroup]] = {}
+    for group in groups:
+        if group.n > 0:
+            by_design.setdefault(group.design, []).append(group)
+    out = []
+    for design, members in by_design.items():
+        reference = members[0].reference
+        n = sum(g.n for g in members)
+        total = np.zeros(3)
+        outer = np.zeros((3, 3))
+        meas = np.zeros((3, 3))
+        for g in members:
+            shift = np.zeros(3)
+            shift[2] = align_heading(g.mean, reference)[2] - g.mean[2]
+            total += g.total + g.n * shift
+            outer += (
+                g.outer + np.outer(g.total, shift) + np.outer(shift, g.total)
+            ) + g.n * np.outer(shift, shift)
+            meas += g.measurement_total
+        mean = total / n
+        scatter = outer - n * np.outer(mean, mean)
+        out.append(DesignSummary(design, n, mean, 0.5 * (scatter + scatter.T), meas / n, reference))
+    return out

@@ -1,0 +1,232 @@
+"""The result of an estimate: values, errors, intervals, and the two checks."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
+
+Z95 = 1.959963984540054
+"""The 97.5 % quantile of the standard normal."""
+
+
+@dataclass(frozen=True)
+class ParameterEstimate:
+    """One parameter's estimate, SI.
+
+    Attributes:
+        name: E_R, E_T, K_theta or K_rho.
+        value: the estimate.
+        stderr: its standard error (inf when the data do not determine it).
+        ci95: 95 % interval: symmetric for E_R and E_T; for K_theta and K_rho
+            symmetric in log K (exp(log K +- 1.96 stderr/K)), or [0, 1.96 stderr]
+            when the estimate is 0.
+        unit: the SI unit.
+    """
+
+    name: str
+    value: float
+    stderr: float
+    ci95: tuple[float, float]
+    unit: str
+
+    @classmethod
+    def build(cls, name: str, value: float, stderr: float) -> ParameterEstimate:
+        """With the interval rule above."""
+        if name in ("K_theta", "K_rho"):
+            if value > 0 and math.isfinite(stderr):
+                spread = math.exp(min(Z95 * stderr / value, 700.0))
+                ci = (value / spread, value * spread)
+            else:
+                ci = (0.0, value + Z95 * stderr)
+        else:
+            ci = (value - Z95 * stderr, value + Z95 * stderr)
+        return cls(name, value, stderr, ci, SI_UNITS[name])
+
+    @property
+    def relative_stderr(self) -> float:
+        """stderr / |value| (inf for a zero value)."""
+        return self.stderr / abs(self.value) if self.value != 0 else math.inf
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """{"value", "stderr", "ci95", "unit"} (SI; inf written as null)."""
+        return {
+            "value": _finite(self.value),
+            "stderr": _finite(self.stderr),
+            "ci95": [_finite(self.ci95[0]), _finite(self.ci95[1])],
+            "unit": self.unit,
+        }
+
+
+@dataclass(frozen=True)
+class Outlier:
+    """A trial the model does not explain.
+
+    Attributes:
+        index: position of the trial in the input (0-based).
+        line: its line in the trial file, or None.
+        mahalanobis2: squared Mahalanobis distance of its pose change from the
+            model mean (model plus measurement covariance), chi^2(3) if it fits.
+        p_value: chi^2(3) tail probability of that distance.
+    """
+
+    index: int
+    line: int | None
+    mahalanobis2: float
+    p_value: float
+
+    def label(self) -> str:
+        """``line 17`` or ``trial #17`` (1-based) when the line is unknown."""
+        return f"line {self.line}" if self.line is not None else f"trial #{self.index + 1}"
+
+
+@dataclass(frozen=True)
+class ModelCheck:
+    """Do the trials look like draws from the fitted model?
+
+    Attributes:
+        fits: no outlier and the overall test does not reject.
+        verdict: plain-language summary.
+        chi2: sum of the trials' squared Mahalanobis distances.
+        dof: 3 n - 4 (at least 1).
+        p_value: chi^2(dof) tail probability of ``chi2``.
+        outliers: trials whose distance exceeds the 1 % level after a
+            Bonferroni correction for n trials.
+        mahalanobis2: every trial's squared distance, in input order.
+    """
+
+    fits: bool
+    verdict: str
+    chi2: float
+    dof: int
+    p_value: float
+    outliers: tuple[Outlier, ...]
+    mahalanobis2: tuple[float, ...]
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """JSON form (per-trial distances omitted; outliers listed)."""
+        return {
+            "fits": self.fits,
+            "verdict": self.verdict,
+            "chi2": _finite(self.chi2),
+            "dof": self.dof,
+            "p_value": _finite(self.p_value),
+            "outliers": [
+                {
+                    "line": o.line,
+                    "index": o.index,
+                    "mahalanobis2": _finite(o.mahalanobis2),
+                    "p_value": o.p_value,
+                }
+                for o in self.outliers
+            ],
+        }
+
+
+@dataclass(frozen=True)
+class Suggestion:
+    """More trials of one design that would make the flagged parameters precise enough.
+
+    Attributes:
+        design_label: the design (e.g. ``k=20 l=0.5 m turn``).
+        k: the design's k.
+        l_m: its leg length, metres.
+        variant: its variant.
+        more_trials: how many more trials (None: this design alone cannot get
+            there within the search limit).
+    """
+
+    design_label: str
+    k: float
+    l_m: float
+    variant: str
+    more_trials: int | None
+
+
+@dataclass(frozen=True)
+class Sufficiency:
+    """Are there enough trials to trust every parameter?
+
+    Attributes:
+        sufficient: every parameter meets its precision target.
+        verdict: plain-language summary.
+        unidentified: the parameters that do not, by name.
+        reasons: one sentence per such parameter.
+        suggestions: per design in the data, the extra trials needed.
+    """
+
+    sufficient: bool
+    verdict: str
+    unidentified: tuple[str, ...]
+    reasons: tuple[str, ...]
+    suggestions: tuple[Suggestion, ...]
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {
+            "sufficient": self.sufficient,
+            "verdict": self.verdict,
+            "unidentified": list(self.unidentified),
+            "reasons": list(self.reasons),
+            "suggestions": [
+                {
+                    "design": s.design_label,
+                    "k": s.k,
+                    "l_m": s.l_m,
+                    "variant": s.variant,
+                    "more_trials": s.more_trials,
+                }
+                for s in self.suggestions
+            ],
+        }
+
+
+@dataclass(frozen=True)
+class EstimateResult:
+    """An estimate of the four parameters with its checks.
+
+    Attributes:
+        method: ``paper`` or ``joint``.
+        n_trials: number of trials used.
+        params: the point estimate (SI).
+        parameters: per parameter value, stderr, interval (order E_R, E_T,
+            K_theta, K_rho).
+        covariance: (4 x 4) covariance of the estimate, SI.
+        correlation: (4 x 4) correlation matrix (nan where a stderr is inf).
+        model_check: see :class:`ModelCheck`.
+        sufficiency: see :class:`Sufficiency`.
+        notes: how the estimate was made (designs used, convergence).
+    """
+
+    method: str
+    n_trials: int
+    params: ErrorParameters
+    parameters: tuple[ParameterEstimate, ...]
+    covariance: tuple[tuple[float, ...], ...]
+    correlation: tuple[tuple[float, ...], ...]
+    model_check: ModelCheck
+    sufficiency: Sufficiency
+    notes: tuple[str, ...] = ()
+
+    def parameter(self, name: str) -> ParameterEstimate:
+        """The estimate of one parameter by name."""
+        return self.parameters[PARAMETER_NAMES.index(name)]
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """{"method", "n_trials", "parameters", "correlation", "model_check",
+        "sufficiency", "notes"}, SI; non-finite numbers as null."""
+        return {
+            "method": self.method,
+            "n_trials": self.n_trials,
+            "parameters": {p.name: p.to_json_dict() for p in self.parameters},
+            "correlation": [[_finite(v) for v in row] for row in self.correlation],
+            "model_check": self.model_check.to_json_dict(),
+            "sufficiency": self.sufficiency.to_json_dict(),
+            "notes": list(self.notes),
+        }
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
