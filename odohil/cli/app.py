@@ -12,7 +12,7 @@ import typer
 
 from odohil import __version__
 
-COMMAND_MODULES: tuple[str, ...] = ("emulate", "predict")
+COMMAND_MODULES: tuple[str, ...] = ("emulate", "predict", "simulate")
 
 app = typer.Typer(
     name="odohil",
