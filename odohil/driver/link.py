@@ -150,7 +150,7 @@ class Link:
         last_byte: float | None = None
         while True:
             try:
-                data = self._port.read(max(1, self._port.in_waiting))
+                data = self._port.read(max(self._decoder.missing, self._port.in_waiting))
             except _IO_ERRORS as exc:
                 raise DisconnectedError(f"serial read failed: {exc}") from exc
             now = time.monotonic()

@@ -100,6 +100,18 @@ class PacketDecoder:
         """Bytes buffered of a partial packet."""
         return len(self._buf)
 
+    @property
+    def missing(self) -> int:
+        """Bytes still needed to complete the packet being received (at least 1;
+        1 while the length is not known yet). Lets a reader ask for them at once."""
+        buf = self._buf
+        if len(buf) < 3 or buf[0] != START:
+            return 1
+        length = buf[1] | (buf[2] << 8)
+        if not MIN_LEN <= length <= MAX_LEN:
+            return 1
+        return max(1, length + 4 - len(buf))
+
     def reset(self) -> bytes:
         """Drop a partial packet (e.g. after 1 s of silence); returns what was dropped."""
         dropped = bytes(self._buf)

@@ -175,3 +175,12 @@ def test_reset_drops_a_partial_packet(partial: bytes, packet: Packet) -> None:
     decoder.reset()
     assert decoder.pending == 0
     assert decoder.feed(encode_packet(packet.type, packet.payload)) == [packet]
+
+
+@given(packets, st.integers(0, 10_000))
+def test_missing_counts_the_bytes_still_needed(packet: Packet, cut: int) -> None:
+    wire = encode_packet(packet.type, packet.payload)
+    prefix = wire[: cut % len(wire)]
+    decoder = PacketDecoder()
+    assert decoder.feed(prefix) == []
+    assert decoder.missing == (len(wire) - len(prefix) if len(prefix) >= 3 else 1)
