@@ -1,0 +1,346 @@
+"""Trial files: CSV rows of measured pose changes or raw floor-mark distances.
+
+Formats (see docs/measurements.md), one row per line, with a header:
+
+- pose changes: ``k,l_m,variant,dx_m,dy_m,dtheta_rad``;
+- raw marks: ``k,l_m,variant,d1_m,d2_m,d3_m,cross1_m[,cross2_m]`` (one ``d`` per
+  screw and one ``cross`` per cross pair of the robot description, in its order);
+
+either with the optional odometry end pose ``odo_x_m,odo_y_m,odo_theta_rad``
+(default: the design's ideal encoder end pose). Blank lines and lines starting
+with ``#`` are ignored.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import tempfile
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import numpy.typing as npt
+
+from odohil.errors import MeasurementError, ParameterError, TrialFileError
+from odohil.science.floor_marks import MarkDistances, PoseDistribution, solve_marks
+from odohil.science.paths import VARIANTS, Design, Variant
+from odohil.science.robot_description import RobotDescription
+
+FloatArray = npt.NDArray[np.float64]
+TrialKind = Literal["pose", "marks"]
+PriorForDesign = Callable[[Design], PoseDistribution]
+"""The model's predicted pose-change distribution of one trial of a design."""
+
+DESIGN_COLUMNS = ("k", "l_m", "variant")
+POSE_COLUMNS = ("dx_m", "dy_m", "dtheta_rad")
+ODOMETRY_COLUMNS = ("odo_x_m", "odo_y_m", "odo_theta_rad")
+
+
+@dataclass(frozen=True, eq=False)
+class Trial:
+    """One trial: its design and its measured pose change.
+
+    Attributes:
+        design: the forth-and-back design driven.
+        pose_change: (dx m, dy m, dtheta rad) in the start frame.
+        pose_cov: 3x3 covariance of ``pose_change`` from the tape errors (raw
+            marks), or None when the file gave the pose change itself.
+        marks: the raw distances (metres), or None for pose rows.
+        odometry_end_pose: (x m, y m, theta rad) the odometry reported.
+        flagged: True when the pose from the marks is in doubt.
+        note: why the trial is flagged (empty otherwise).
+        line: line number in the file (1-based).
+    """
+
+    design: Design
+    pose_change: FloatArray
+    pose_cov: FloatArray | None
+    marks: MarkDistances | None
+    odometry_end_pose: FloatArray
+    flagged: bool = False
+    note: str = ""
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class TrialSet:
+    """The trials of one file, in file order.
+
+    Attributes:
+        trials: the trials.
+        kind: ``pose`` or ``marks``, the file's format.
+        source: where the trials came from (a path).
+    """
+
+    trials: tuple[Trial, ...]
+    kind: TrialKind
+    source: str = ""
+
+    def __len__(self) -> int:
+        return len(self.trials)
+
+    def designs(self) -> tuple[Design, ...]:
+        """The distinct designs, in order of first appearance."""
+        return tuple(dict.fromkeys(trial.design for trial in self.trials))
+
+    def for_design(self, design: Design) -> tuple[Trial, ...]:
+        """The trials of one design, in file order."""
+        return tuple(trial for trial in self.trials if trial.design == design)
+
+    def flagged(self) -> tuple[Trial, ...]:
+        """The trials whose pose from the marks is in doubt."""
+        return tuple(trial for trial in self.trials if trial.flagged)
+
+
+def read_trials(
+    path: str | Path,
+    description: RobotDescription | None = None,
+    prior: PriorForDesign | None = None,
+) -> TrialSet:
+    """Read a trial file (UTF-8 CSV).
+
+    Args:
+        path: the file.
+        description: the robot description; required for raw-mark files.
+        prior: optional model prediction per design, used to choose among
+            candidate poses of raw-mark rows.
+
+    Raises:
+        TrialFileError: the file cannot be read, its header is wrong, or any
+            row is bad; the message lists every bad row by line number.
+    """
+    file = Path(path)
+    try:
+        text = file.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise TrialFileError(f"cannot read trial file {file}: {exc}") from exc
+    return parse_trials(text, description, prior, source=str(file))
+
+
+def parse_trials(
+    text: str,
+    description: RobotDescription | None = None,
+    prior: PriorForDesign | None = None,
+    source: str = "trial file",
+) -> TrialSet:
+    """Parse trial-file text; see :func:`read_trials`."""
+    lines = [
+        (number, line)
+        for number, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise TrialFileError(f"{source}: no header line")
+    header_line, header_text = lines[0]
+    header = [name.strip() for name in next(csv.reader([header_text]))]
+    kind, columns = _layout(header, description, f"{source}, line {header_line}")
+    parser = _RowParser(kind, header, columns, description, prior)
+    trials: list[Trial] = []
+    problems: list[str] = []
+    for number, line in lines[1:]:
+        fields = [field.strip() for field in next(csv.reader([line]))]
+        try:
+            trials.append(parser.parse(fields, number))
+        except MeasurementError as exc:
+            problems.append(f"line {number}: {exc}")
+    if problems:
+        raise TrialFileError(
+            f"{source}: {len(problems)} bad row(s), none used:\n  " + "\n  ".join(problems)
+        )
+    return TrialSet(trials=tuple(trials), kind=kind, source=source)
+
+
+def write_pose_trials(path: str | Path, rows: Iterable[Trial]) -> None:
+    """Write trials in the pose-change format, with the odometry columns.
+
+    Atomic: a temporary file in the same directory is renamed over ``path``
+    only once fully written, so readers never see half a file. Floats are
+    written with ``repr`` so that reading gives back the same numbers.
+
+    Raises:
+        MeasurementError: a trial has a non-finite pose or odometry pose.
+    """
+    header = DESIGN_COLUMNS + POSE_COLUMNS + ODOMETRY_COLUMNS
+    body = [",".join(header)]
+    for trial in rows:
+        values = [*trial.pose_change.tolist(), *trial.odometry_end_pose.tolist()]
+        if len(values) != 6 or not all(math.isfinite(v) for v in values):
+            raise MeasurementError(
+                f"trial of line {trial.line}: pose change and odometry end pose must be "
+                f"three finite numbers each, got {values}"
+            )
+        design = trial.design
+        body.append(
+            ",".join([f"{design.k:g}", repr(design.l_m), design.variant, *map(repr, values)])
+        )
+    target = Path(path)
+    handle, temporary = tempfile.mkstemp(
+        dir=target.parent, prefix=f".{target.name}.", suffix=".tmp"
+    )
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
+            stream.write("\n".join(body) + "\n")
+            stream.flush()
+            os.fsync(stream.fileno())
+        os.replace(temporary, target)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
+
+
+def _layout(
+    header: list[str], description: RobotDescription | None, where: str
+) -> tuple[TrialKind, tuple[str, ...]]:
+    """The file kind and its required columns, from the header."""
+    duplicated = sorted({name for name in header if header.count(name) > 1})
+    if duplicated:
+        raise TrialFileError(f"{where}: column(s) named twice: {', '.join(duplicated)}")
+    is_pose = any(name in header for name in POSE_COLUMNS)
+    is_marks = any(name.startswith(("d1", "cross")) for name in header)
+    if is_pose == is_marks:
+        raise TrialFileError(
+            f"{where}: the header must name either the pose columns "
+            f"{','.join(POSE_COLUMNS)} or the raw-mark columns d1_m,...,cross1_m; "
+            f"got {','.join(header)}"
+        )
+    kind: TrialKind = "pose" if is_pose else "marks"
+    if kind == "pose":
+        columns: tuple[str, ...] = DESIGN_COLUMNS + POSE_COLUMNS
+    else:
+        if description is None:
+            raise TrialFileError(f"{where}: a raw-mark file needs the robot description")
+        columns = DESIGN_COLUMNS + _mark_columns(description)
+    has_odometry = [name in header for name in ODOMETRY_COLUMNS]
+    if any(has_odometry) and not all(has_odometry):
+        raise TrialFileError(f"{where}: give all of {','.join(ODOMETRY_COLUMNS)} or none of them")
+    allowed = columns + ODOMETRY_COLUMNS
+    missing = [name for name in columns if name not in header]
+    unknown = [name for name in header if name not in allowed]
+    if missing or unknown:
+        parts = []
+        if missing:
+            parts.append(f"missing column(s) {','.join(missing)}")
+        if unknown:
+            parts.append(f"unknown column(s) {','.join(unknown)}")
+        raise TrialFileError(
+            f"{where}: {'; '.join(parts)} (a {kind} file has {','.join(columns)}"
+            f"[,{','.join(ODOMETRY_COLUMNS)}])"
+        )
+    return kind, columns
+
+
+def _mark_columns(description: RobotDescription) -> tuple[str, ...]:
+    same = tuple(f"d{n}_m" for n in range(1, len(description.screws) + 1))
+    cross = tuple(f"cross{n}_m" for n in range(1, len(description.cross_pairs) + 1))
+    return same + cross
+
+
+class _RowParser:
+    """Turns the fields of one row into a :class:`Trial`, or raises
+    :class:`MeasurementError` listing everything wrong with the row."""
+
+    def __init__(
+        self,
+        kind: TrialKind,
+        header: list[str],
+        columns: tuple[str, ...],
+        description: RobotDescription | None,
+        prior: PriorForDesign | None,
+    ) -> None:
+        self._kind = kind
+        self._header = header
+        self._value_columns = columns[len(DESIGN_COLUMNS) :]
+        self._description = description
+        self._prior = prior
+        self._priors: dict[Design, PoseDistribution] = {}
+
+    def parse(self, fields: list[str], line: int) -> Trial:
+        if len(fields) != len(self._header):
+            raise MeasurementError(
+                f"expected {len(self._header)} fields ({','.join(self._header)}), got {len(fields)}"
+            )
+        row = dict(zip(self._header, fields, strict=True))
+        problems: list[str] = []
+        design = self._design(row, problems)
+        values = [self._number(row, name, problems) for name in self._value_columns]
+        odometry: list[float | None] = [
+            self._number(row, name, problems) for name in ODOMETRY_COLUMNS if name in row
+        ]
+        if self._kind == "marks":
+            for name, value in zip(self._value_columns, values, strict=True):
+                if value is not None and value < 0:
+                    problems.append(f"{name} is a distance and cannot be negative: {value!r}")
+        if problems or design is None:
+            raise MeasurementError("; ".join(problems))
+        numbers = [float(v) for v in values if v is not None]
+        if odometry:
+            odometry_end = np.array(odometry, dtype=np.float64)
+        else:
+            odometry_end = np.array(design.path().encoder_end_pose(), dtype=np.float64)
+        if self._kind == "pose":
+            return Trial(
+                design=design,
+                pose_change=np.array(numbers, dtype=np.float64),
+                pose_cov=None,
+                marks=None,
+                odometry_end_pose=odometry_end,
+                line=line,
+            )
+        return self._solve(design, numbers, odometry_end, line)
+
+    def _solve(
+        self, design: Design, numbers: list[float], odometry_end: FloatArray, line: int
+    ) -> Trial:
+        description = self._description
+        assert description is not None  # checked with the header
+        n_same = len(description.screws)
+        marks = MarkDistances(tuple(numbers[:n_same]), tuple(numbers[n_same:]))
+        prior = None
+        if self._prior is not None:
+            if design not in self._priors:
+                self._priors[design] = self._prior(design)
+            prior = self._priors[design]
+        solution = solve_marks(description, marks, odometry_end, prior=prior)
+        return Trial(
+            design=design,
+            pose_change=solution.pose_change,
+            pose_cov=solution.cov,
+            marks=marks,
+            odometry_end_pose=odometry_end,
+            flagged=not solution.clear_cut,
+            note=solution.reason,
+            line=line,
+        )
+
+    @staticmethod
+    def _number(row: dict[str, str], name: str, problems: list[str]) -> float | None:
+        text = row[name]
+        try:
+            value = float(text)
+        except ValueError:
+            problems.append(f"{name} is not a number: {text!r}")
+            return None
+        if not math.isfinite(value):
+            problems.append(f"{name} is not a finite number: {text!r}")
+            return None
+        return value
+
+    def _design(self, row: dict[str, str], problems: list[str]) -> Design | None:
+        k = self._number(row, "k", problems)
+        l_m = self._number(row, "l_m", problems)
+        variant = row["variant"]
+        if variant not in VARIANTS:
+            problems.append(f"variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
+            return None
+        if k is None or l_m is None:
+            return None
+        chosen: Variant = "turn" if variant == "turn" else "reverse"
+        try:
+            return Design(k, l_m, chosen)
+        except ParameterError as exc:
+            problems.append(str(exc))
+            return None
