@@ -1,0 +1,79 @@
+"""The TRUE pose drifts as the four parameters say (in process, many runs, 4-SE tolerances)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from odohil import units
+from odohil.protocol import messages as m
+from odohil.science.parameters import ErrorParameters
+
+from .link import RawLink
+
+# Exaggerated values so that few runs give a sharp test (paper units).
+E_R_DEG, E_T, K_THETA_DEG2, K_RHO = 5.0, 0.05, 1.0, 1e-4
+PARAMS = ErrorParameters.from_paper_units(E_R_DEG, E_T, K_THETA_DEG2, K_RHO)
+RUNS = 300
+WIRE = 394  # one metre, rounded to the wire unit
+
+
+def _runs(fake_port: Any, steer: int) -> tuple[np.ndarray, np.ndarray, float]:
+    """Heading changes (rad) and chord lengths (m) of RUNS straight runs of WIRE units,
+    and the true heading (rad) after the initial in-place turn by ``steer``."""
+    port = fake_port(
+        f"seed=11&time_scale=10000&E_R={E_R_DEG}&E_T={E_T}&K_theta={K_THETA_DEG2}&K_rho={K_RHO}"
+    )
+    link = RawLink(port)
+    link.request(m.Sp(200, 450, 450))
+    if steer:
+        link.request(m.Pr(0, steer, 0))
+        link.request(m.Ws(True, True, True, 5))
+    heading0 = port.truth().true_theta_rad
+    turns, chords = [], []
+    for _ in range(RUNS):
+        before = port.truth()
+        link.request(m.Dp(0, 0))
+        link.request(m.Pr(WIRE, 0, 0))
+        link.request(m.Ws(True, True, True, 5))
+        after = port.truth()
+        assert not after.moving
+        assert (after.encoder_x, after.encoder_y) == (
+            round(WIRE * math.cos(math.radians(steer / 10))),
+            round(WIRE * math.sin(math.radians(steer / 10))),
+        )
+        turns.append(after.true_theta_rad - before.true_theta_rad)
+        chords.append(
+            math.hypot(after.true_x_m - before.true_x_m, after.true_y_m - before.true_y_m)
+        )
+    return np.array(turns), np.array(chords), heading0
+
+
+def test_heading_and_distance_drift_match_the_parameters(fake_port: Any) -> None:
+    d = units.wire_to_metres(WIRE)
+    turns, chords, _ = _runs(fake_port, steer=0)
+    n = len(turns)
+
+    mean_turn = PARAMS.e_r * d  # eq. 2, per metre driven
+    var_turn = PARAMS.k_theta * d  # eq. 11
+    se_mean = math.sqrt(var_turn / n)
+    assert abs(turns.mean() - mean_turn) < 4 * se_mean
+    se_var = var_turn * math.sqrt(2.0 / (n - 1))
+    assert abs(turns.var(ddof=1) - var_turn) < 4 * se_var
+
+    # chord of an arc of length (1 + E_T) d turning by E_R d
+    half = mean_turn / 2
+    mean_chord = (1 + PARAMS.e_t) * d * math.sin(half) / half
+    var_chord = PARAMS.k_rho * d  # eq. 14 (heading noise adds O(K_theta^2), negligible)
+    assert abs(chords.mean() - mean_chord) < 4 * math.sqrt(var_chord / n)
+    assert abs(chords.var(ddof=1) - var_chord) < 4 * var_chord * math.sqrt(2.0 / (n - 1))
+
+
+def test_steering_turns_are_error_free_and_drive_follows_them(fake_port: Any) -> None:
+    turns, _, heading0 = _runs(fake_port, steer=900)
+    assert abs(heading0 - math.pi / 2) < 1e-12  # in-place turns are error free
+    # the 90 deg turn happened before the runs: each run drifts as on the x axis
+    se_mean = math.sqrt(PARAMS.k_theta * units.wire_to_metres(WIRE) / len(turns))
+    assert abs(turns.mean() - PARAMS.e_r * units.wire_to_metres(WIRE)) < 4 * se_mean
