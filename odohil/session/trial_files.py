@@ -335,12 +335,12 @@ class _RowParser:
         variant = row["variant"]
         if variant not in VARIANTS:
             problems.append(f"variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
-            return None
         if k is None or l_m is None:
             return None
-        chosen: Variant = "turn" if variant == "turn" else "reverse"
+        chosen: Variant = "reverse" if variant == "reverse" else "turn"
         try:
-            return Design(k, l_m, chosen)
+            design = Design(k, l_m, chosen)
         except ParameterError as exc:
             problems.append(str(exc))
             return None
+        return design if variant in VARIANTS else None

@@ -156,7 +156,7 @@ def test_every_bad_row_is_reported_by_line_and_reason(tmp_path: Path) -> None:
         "1,6,turn,0.1,nan,0.3,0.4,0.5",  # 5
         "1,6,turn,0.1,0.2,-0.3,0.4,0.5",  # 6
         "0.7,6,turn,0.1,0.2,0.3,0.4,0.5",  # 7
-        "1,6,sideways,0.1,0.2,0.3,0.4,0.5",  # 8
+        "0.7,6,sideways,0.1,0.2,0.3,0.4,0.5",  # 8: two problems
         "1,-6,turn,0.1,0.2,0.3,0.4,0.5",  # 9
         inconsistent,  # 10
         good,  # 11
@@ -172,7 +172,7 @@ def test_every_bad_row_is_reported_by_line_and_reason(tmp_path: Path) -> None:
         5: "d2_m is not a finite number",
         6: "d3_m is a distance and cannot be negative",
         7: "k must be a positive multiple of 1/2",
-        8: "variant must be one of turn, reverse",
+        8: "variant must be one of turn, reverse, got 'sideways'; k must be",
         9: "l must be a positive length",
         10: "Suspect distance: cross2",
     }
