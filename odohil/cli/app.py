@@ -12,7 +12,7 @@ import typer
 
 from odohil import __version__
 
-COMMAND_MODULES: tuple[str, ...] = ("emulate", "predict", "simulate")
+COMMAND_MODULES: tuple[str, ...] = ("emulate", "predict", "simulate", "run", "resume", "demo")
 
 app = typer.Typer(
     name="odohil",

@@ -35,6 +35,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Protocol
 
+import numpy as np
+
 from odohil import __version__
 from odohil.driver.motion import (
     DEFAULT_ACCELERATIONS,
@@ -47,13 +49,22 @@ from odohil.driver.motion import (
 from odohil.driver.robot import NomadRobot
 from odohil.driver.sample import EncoderSample
 from odohil.errors import InconsistentMeasurementError, JournalError, MeasurementError, OdohilError
+from odohil.science.estimators import IncrementalEstimator, Observation
 from odohil.science.floor_marks import MarkDistances, distance_labels, solve_marks
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session import state as ev
 from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
 from odohil.session.sources import MeasurementSource, TrialContext, check_distance
-from odohil.session.state import CompletedTrial, OpenTrial, Phase, SessionState, apply, replay
+from odohil.session.state import (
+    CompletedTrial,
+    OpenTrial,
+    Phase,
+    SessionState,
+    apply,
+    description_of_header,
+    replay,
+)
 
 MAX_REJECTIONS = 3
 """How many times one attempt's distances may be rejected before giving up."""
@@ -202,9 +213,27 @@ def resume_session(folder: str | Path, note: Mapping[str, Any] | None = None) ->
 
 def description_of(state: SessionState) -> RobotDescription:
     """The robot description journaled in the session header."""
-    return parse_robot_description(
-        str(state.header["robot_toml"]), str(state.header.get("robot_path") or "session")
-    )
+    return description_of_header(state)
+
+
+class IncrementalLiveEstimator:
+    """A :class:`LiveEstimator` on the joint maximum-likelihood
+    :class:`~odohil.science.estimators.IncrementalEstimator`."""
+
+    def __init__(self) -> None:
+        self.inner = IncrementalEstimator()
+
+    def add(self, trial: CompletedTrial) -> Mapping[str, Any] | None:
+        """Fold the trial in; the current result's JSON object, or None."""
+        observation = Observation(
+            design=trial.design,
+            pose_change=np.array(trial.pose_change, dtype=np.float64),
+            measurement_cov=np.array(trial.cov, dtype=np.float64),
+            line=trial.seq,
+        )
+        if self.inner.add(observation) is None:
+            return None
+        return self.inner.result().to_json_dict()
 
 
 class SessionEngine:

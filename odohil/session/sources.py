@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
@@ -32,6 +33,7 @@ from odohil.errors import MeasurementError
 from odohil.science.floor_marks import distance_labels, marks_from_pose
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription
+from odohil.session.trial_files import read_trials
 
 
 @dataclass(frozen=True)
@@ -233,14 +235,17 @@ class FakeTruthSource:
 
 
 class RecordedSource:
-    """Distances taken beforehand: row k (0-based) serves the k-th trial attempt
-    that is measured, in session order; ``start_row`` skips rows already used.
-
-    Each row holds the distances in the robot description's order.
+    """Distances taken beforehand: row k (1-based) serves trial k of the plan
+    (every attempt at it). Each row holds the distances in the robot
+    description's order; with ``designs``, row k must be of trial k's design.
     """
 
     def __init__(
-        self, rows: Sequence[Sequence[float]], description: RobotDescription, origin: str
+        self,
+        rows: Sequence[Sequence[float]],
+        description: RobotDescription,
+        origin: str,
+        designs: Sequence[Design] | None = None,
     ) -> None:
         labels = distance_labels(description)
         for number, row in enumerate(rows, start=1):
@@ -251,6 +256,7 @@ class RecordedSource:
                 )
         self.rows = [tuple(float(v) for v in row) for row in rows]
         self.origin = origin
+        self.designs = tuple(designs) if designs is not None else None
 
     def row_for(self, ctx: TrialContext) -> int:
         """The row used by trial ``ctx.trial`` (trial k uses row k - 1)."""
@@ -272,6 +278,11 @@ class RecordedSource:
                 f"{self.origin}: trial {ctx.trial} needs row {row + 1}, "
                 f"the file has {len(self.rows)}"
             )
+        if self.designs is not None and self.designs[row] != ctx.design:
+            raise MeasurementError(
+                f"{self.origin}: row {row + 1} is design {self.designs[row].label()}, "
+                f"trial {ctx.trial} runs {ctx.design.label()}"
+            )
         return check_distance(self.rows[row][index], ctx.labels[index])
 
     def rejected(self, ctx: TrialContext, reason: str) -> None:
@@ -279,3 +290,28 @@ class RecordedSource:
         raise MeasurementError(
             f"{self.origin}: row {self.row_for(ctx) + 1} (trial {ctx.trial}): {reason}"
         )
+
+
+def recorded_source_from_file(path: str | Path, description: RobotDescription) -> RecordedSource:
+    """A :class:`RecordedSource` from a trial file: raw-mark rows give their
+    distances; pose rows give the exact distances their pose change leaves
+    (forward model). Row k serves trial k and must be of its design.
+
+    Raises:
+        TrialFileError: bad rows (all listed).
+    """
+    trials = read_trials(path, description)
+    rows = [
+        tuple(
+            float(v)
+            for v in (
+                trial.marks.as_array()
+                if trial.marks is not None
+                else marks_from_pose(description, trial.pose_change).as_array()
+            )
+        )
+        for trial in trials.trials
+    ]
+    return RecordedSource(
+        rows, description, origin=str(path), designs=[t.design for t in trials.trials]
+    )

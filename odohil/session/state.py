@@ -38,12 +38,19 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from enum import Enum
+from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from odohil.errors import JournalError, ParameterError
+from odohil.science.estimators import Observation
+from odohil.science.floor_marks import MarkDistances
 from odohil.science.paths import Design
-from odohil.session.journal import Record
+from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.session.journal import Record, TornRecord, read_journal
 from odohil.session.plan import Plan
+from odohil.session.trial_files import Trial, TrialSet
 
 FORMAT = 1
 """Version of the journal's event schema."""
@@ -122,6 +129,8 @@ class CompletedTrial:
         clear_cut: whether the solver was sure of its choice.
         start: the measurement source's start data (e.g. the true start pose).
         end: the measurement source's end data.
+        note: why the solution is in doubt (empty when clear-cut).
+        seq: sequence number (= line in the journal file) of the ``solved`` record.
     """
 
     trial: int
@@ -135,6 +144,8 @@ class CompletedTrial:
     clear_cut: bool
     start: Mapping[str, Any]
     end: Mapping[str, Any]
+    note: str = ""
+    seq: int = 0
 
 
 @dataclass(frozen=True)
@@ -302,6 +313,8 @@ def _apply(state: SessionState, record: Record) -> SessionState:
             clear_cut=bool(data["clear_cut"]),
             start=opened.start,
             end=opened.end,
+            note=str(data.get("reason", "")),
+            seq=record.seq,
         )
         return replace(state, completed=(*state.completed, done), open_trial=None)
     raise JournalError(f"record {record.seq}: unknown event kind {kind!r}")
@@ -360,3 +373,88 @@ def _expect(opened: OpenTrial, record: Record, phase: Phase) -> None:
 def _triple(value: Any) -> tuple[float, float, float]:
     x, y, z = (float(v) for v in value)
     return (x, y, z)
+
+
+def session_trials(state: SessionState, source: str = "session") -> TrialSet:
+    """The completed trials as a trial set (raw-marks kind), in completion order.
+
+    Each trial's ``line`` is the journal line of its ``solved`` record;
+    ``flagged``/``note`` say when the floor-mark solution was not clear-cut.
+    """
+    n_screws = len(description_of_header(state).screws)
+    trials = tuple(
+        Trial(
+            design=t.design,
+            pose_change=np.array(t.pose_change, dtype=np.float64),
+            pose_cov=np.array(t.cov, dtype=np.float64),
+            marks=MarkDistances(
+                same_m=t.measurements[:n_screws], cross_m=t.measurements[n_screws:]
+            ),
+            odometry_end_pose=np.array(t.encoder_end_pose, dtype=np.float64),
+            flagged=not t.clear_cut,
+            note=t.note,
+            line=t.seq,
+        )
+        for t in state.completed
+    )
+    return TrialSet(trials=trials, kind="marks", source=source)
+
+
+def session_observations(state: SessionState) -> list[Observation]:
+    """The completed trials as the estimators' observations (with the
+    floor-mark covariance as measurement covariance)."""
+    return trials_to_observations(session_trials(state))
+
+
+def trials_to_observations(trials: TrialSet) -> list[Observation]:
+    """Trials as observations; a trial without a covariance has an exact pose."""
+    return [
+        Observation(
+            design=t.design,
+            pose_change=t.pose_change,
+            measurement_cov=t.pose_cov if t.pose_cov is not None else np.zeros((3, 3)),
+            line=t.line,
+        )
+        for t in trials.trials
+    ]
+
+
+@dataclass(frozen=True)
+class LoadedSession:
+    """A session read from its folder without changing it.
+
+    Attributes:
+        state: the replayed state.
+        torn: the torn last record, if any (not used; say so to the user).
+    """
+
+    state: SessionState
+    torn: TornRecord | None
+
+
+def load_session(folder: str | Path) -> LoadedSession:
+    """Read and replay a session folder (read-only).
+
+    Raises:
+        JournalError: no journal, or a corrupt or inconsistent one.
+    """
+    contents = read_journal(folder)
+    return LoadedSession(replay(contents.records), contents.torn)
+
+
+def load_session_trials(folder: str | Path) -> TrialSet:
+    """The completed trials of a session folder, for offline estimation
+    (``odohil estimate SESSION``). A torn last record is ignored, as on resume;
+    call :func:`load_session` to report it.
+
+    Raises:
+        JournalError: no journal, or a corrupt or inconsistent one.
+    """
+    return session_trials(load_session(folder).state, source=str(folder))
+
+
+def description_of_header(state: SessionState) -> RobotDescription:
+    """The robot description journaled in the session header."""
+    return parse_robot_description(
+        str(state.header["robot_toml"]), str(state.header.get("robot_path") or "session")
+    )

@@ -1,0 +1,115 @@
+"""``odohil demo``: a whole calibration against the fake robot, unattended.
+
+Starts the fake Nomad 150 (``python -m fakes.nomad``) on a pseudo-terminal with
+known, exaggerated error parameters (:data:`DEMO_TRUTH`), runs the session
+engine through the real driver with the fake's ground truth as measurement
+source (1 mm tape noise), and prints the estimates beside the true values.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from odohil.cli.run import (
+    EXIT_ERROR,
+    EXIT_INTERRUPTED,
+    SnapshotTruth,
+    connect,
+    execute,
+    finish,
+)
+from odohil.errors import OdohilError
+from odohil.science.parameters import SI_UNITS, ErrorParameters
+from odohil.science.robot_description import parse_robot_description
+from odohil.session.engine import start_session
+from odohil.session.plan import parse_plan
+from odohil.session.sources import FakeTruthSource
+
+DEMO_TRUTH = ErrorParameters.from_paper_units(-1.0, -0.05, 0.3, 9e-4)
+"""The fake robot's true parameters: the Nomad 150's (-0.202 deg/m, -0.02,
+0.012 deg^2/m, 3.6e-5 m) scaled by about 5, 2.5, 25 and 25, so that the
+odometry error of a 4 m trial stands well clear of 1 mm tape noise."""
+DEMO_PLAN = "k=1,l=2,n=24;k=0.5,l=2,n=24"
+"""Closed 4 m runs (E_R, K_theta, K_rho) and one-way 2 m runs (E_T)."""
+DEMO_TIME_SCALE = 20000.0
+"""Simulated seconds per wall second in the fake robot."""
+DEMO_ROBOT_TOML = """\
+[screws]
+A = [0.20, 0.0]
+B = [-0.10, 0.173]
+C = [-0.10, -0.173]
+[measurement]
+sigma_m = 0.001
+cross = [["A", "B"], ["B", "C"]]
+"""
+
+
+def demo(
+    seed: Annotated[int, typer.Option("--seed", help="Seed of the fake robot and tape.")] = 1,
+    json_out: Annotated[
+        bool, typer.Option("--json", help="Print the estimate and the truth as JSON.")
+    ] = False,
+    session: Annotated[
+        Path | None,
+        typer.Option("--session", help="Keep the session folder here (default: a temp folder)."),
+    ] = None,
+) -> None:
+    """Calibrate the fake robot unattended and compare with its true parameters."""
+    console = Console(stderr=True)
+    truth = DEMO_TRUTH.to_si_dict()
+    paper = DEMO_TRUTH.to_paper_units()
+    try:
+        from fakes.nomad.process import EmulatorProcess
+
+        with tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
+            folder = session or Path(tmp) / "session"
+            args = [
+                "--seed", str(seed),
+                "--E-R", repr(paper["E_R"]),
+                "--E-T", repr(paper["E_T"]),
+                "--K-theta", repr(paper["K_theta"]),
+                "--K-rho", repr(paper["K_rho"]),
+                "--time-scale", repr(DEMO_TIME_SCALE),
+                "--truth-socket", str(Path(tmp) / "truth.sock"),
+            ]  # fmt: skip
+            with EmulatorProcess(args) as emulator:
+                console.print(f"fake robot on {emulator.device}; true parameters (SI) {truth}")
+                description = parse_robot_description(DEMO_ROBOT_TOML, "demo robot")
+                settings = {
+                    "port": emulator.device,
+                    "baud": 38400,
+                    "truth_socket": emulator.truth_socket,
+                    "seed": seed,
+                    "truth": truth,
+                }
+                with connect(emulator.device, 38400, emulator.truth_socket) as (robot, reader):
+                    source = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+                    journal, state = start_session(
+                        folder,
+                        DEMO_ROBOT_TOML,
+                        parse_plan(DEMO_PLAN),
+                        measure="fake",
+                        settings=settings,
+                    )
+                    with journal:
+                        outcome = execute(journal, state, robot, source, settings, console)
+    except KeyboardInterrupt:
+        console.print("[yellow]interrupted[/]")
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    except (OdohilError, OSError) as exc:
+        console.print(f"[red]error[/]: {exc}")
+        raise typer.Exit(EXIT_ERROR) from None
+    extra = {
+        "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
+    }
+    finish(outcome, json_out, console, extra=extra, truth=truth)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``demo`` to the ``odohil`` app."""
+    app.command("demo")(demo)

@@ -1,0 +1,79 @@
+"""``odohil resume``: continue a session exactly where its journal stops."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+
+from odohil.cli.run import EXIT_ERROR, EXIT_INTERRUPTED, connect, execute, finish, make_source
+from odohil.driver.link import DEFAULT_BAUD
+from odohil.errors import InitError, OdohilError
+from odohil.session.engine import description_of, resume_session
+
+
+def resume(
+    session: Annotated[Path, typer.Argument(help="The session folder to continue.")],
+    port: Annotated[
+        str | None, typer.Option("--port", help="Serial port (default: the session's).")
+    ] = None,
+    truth_socket: Annotated[
+        str | None,
+        typer.Option("--truth-socket", help="Fake robot truth socket (default: the session's)."),
+    ] = None,
+    baud: Annotated[
+        int | None, typer.Option("--baud", help="Line speed (default: the session's).")
+    ] = None,
+    json_out: Annotated[
+        bool, typer.Option("--json", help="Print the final estimate as JSON.")
+    ] = False,
+) -> None:
+    """Continue an interrupted session: no trial lost, none counted twice.
+
+    A trial cut off before or during its motion is voided and redone; one whose
+    motion finished resumes at its next missing measurement.
+    """
+    console = Console(stderr=True)
+    try:
+        resumed = resume_session(session)
+        with resumed.journal:
+            if resumed.torn is not None:
+                console.print(f"[yellow]warning[/]: {resumed.torn.describe()}")
+            state = resumed.state
+            settings = dict(state.header.get("settings", {}))
+            port_url = port or settings.get("port")
+            if not port_url:
+                raise InitError("the session does not say which port; give --port")
+            line_baud = baud or int(settings.get("baud") or DEFAULT_BAUD)
+            socket_path = truth_socket or settings.get("truth_socket")
+            done = len(state.completed)
+            assert state.plan is not None
+            console.print(
+                f"resuming {session}: {done} of {state.plan.n_trials} trials done"
+                + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
+            )
+            with connect(str(port_url), line_baud, socket_path) as (robot, truth):
+                source = make_source(
+                    str(state.header.get("measure")),
+                    description_of(state),
+                    truth,
+                    int(settings.get("seed") or 0),
+                    settings.get("trial_file"),
+                )
+                connection = {**settings, "port": port_url, "baud": line_baud}
+                connection["truth_socket"] = socket_path
+                outcome = execute(resumed.journal, state, robot, source, connection, console)
+    except KeyboardInterrupt:
+        console.print("[yellow]interrupted[/]")
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    except (OdohilError, OSError) as exc:
+        console.print(f"[red]error[/]: {exc}")
+        raise typer.Exit(EXIT_ERROR) from None
+    finish(outcome, json_out, console)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``resume`` to the ``odohil`` app."""
+    app.command("resume")(resume)
