@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Iterator
 from contextlib import ExitStack
 
@@ -10,6 +11,7 @@ import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
 from fakes.nomad.process import EmulatorProcess
+from fakes.nomad.truth import TruthSnapshot
 from odohil.protocol.messages import Lp, St, encode_request
 
 from .link import RawLink
@@ -25,7 +27,8 @@ class PtyRobot:
         self.port = port
         self.link = RawLink(port)
 
-    def truth(self):  # type: ignore[no-untyped-def]
+    def truth(self) -> TruthSnapshot:
+        """The robot's true pose and logs."""
         return self.process.truth()
 
 
@@ -57,8 +60,6 @@ def pty_robot() -> Iterator[Callable[..., PtyRobot]]:
 
 
 def _settled_moving(robot: PtyRobot) -> bool:
-    import time
-
     deadline = time.monotonic() + 5.0
     while time.monotonic() < deadline:
         if not robot.truth().moving:
