@@ -15,7 +15,10 @@ from odohil.errors import OdohilError
 from odohil.science.parameters import NOMAD150
 
 _PAPER = NOMAD150.to_paper_units()
-_FAULT_HELP = f"NAME[:CODE][@N], repeatable; NAME one of {', '.join(FAULT_NAMES)}."
+_FAULT_HELP = (
+    "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
+    f"repeatable; NAME one of {', '.join(FAULT_NAMES)}. See docs/fake-robot.md."
+)
 
 
 def emulate(
