@@ -384,6 +384,8 @@ class NomadEngine:
         """``zr``: turn steering and turret to the nearest whole turn at full speed."""
         body = self.body
         body.axes[TRANS].halt()
+        for axis in body.axes:
+            axis.stuck = False
         end = body.t
         for index in (STEER, TURRET):
             axis = body.axes[index]
