@@ -221,9 +221,14 @@ def sufficiency(
         if not math.isfinite(stderr[p]):
             flagged.append(p)
             reasons.append(f"{name} is not identifiable from these trials (no information)")
-        elif name in ("K_theta", "K_rho") and value <= 0:
+        elif name in ("K_theta", "K_rho") and value < 2.0 * stderr[p]:
             flagged.append(p)
-            reasons.append(f"{name} is not distinguishable from zero")
+            # aim at pinning it to within the target relative to its current upper reach
+            targets[p] = criteria.k_relative * (value + 2.0 * stderr[p])
+            reasons.append(
+                f"{name} is not distinguishable from zero (estimate {value:.2g}, "
+                f"standard error {stderr[p]:.2g})"
+            )
         elif stderr[p] > targets[p]:
             flagged.append(p)
             if name == "E_T":
@@ -239,25 +244,32 @@ def sufficiency(
     if not flagged:
         return Sufficiency(True, "enough trials: every parameter meets its target", (), (), ())
     names = tuple(PARAMETER_NAMES[p] for p in flagged)
-    suggestions: list[Suggestion] = []
-    computable = [p for p in flagged if targets[p] > 0]
     try:
         info, per_trial = _information(summaries, params)
     except ParameterError:
         info, per_trial = np.zeros((4, 4)), {}
     base = _variances(info)
-    for summary in summaries:
-        one = per_trial.get(summary.design)
-        more = (
-            _extra_trials(info, one, base, stderr, targets, computable)
-            if one is not None and computable
-            else None
-        )
-        d = summary.design
-        suggestions.append(Suggestion(d.label(), d.k, d.l_m, d.variant, more))
-    doable = [s for s in suggestions if s.more_trials is not None]
-    verdict = f"not enough trials for {_join(list(names))}"
-    if doable:
-        best = min(doable, key=lambda s: (s.more_trials or 0) * s.l_m * 2 * s.k)
-        verdict += f": about {best.more_trials} more trials of {best.design_label} would do"
+    suggestions: list[Suggestion] = []
+    advice: list[str] = []
+    for p in flagged:
+        mine: list[Suggestion] = []
+        for summary in summaries:
+            one = per_trial.get(summary.design)
+            more = (
+                _extra_trials(info, one, base, stderr, targets, [p])
+                if one is not None and targets[p] > 0
+                else None
+            )
+            d = summary.design
+            mine.append(Suggestion(PARAMETER_NAMES[p], d.label(), d.k, d.l_m, d.variant, more))
+        suggestions += mine
+        doable = [s for s in mine if s.more_trials is not None]
+        if doable:
+            best = min(doable, key=lambda s: (s.more_trials or 0) * s.l_m * 2 * s.k)
+            advice.append(
+                f"{PARAMETER_NAMES[p]}: about {best.more_trials} more trials of {best.design_label}"
+            )
+        else:
+            advice.append(f"{PARAMETER_NAMES[p]}: more trials of these designs would not do")
+    verdict = f"not enough trials for {_join(list(names))} ({'; '.join(advice)})"
     return Sufficiency(False, verdict, names, tuple(reasons), tuple(suggestions))

@@ -127,9 +127,10 @@ class ModelCheck:
 
 @dataclass(frozen=True)
 class Suggestion:
-    """More trials of one design that would make the flagged parameters precise enough.
+    """More trials of one design that would make a flagged parameter precise enough.
 
     Attributes:
+        parameter: the parameter (E_R, E_T, K_theta or K_rho).
         design_label: the design (e.g. ``k=20 l=0.5 m turn``).
         k: the design's k.
         l_m: its leg length, metres.
@@ -138,6 +139,7 @@ class Suggestion:
             there within the search limit).
     """
 
+    parameter: str
     design_label: str
     k: float
     l_m: float
@@ -154,7 +156,8 @@ class Sufficiency:
         verdict: plain-language summary.
         unidentified: the parameters that do not, by name.
         reasons: one sentence per such parameter.
-        suggestions: per design in the data, the extra trials needed.
+        suggestions: per flagged parameter and design in the data, the extra
+            trials needed.
     """
 
     sufficient: bool
@@ -172,6 +175,7 @@ class Sufficiency:
             "reasons": list(self.reasons),
             "suggestions": [
                 {
+                    "parameter": s.parameter,
                     "design": s.design_label,
                     "k": s.k,
                     "l_m": s.l_m,
