@@ -1,0 +1,63 @@
+"""Shared set-up of the session tests: a robot description, a fake robot in process."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import fakes  # noqa: F401  (registers the fakerobot:// URL handler)
+from odohil.driver.link import open_port
+from odohil.driver.robot import NomadRobot
+from odohil.science.robot_description import RobotDescription, parse_robot_description
+
+ROBOT_TOML = """\
+[screws]
+A = [0.20, 0.0]
+B = [-0.10, 0.173]
+C = [-0.10, -0.173]
+[measurement]
+sigma_m = 0.001
+cross = [["A", "B"], ["B", "C"]]
+"""
+
+FAST = "time_scale=20000"
+"""Fake robot time scale for tests: motions take well under a millisecond."""
+
+
+def description() -> RobotDescription:
+    """The test robot description."""
+    return parse_robot_description(ROBOT_TOML, "test robot")
+
+
+def write_robot(folder: Path) -> Path:
+    """The test robot description as a file in ``folder``."""
+    path = folder / "robot.toml"
+    path.write_text(ROBOT_TOML, encoding="utf-8")
+    return path
+
+
+class PortTruth:
+    """The true pose of an in-process fake robot (a fakerobot:// port)."""
+
+    def __init__(self, port: Any) -> None:
+        self.port = port
+
+    def true_pose(self) -> tuple[float, float, float]:
+        snapshot = self.port.engine.truth()
+        return (snapshot.true_x_m, snapshot.true_y_m, snapshot.true_theta_rad)
+
+    def moving(self) -> bool:
+        return bool(self.port.engine.truth().moving)
+
+
+@contextmanager
+def fake_robot(query: str) -> Iterator[tuple[NomadRobot, PortTruth]]:
+    """A NomadRobot on fakerobot://?QUERY and its truth; closed (st) afterwards."""
+    port: Any = open_port(f"fakerobot://?{query}", 38400)
+    robot = NomadRobot.from_port(port)
+    try:
+        yield robot, PortTruth(port)
+    finally:
+        robot.close()

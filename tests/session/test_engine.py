@@ -1,0 +1,254 @@
+"""The session engine against the in-process fake robot (fakerobot://)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from odohil.errors import MeasurementError
+from odohil.session import state as ev
+from odohil.session.engine import (
+    CallbackObserver,
+    IncrementalLiveEstimator,
+    SessionEngine,
+    resume_session,
+    start_session,
+)
+from odohil.session.journal import Record, read_journal
+from odohil.session.plan import parse_plan
+from odohil.session.sources import FakeTruthSource, TrialContext, recorded_source_from_file
+from odohil.session.state import SessionState, load_session_trials, replay
+from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
+
+PLAN = "k=1,l=1,n=3;k=0.5,l=1.5,n=3"
+# exaggerated errors so that the solved poses differ visibly from the odometry
+QUERY = f"seed=11&{FAST}&E_R=-1.0&E_T=-0.05&K_theta=0.3&K_rho=0.0009"
+
+
+def _start(folder: Path, plan: str = PLAN) -> tuple[Any, SessionState]:
+    return start_session(folder, ROBOT_TOML, parse_plan(plan), measure="fake", settings={})
+
+
+def _kinds(folder: Path) -> list[str]:
+    return [r.kind for r in read_journal(folder).records]
+
+
+def test_every_trial_once_with_the_true_pose_change(tmp_path: Path) -> None:
+    with fake_robot(QUERY) as (robot, truth):
+        journal, state = _start(tmp_path)
+        source = FakeTruthSource(truth, description(), seed=3)
+        with journal:
+            engine = SessionEngine(
+                journal, state, robot, source, estimator=IncrementalLiveEstimator()
+            )
+            final = engine.run()
+    assert final.finished
+    assert [t.trial for t in final.completed] == [1, 2, 3, 4, 5, 6]
+    assert all(t.attempt == 1 for t in final.completed)
+    for t in final.completed:
+        ctx = TrialContext(t.trial, t.attempt, 6, t.design, (), start=t.start, end=t.end)
+        true = np.array(source.true_pose_change(ctx))
+        solved = np.array(t.pose_change)
+        sd = np.sqrt(np.diag(np.array(t.cov)))
+        # the floor-mark solution is the truth within its own (5 sigma) error
+        assert np.all(np.abs(solved - true) <= 5 * sd + 1e-6), (t.trial, solved, true, sd)
+        # odometry reports the commanded path (within one wire unit, 2.54 mm)
+        nominal = t.design.path().encoder_end_pose()
+        assert np.allclose(t.encoder_end_pose[:2], nominal[:2], atol=0.003)
+        assert abs(math.remainder(t.encoder_end_pose[2], 2 * math.pi)) < 0.002
+    # the journal on disk tells exactly the same session
+    on_disk = replay(read_journal(tmp_path).records)
+    assert on_disk.completed == final.completed
+    assert on_disk.last_estimate is not None
+    assert on_disk.last_estimate["n_trials"] == 6
+    assert on_disk.last_estimate["result"]["n_trials"] == 6
+    trials = load_session_trials(tmp_path)
+    assert [t.line for t in trials.trials] == [t.seq for t in final.completed]
+    np.testing.assert_array_equal(trials.trials[0].pose_change, final.completed[0].pose_change)
+
+
+def _interrupt_on(kind: str, trial: int) -> CallbackObserver:
+    def callback(record: Record, state: SessionState) -> None:
+        if record.kind == kind and record.data.get("trial") == trial:
+            raise KeyboardInterrupt
+
+    return CallbackObserver(callback)
+
+
+def test_cut_off_at_the_motion_is_void_and_redone(tmp_path: Path) -> None:
+    with fake_robot(QUERY) as (robot, truth):
+        journal, state = _start(tmp_path, "k=1,l=0.5,n=3")
+        source = FakeTruthSource(truth, description(), seed=3)
+        with journal, pytest.raises(KeyboardInterrupt):
+            SessionEngine(
+                journal, state, robot, source, observer=_interrupt_on(ev.MOTION_START, 2)
+            ).run()
+        assert not truth.moving()
+        kinds = _kinds(tmp_path)
+        assert kinds[-3:] == [ev.MOTION_START, ev.VOID, ev.STOPPED]
+        stopped = read_journal(tmp_path).records[-1].data
+        assert stopped["reason"] == "interrupted"
+
+        resumed = resume_session(tmp_path)
+        with resumed.journal:
+            final = SessionEngine(resumed.journal, resumed.state, robot, source).run()
+    assert [(t.trial, t.attempt) for t in final.completed] == [(1, 1), (2, 2), (3, 1)]
+    assert final.voided == 1
+
+
+class _FailingAt(FakeTruthSource):
+    """Breaks off (as Ctrl-C would) when asked for one distance of one trial."""
+
+    def __init__(self, *args: Any, trial: int, index: int, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.at = (trial, index)
+
+    def distance(self, ctx: TrialContext, index: int) -> float:
+        if (ctx.trial, index) == self.at:
+            raise KeyboardInterrupt
+        return super().distance(ctx, index)
+
+
+def test_cut_off_while_measuring_resumes_at_the_next_distance(tmp_path: Path) -> None:
+    with fake_robot(QUERY) as (robot, truth):
+        journal, state = _start(tmp_path, "k=1,l=0.5,n=2")
+        failing = _FailingAt(truth, description(), seed=3, trial=2, index=2)
+        with journal, pytest.raises(KeyboardInterrupt):
+            SessionEngine(journal, state, robot, failing).run()
+        before = replay(read_journal(tmp_path).records)
+        assert before.open_trial is not None
+        assert before.open_trial.phase is ev.Phase.MEASURING
+        assert len(before.open_trial.measurements) == 2
+
+        source = FakeTruthSource(truth, description(), seed=3)
+        resumed = resume_session(tmp_path)
+        with resumed.journal:
+            final = SessionEngine(resumed.journal, resumed.state, robot, source).run()
+    assert [(t.trial, t.attempt) for t in final.completed] == [(1, 1), (2, 1)]
+    assert final.voided == 0
+    second = final.completed[1]
+    # the distances taken before and after the break are those of one attempt
+    ctx = TrialContext(2, 1, 2, second.design, (), start=second.start, end=second.end)
+    expected = [source.distance(ctx, i) for i in range(5)]
+    assert list(second.measurements) == expected
+    records = read_journal(tmp_path).records
+    indices = [
+        r.data["index"] for r in records if r.kind == ev.MEASUREMENT and r.data["trial"] == 2
+    ]
+    assert indices == [0, 1, 2, 3, 4]
+
+
+class _OneBadTape(FakeTruthSource):
+    """Misreads the first distance by 5 cm on the first try of each attempt."""
+
+    def distance(self, ctx: TrialContext, index: int) -> float:
+        value = super().distance(ctx, index)
+        return value + 0.05 if (index == 0 and ctx.rejections == 0) else value
+
+
+def test_inconsistent_distances_are_rejected_and_taken_again(tmp_path: Path) -> None:
+    with fake_robot(QUERY) as (robot, truth):
+        journal, state = _start(tmp_path, "k=0.5,l=1,n=2")
+        with journal:
+            final = SessionEngine(
+                journal, state, robot, _OneBadTape(truth, description(), seed=3)
+            ).run()
+    assert len(final.completed) == 2
+    kinds = _kinds(tmp_path)
+    assert kinds.count(ev.MEASUREMENTS_REJECTED) == 2
+    assert kinds.count(ev.MEASUREMENT) == 4 * 5
+
+
+def _trial_file(path: Path, rows: list[tuple[float, float, str, float, float, float]]) -> Path:
+    lines = ["k,l_m,variant,dx_m,dy_m,dtheta_rad"]
+    lines += [",".join(str(v) for v in row) for row in rows]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    return path
+
+
+def test_recorded_distances_from_a_trial_file(tmp_path: Path) -> None:
+    poses = [(0.5, 0.01, -0.02), (0.49, -0.005, 0.01)]
+    file = _trial_file(tmp_path / "trials.csv", [(0.5, 0.5, "turn", *p) for p in poses])
+    source = recorded_source_from_file(file, description())
+    with fake_robot(QUERY) as (robot, _):
+        journal, state = _start(tmp_path / "s", "k=0.5,l=0.5,n=2")
+        with journal:
+            final = SessionEngine(journal, state, robot, source).run()
+    for trial, pose in zip(final.completed, poses, strict=True):
+        np.testing.assert_allclose(trial.pose_change, pose, atol=1e-7)
+
+
+def test_recorded_row_of_another_design_is_refused(tmp_path: Path) -> None:
+    file = _trial_file(tmp_path / "trials.csv", [(1.0, 0.5, "turn", 0.0, 0.0, 0.0)])
+    source = recorded_source_from_file(file, description())
+    with fake_robot(QUERY) as (robot, _):
+        journal, state = _start(tmp_path / "s", "k=0.5,l=0.5,n=1")
+        with journal, pytest.raises(MeasurementError, match="row 1 is design k=1"):
+            SessionEngine(journal, state, robot, source).run()
+    assert _kinds(tmp_path / "s")[-1] == ev.STOPPED
+
+
+class _Prompts:
+    """A scripted operator."""
+
+    def __init__(self, answers: list[str]) -> None:
+        self.answers = answers
+        self.problems: list[str] = []
+        self.marked: list[str] = []
+
+    def confirm_start_marks(self, ctx: TrialContext) -> None:
+        self.marked.append("start")
+
+    def confirm_end_marks(self, ctx: TrialContext) -> None:
+        self.marked.append("end")
+
+    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
+        self.problems.append(problem)
+        return self.answers.pop(0)
+
+    def show_rejection(self, ctx: TrialContext, reason: str) -> None:
+        raise AssertionError(reason)
+
+
+def test_operator_answers_are_checked_and_asked_again() -> None:
+    from odohil.science.paths import Design
+    from odohil.session.sources import OperatorSource
+
+    prompts = _Prompts(["abc", "-0.1", "nan", " 0.25 "])
+    source = OperatorSource(prompts)
+    ctx = TrialContext(1, 1, 1, Design(1, 1.0), ("d1 (screw A)",))
+    assert source.mark_start(ctx) == {}
+    assert source.mark_end(ctx) == {}
+    assert source.distance(ctx, 0) == 0.25
+    assert prompts.marked == ["start", "end"]
+    assert prompts.problems[0] == ""
+    assert "not a number" in prompts.problems[1]
+    assert "negative" in prompts.problems[2]
+    assert "finite" in prompts.problems[3]
+
+
+def test_records_go_to_the_observer_in_order(tmp_path: Path) -> None:
+    seen: list[tuple[int, str, int]] = []
+
+    def callback(record: Record, state: SessionState) -> None:
+        seen.append((record.seq, record.kind, len(state.completed)))
+
+    with fake_robot(QUERY) as (robot, truth):
+        journal, state = _start(tmp_path, "k=0.5,l=0.5,n=1")
+        with journal:
+            SessionEngine(
+                journal,
+                state,
+                robot,
+                FakeTruthSource(truth, description()),
+                observer=CallbackObserver(callback),
+            ).run()
+    kinds = [kind for _, kind, _ in seen]
+    assert kinds[:4] == [ev.ROBOT, ev.TRIAL_START, ev.MOTION_START, ev.MOTION_DONE]
+    assert kinds[-2:] == [ev.SOLVED, ev.FINISHED]
+    assert [seq for seq, _, _ in seen] == list(range(3, 3 + len(seen)))
+    assert seen[-1][2] == 1
