@@ -101,6 +101,7 @@ class RobotBody:
         self.speed = list(map(float, POWER_ON_SPEED))
         self.accel = list(map(float, POWER_ON_ACCEL))
         self.limp = False
+        self._clamped = False
 
     # ---- time -------------------------------------------------------------
     def advance(self, t_end: float) -> None:
@@ -155,8 +156,10 @@ class RobotBody:
     def _set_encoder_xy(self, x: float, y: float) -> None:
         cx = min(max(x, -WIRE_LIMIT), WIRE_LIMIT)
         cy = min(max(y, -WIRE_LIMIT), WIRE_LIMIT)
-        if (cx, cy) != (x, y):
+        clamped = (cx, cy) != (x, y)
+        if clamped and not self._clamped:
             _LOG.warning("encoder position clamped to +-%d (C7): %.1f, %.1f", WIRE_LIMIT, x, y)
+        self._clamped = clamped
         self.enc_x, self.enc_y = cx, cy
 
     # ---- commands (at the current simulated time) --------------------------
