@@ -12,7 +12,7 @@ import typer
 
 from odohil import __version__
 
-COMMAND_MODULES: tuple[str, ...] = ("emulate", "predict", "simulate", "run", "resume", "demo")
+COMMAND_MODULES: tuple[str, ...] = ("emulate", "predict", "simulate", "run", "resume", "demo", "estimate")
 
 app = typer.Typer(
     name="odohil",
