@@ -59,7 +59,7 @@ _SAME_CANDIDATE = 0.05
 """Two minima are one candidate when they differ by less than this many tape
 sigmas (positions, and heading times the screws' radius)."""
 _MAX_CONDITION = 1e10
-NONLINEARITY_LIMIT = 1.0
+NONLINEARITY_LIMIT = 3.0
 """A trial is not clear-cut when a 3-sigma step (of the reported covariance)
 from the chosen pose moves the residuals more than this many tape sigmas away
 from their linear prediction: the error region is then bent and the
