@@ -12,7 +12,18 @@ import typer
 
 from odohil import __version__
 
-COMMAND_MODULES: tuple[str, ...] = ("emulate", "predict", "simulate", "run", "resume", "demo", "estimate")
+COMMAND_MODULES: tuple[str, ...] = (
+    "emulate",
+    "predict",
+    "simulate",
+    "plan",
+    "covariance",
+    "run",
+    "resume",
+    "demo",
+    "report",
+    "estimate",
+)
 
 app = typer.Typer(
     name="odohil",

@@ -1,0 +1,166 @@
+"""``odohil covariance``: mean and covariance of the odometry pose change of a path."""
+
+from __future__ import annotations
+
+import json
+import math
+from enum import StrEnum
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from odohil.errors import OdohilError
+from odohil.science.covariance import SimulatedMoments, predicted_moments, simulated_moments
+from odohil.science.moments import PoseMoments
+from odohil.science.parameters import NOMAD150, ErrorParameters
+from odohil.science.paths import Design, EncoderPath, square
+from odohil.science.simulator import DEFAULT_SEGMENT_M
+
+_PAPER = NOMAD150.to_paper_units()
+COMPONENTS = ("x", "y", "Delta")
+COMPONENT_UNITS = ("m", "m", "rad")
+
+
+class PathChoice(StrEnum):
+    """The kind of path."""
+
+    forth_and_back = "forth-and-back"
+    square = "square"
+
+
+class VariantChoice(StrEnum):
+    """How the robot comes back: turn in place, or drive backwards."""
+
+    turn = "turn"
+    reverse = "reverse"
+
+
+def _path(
+    kind: PathChoice, k: float | None, l_m: float | None, variant: VariantChoice, side: float | None
+) -> EncoderPath:
+    if kind is PathChoice.forth_and_back:
+        if k is None or l_m is None:
+            raise typer.BadParameter("--path forth-and-back needs --k and --l")
+        if side is not None:
+            raise typer.BadParameter("--side is for --path square")
+        return Design(k, l_m, variant.value).path()
+    if side is None:
+        raise typer.BadParameter("--path square needs --side")
+    if k is not None or l_m is not None:
+        raise typer.BadParameter("--k and --l are for --path forth-and-back")
+    return square(side)
+
+
+def _matrix_dict(matrix: object) -> list[list[float]]:
+    return [[float(v) for v in row] for row in matrix]  # type: ignore[attr-defined]
+
+
+def _document(
+    path: EncoderPath,
+    params: ErrorParameters,
+    exact: PoseMoments,
+    sim: SimulatedMoments | None,
+) -> dict[str, object]:
+    document: dict[str, object] = {
+        "path": path.name,
+        "distance_m": path.distance_m,
+        "parameters_si": params.to_si_dict(),
+        "components": list(COMPONENTS),
+        "units": {"mean": list(COMPONENT_UNITS), "cov": "products of the component units"},
+        "closed_form": {"mean": [float(v) for v in exact.mean], "cov": _matrix_dict(exact.cov)},
+    }
+    if sim is not None:
+        document["simulated"] = {
+            "n_trials": sim.n_trials,
+            "mean": [float(v) for v in sim.mean],
+            "mean_se": [float(v) for v in sim.mean_se],
+            "cov": _matrix_dict(sim.cov),
+            "cov_se": _matrix_dict(sim.cov_se),
+        }
+    return document
+
+
+def _print(
+    path: EncoderPath, exact: PoseMoments, sim: SimulatedMoments | None, params: ErrorParameters
+) -> None:
+    console = Console()
+    paper = params.to_paper_units()
+    table = Table(
+        title=f"Pose change after {path.name} ({path.distance_m:g} m driven)",
+        caption=f"E_R = {paper['E_R']:g} deg/m, E_T = {paper['E_T']:g}, "
+        f"K_theta = {paper['K_theta']:g} deg^2/m, K_rho = {paper['K_rho']:g} m",
+    )
+    table.add_column("quantity")
+    table.add_column("closed form", justify="right")
+    if sim is not None:
+        table.add_column(f"simulated ({sim.n_trials} trials) +- MC se", justify="right")
+    for i, (name, unit) in enumerate(zip(COMPONENTS, COMPONENT_UNITS, strict=True)):
+        row = [f"mean {name} ({unit})", f"{exact.mean[i]:.6g}"]
+        if sim is not None:
+            row.append(f"{sim.mean[i]:.6g} +- {sim.mean_se[i]:.2g}")
+        table.add_row(*row)
+    for i in range(3):
+        for j in range(i, 3):
+            unit = f"{COMPONENT_UNITS[i]} {COMPONENT_UNITS[j]}"
+            row = [f"cov({COMPONENTS[i]}, {COMPONENTS[j]}) ({unit})", f"{exact.cov[i, j]:.6g}"]
+            if sim is not None:
+                row.append(f"{sim.cov[i, j]:.6g} +- {sim.cov_se[i, j]:.2g}")
+            table.add_row(*row)
+    sd = [math.sqrt(max(exact.cov[i, i], 0.0)) for i in range(3)]
+    table.add_row(
+        "sd x, y (mm); sd Delta (deg)",
+        f"{sd[0] * 1e3:.4g}, {sd[1] * 1e3:.4g}; {math.degrees(sd[2]):.4g}",
+        *([""] if sim is not None else []),
+    )
+    console.print(table)
+
+
+def covariance(
+    path_kind: Annotated[PathChoice, typer.Option("--path", help="forth-and-back or square.")],
+    k: float | None = typer.Option(None, "--k", help="Forth-and-back pairs, a multiple of 1/2."),
+    l_m: float | None = typer.Option(None, "--l", help="Forth-and-back leg length, m."),
+    variant: Annotated[
+        VariantChoice,
+        typer.Option("--variant", help="turn: 180 deg in place; reverse: drive back."),
+    ] = VariantChoice.turn,
+    side: float | None = typer.Option(None, "--side", help="Square side, m."),
+    e_r: float = typer.Option(_PAPER["E_R"], "--E-R", help="E_R, deg/m."),
+    e_t: float = typer.Option(_PAPER["E_T"], "--E-T", help="E_T (no unit)."),
+    k_theta: float = typer.Option(_PAPER["K_theta"], "--K-theta", help="K_theta, deg^2/m."),
+    k_rho: float = typer.Option(_PAPER["K_rho"], "--K-rho", help="K_rho, m."),
+    n_simulate: int | None = typer.Option(
+        None, "--simulate", help="Also simulate this many trials (discrete model)."
+    ),
+    seed: int | None = typer.Option(None, "--seed", help="Seed of the simulation."),
+    segment_m: float = typer.Option(
+        DEFAULT_SEGMENT_M, "--segment-m", help="Segment length of the simulation, m."
+    ),
+    as_json: bool = typer.Option(False, "--json", help="Print SI values as JSON."),
+) -> None:
+    """Mean and covariance of the pose change (x, y, Delta) after a path: closed
+    form, and simulated if asked. Parameters in the paper's units (default:
+    Nomad 150)."""
+    if n_simulate is not None and n_simulate < 2:
+        raise typer.BadParameter(f"--simulate needs at least 2 trials, got {n_simulate}")
+    try:
+        path = _path(path_kind, k, l_m, variant, side)
+        params = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
+        exact = predicted_moments(path, params)
+        sim = (
+            simulated_moments(path, params, n_simulate, seed=seed, segment_m=segment_m)
+            if n_simulate is not None
+            else None
+        )
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    if as_json:
+        typer.echo(json.dumps(_document(path, params, exact, sim), indent=2))
+    else:
+        _print(path, exact, sim, params)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``covariance`` to the ``odohil`` app."""
+    app.command("covariance")(covariance)
