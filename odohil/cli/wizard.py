@@ -1,0 +1,557 @@
+"""``odohil wizard``: the operator's guide beside the robot, one trial at a time.
+
+Pre-flight checks first (nothing moves until all pass); then per trial: mark
+the floor, watch the motion, type the tape distances (checked, re-asked with
+the reason), see the live estimate. Ctrl-C during a motion stops the robot,
+journals and exits 130; a second Ctrl-C exits at once. Running the wizard
+again on the same ``--session`` continues where the journal stops.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import signal
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from types import FrameType
+from typing import Annotated, Any, NoReturn
+
+import numpy as np
+import typer
+from rich.console import Console
+
+from odohil import units
+from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
+from odohil.cli.run import default_session_folder
+from odohil.driver.link import DEFAULT_BAUD
+from odohil.driver.robot import NomadRobot
+from odohil.driver.sample import EncoderSample
+from odohil.errors import MeasurementError, OdohilError
+from odohil.science.floor_marks import marks_from_pose
+from odohil.science.moments import pose_moments
+from odohil.science.parameters import NOMAD150, ErrorParameters
+from odohil.science.paths import Design
+from odohil.science.planner import DEFAULT_MAX_LEG_M
+from odohil.science.robot_description import RobotDescription
+from odohil.session import state as ev
+from odohil.session.engine import (
+    IncrementalLiveEstimator,
+    SessionEngine,
+    description_of,
+    resume_session,
+    start_session,
+)
+from odohil.session.journal import Journal, Record, journal_path
+from odohil.session.plan import Plan, parse_plan
+from odohil.session.robot_file import load_robot_description
+from odohil.session.sources import OperatorSource, TrialContext
+from odohil.session.state import SessionState
+
+EXIT_ERROR = 1
+EXIT_PREFLIGHT = 2
+EXIT_INTERRUPTED = 130
+DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
+MAX_WIRE = 32767
+"""Largest relative move one ``pr`` carries, 0.1 in."""
+_SAMPLES = 400
+_SPREAD_SIGMAS = 4.0
+_UNITS = {"": 1.0, "m": 1.0, "cm": 0.01, "mm": 0.001}
+_NUMBER = re.compile(r"^\s*(?P<number>[^a-z\s]*|nan|inf|[+-]inf|infinity)\s*(?P<unit>mm|cm|m)?\s*$")
+
+
+# --- distances -------------------------------------------------------------
+
+
+def parse_metres(text: str) -> float:
+    """A typed distance in metres: ``0.012``, ``12 mm``, ``1.2cm``, ``0.012 m``.
+
+    Raises:
+        MeasurementError: not a number (with an optional unit), not finite, or negative.
+    """
+    match = _NUMBER.match(text.strip().lower())
+    if match is None or not match.group("number"):
+        raise MeasurementError(
+            f"{text.strip()!r} is not a number of metres (e.g. 0.012, 12 mm or 1.2 cm)"
+        )
+    try:
+        value = float(match.group("number")) * _UNITS[match.group("unit") or ""]
+    except ValueError:
+        raise MeasurementError(
+            f"{text.strip()!r} is not a number of metres (e.g. 0.012, 12 mm or 1.2 cm)"
+        ) from None
+    if not math.isfinite(value):
+        raise MeasurementError(f"{text.strip()!r} is not a finite number")
+    if value < 0:
+        raise MeasurementError(f"a distance cannot be negative ({text.strip()})")
+    return value
+
+
+@dataclass(frozen=True)
+class ExpectedRange:
+    """What the model expects of one distance, metres.
+
+    Attributes:
+        low, high: the expected range (model spread, 4 sigma, plus tape error).
+        limit: beyond this the value is physically implausible for the trial.
+    """
+
+    low: float
+    high: float
+    limit: float
+
+
+def expected_ranges(
+    description: RobotDescription,
+    design: Design,
+    params: tuple[ErrorParameters, ...],
+    seed: int = 0,
+) -> tuple[ExpectedRange, ...]:
+    """Per distance, the range the model predicts under any of ``params``
+    (Monte Carlo of the model's Gaussian pose change through the forward model)."""
+    rng = np.random.default_rng(seed)
+    lows: list[np.ndarray[Any, np.dtype[np.float64]]] = []
+    highs: list[np.ndarray[Any, np.dtype[np.float64]]] = []
+    for p in params:
+        moments = pose_moments(design.path(), p)
+        poses = rng.multivariate_normal(moments.mean, moments.cov, _SAMPLES, method="eigh")
+        values = np.array([marks_from_pose(description, pose).as_array() for pose in poses])
+        mean, sd = values.mean(axis=0), values.std(axis=0)
+        lows.append(mean - _SPREAD_SIGMAS * sd)
+        highs.append(mean + _SPREAD_SIGMAS * sd)
+    tape = 3.0 * description.sigma_m
+    low = np.clip(np.min(lows, axis=0) - tape, 0.0, None)
+    high = np.max(highs, axis=0) + tape
+    radius = float(np.max(np.hypot(description.positions()[:, 0], description.positions()[:, 1])))
+    limit = design.distance_m + 2.0 * radius + 0.1
+    return tuple(ExpectedRange(float(a), float(b), limit) for a, b in zip(low, high, strict=True))
+
+
+# --- Ctrl-C ----------------------------------------------------------------
+
+
+class Interrupts:
+    """SIGINT policy: during a motion the first Ctrl-C is raised at the next
+    encoder sample (the driver then stops the robot); elsewhere at once; a
+    second Ctrl-C exits the process immediately with status 130."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.in_motion = False
+        self.pending = False
+
+    def install(self) -> None:
+        """Take over SIGINT."""
+        signal.signal(signal.SIGINT, self._handler)
+
+    def _handler(self, signum: int, frame: FrameType | None) -> None:
+        self.count += 1
+        if self.count >= 2:
+            os.write(2, b"\nsecond Ctrl-C: exiting at once\n")
+            os._exit(EXIT_INTERRUPTED)
+        if self.in_motion:
+            self.pending = True
+            os.write(2, b"\nCtrl-C: stopping the robot...\n")
+            return
+        raise KeyboardInterrupt
+
+    def check(self) -> None:
+        """Raise the Ctrl-C deferred during a motion."""
+        if self.pending:
+            self.pending = False
+            raise KeyboardInterrupt
+
+
+class LiveRobot(NomadRobot):
+    """A :class:`NomadRobot` that also shows every encoder sample of a motion
+    (the engine's motion has no sample hook of its own)."""
+
+    sample_hook: Callable[[int, EncoderSample | None, EncoderSample], None] | None = None
+    polls = 0
+
+    def poll_until_stopped(
+        self, timeout_s: float, on_sample: Callable[[EncoderSample], None] | None = None
+    ) -> EncoderSample:
+        """As :meth:`NomadRobot.poll_until_stopped`, feeding :attr:`sample_hook` too."""
+        hook = self.sample_hook
+        step, start = self.polls, self.last_sample
+        self.polls += 1
+
+        def both(sample: EncoderSample) -> None:
+            if on_sample is not None:
+                on_sample(sample)
+            if hook is not None:
+                hook(step, start, sample)
+
+        return super().poll_until_stopped(timeout_s, both)
+
+
+# --- the operator's side ---------------------------------------------------
+
+
+class WizardPrompts:
+    """The :class:`~odohil.session.sources.OperatorPrompts` of the wizard."""
+
+    def __init__(
+        self,
+        console: Console,
+        description: RobotDescription,
+        interrupts: Interrupts,
+        progress: MotionProgress,
+    ) -> None:
+        self.console = console
+        self.description = description
+        self.interrupts = interrupts
+        self.progress = progress
+        self.estimate: ErrorParameters | None = None
+        self._ranges: dict[tuple[int, int, int], tuple[ExpectedRange, ...]] = {}
+
+    def _input(self, prompt: str) -> str:
+        try:
+            return self.console.input(prompt)
+        except EOFError:
+            raise MeasurementError("the input ended (no operator at the terminal)") from None
+
+    def confirm_start_marks(self, ctx: TrialContext) -> None:
+        """Ask for the start marks."""
+        screws = ", ".join(self.description.screw_names)
+        self.console.print(
+            f"\n[bold]Trial {ctx.trial}/{ctx.n_trials}[/] (attempt {ctx.attempt}): "
+            f"{ctx.design.label()}, {ctx.design.distance_m:g} m of driving."
+        )
+        self._input(
+            f"Mark the floor at the {len(self.description.screws)} screws ({screws}), "
+            "keep clear of the robot, then press Enter to start the motion: "
+        )
+
+    def confirm_end_marks(self, ctx: TrialContext) -> None:
+        """The motion is over: ask for the end marks."""
+        self.progress.stop()
+        self.interrupts.in_motion = False
+        self.interrupts.check()
+        pose = ctx.encoder_end_pose
+        if pose is not None:
+            self.console.print(
+                f"Motion done; encoders say x={pose[0]:+.4f} m y={pose[1]:+.4f} m "
+                f"heading {math.degrees(pose[2]):+.2f} deg from the start."
+            )
+        self._input("Mark the floor at the screws again (end marks), then press Enter: ")
+
+    def _range(self, ctx: TrialContext, index: int) -> ExpectedRange:
+        key = (ctx.trial, ctx.attempt, 0 if self.estimate is None else 1)
+        if key not in self._ranges:
+            params = (NOMAD150,) if self.estimate is None else (NOMAD150, self.estimate)
+            self._ranges[key] = expected_ranges(self.description, ctx.design, params, ctx.trial)
+        return self._ranges[key][index]
+
+    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
+        """Ask until the answer is a plausible distance; return it in metres (text)."""
+        label = ctx.labels[index]
+        expected = self._range(ctx, index)
+        hint = f"expected {expected.low:.4f} to {expected.high:.4f} m"
+        if problem:
+            self.console.print(f"[red]{problem}[/]")
+        unconfirmed: float | None = None
+        while True:
+            text = self._input(f"{label}, metres ({hint}; cm/mm suffix accepted): ")
+            try:
+                value = parse_metres(text)
+            except MeasurementError as exc:
+                self.console.print(f"[red]refused:[/] {exc}; type it again")
+                continue
+            if value > expected.limit:
+                self.console.print(
+                    f"[red]refused:[/] {value:g} m is implausible: the marks of this trial "
+                    f"cannot be more than {expected.limit:.2f} m apart; type it again"
+                )
+                continue
+            if not expected.low <= value <= expected.high and value != unconfirmed:
+                self.console.print(
+                    f"[yellow]check:[/] {value:g} m is outside the expected range ({hint}); "
+                    "type the same value again to keep it, or the corrected one"
+                )
+                unconfirmed = value
+                continue
+            return repr(value)
+
+    def show_rejection(self, ctx: TrialContext, reason: str) -> None:
+        """The set of distances fits no rigid motion: say why, then re-ask the set."""
+        self.console.print(
+            f"[red]These distances fit no rigid motion:[/] {reason}\n"
+            "Measure this trial's distances again (all of them)."
+        )
+
+
+class WizardObserver:
+    """Sees the session unfold: trial headers, motion bar, solved pose, live table."""
+
+    def __init__(
+        self,
+        console: Console,
+        prompts: WizardPrompts,
+        interrupts: Interrupts,
+        progress: MotionProgress,
+        robot: LiveRobot,
+    ) -> None:
+        self.console = console
+        self.prompts = prompts
+        self.interrupts = interrupts
+        self.progress = progress
+        self.robot = robot
+        robot.sample_hook = self._sample
+
+    def _sample(self, step: int, start: EncoderSample | None, sample: EncoderSample) -> None:
+        self.progress.update(step, start, sample)
+        self.interrupts.check()
+
+    def record(self, record: Record, state: SessionState) -> None:
+        """React to one journaled record."""
+        kind, data = record.kind, record.data
+        if kind == ev.MOTION_START:
+            opened = state.open_trial
+            assert opened is not None
+            assert state.plan is not None
+            self.robot.polls = 0
+            self.interrupts.in_motion = True
+            self.progress.start(state.plan.items[opened.design_index].design)
+        elif kind == ev.SOLVED:
+            x, y, theta = data["pose_change"]
+            self.console.print(
+                f"[green]Trial {data['trial']} solved:[/] dx={1e3 * x:+.1f} mm "
+                f"dy={1e3 * y:+.1f} mm dtheta={math.degrees(theta):+.3f} deg"
+                + (
+                    ""
+                    if data.get("clear_cut", True)
+                    else f" [yellow](not clear-cut: {data['reason']})"
+                )
+            )
+            if not _can_estimate(state):
+                self.console.print("No estimate yet: it needs 2 trials of a design.")
+        elif kind == ev.ESTIMATE:
+            result = data["result"]
+            self.prompts.estimate = _params_of(result)
+            assert state.plan is not None
+            remaining = state.plan.n_trials - len(state.completed)
+            self.console.print(estimate_panel(state.completed, result, remaining))
+        elif kind == ev.VOID:
+            self.progress.stop()
+            self.console.print(f"[yellow]Trial {data['trial']} attempt voided:[/] {data['reason']}")
+        elif kind == ev.FINISHED:
+            self.console.print(f"[bold green]Session complete:[/] {data['n_trials']} trials.")
+
+
+def _can_estimate(state: SessionState) -> bool:
+    counts: dict[Design, int] = {}
+    for trial in state.completed:
+        counts[trial.design] = counts.get(trial.design, 0) + 1
+    return any(n >= 2 and d.path().signed_distance_m != 0 for d, n in counts.items())
+
+
+def _params_of(result: Any) -> ErrorParameters | None:
+    try:
+        values = [
+            float(result["parameters"][n]["value"]) for n in ("E_R", "E_T", "K_theta", "K_rho")
+        ]
+        return ErrorParameters(*values)
+    except (KeyError, TypeError, ValueError, OdohilError):
+        return None
+
+
+# --- pre-flight --------------------------------------------------------------
+
+
+def plan_checks(plan: Plan, max_leg_m: float) -> list[Check]:
+    """Is every design of the plan something the robot can drive?"""
+    problems = []
+    for item in plan.items:
+        leg = item.design.l_m
+        if leg > max_leg_m:
+            problems.append(f"{item.design.label()}: legs of {leg:g} m exceed {max_leg_m:g} m")
+        if abs(units.metres_to_wire(leg)) > MAX_WIRE:
+            problems.append(f"{item.design.label()}: a leg does not fit one move command")
+    detail = (
+        f"{plan.n_trials} trials, {plan.distance_m:.1f} m of driving ({plan.to_text()})"
+        if not problems
+        else "; ".join(problems)
+    )
+    return [Check("plan feasible", not problems, detail)]
+
+
+def _fail(console: Console, check: Check) -> NoReturn:
+    console.print(check_line(check))
+    console.print("[red]Pre-flight failed: nothing was moved.[/]")
+    raise typer.Exit(EXIT_PREFLIGHT)
+
+
+@dataclass
+class Opened:
+    """The session the wizard works on."""
+
+    journal: Journal
+    state: SessionState
+
+
+def _resume(console: Console, folder: Path, max_leg_m: float, port: str) -> Opened:
+    try:
+        resumed = resume_session(folder, {"by": "wizard", "port": port})
+    except OdohilError as exc:
+        _fail(console, Check("session", False, str(exc)))
+    state = resumed.state
+    console.print(check_line(Check("robot description", True, "the session's journaled one")))
+    if resumed.torn is not None:
+        console.print(f"[yellow]warning:[/] {resumed.torn.describe()}")
+    assert state.plan is not None
+    for check in plan_checks(state.plan, max_leg_m):
+        console.print(check_line(check))
+    done = len(state.completed)
+    detail = f"resuming {folder}: {done} of {state.plan.n_trials} trials done"
+    console.print(check_line(Check("session", True, detail)))
+    return Opened(resumed.journal, state)
+
+
+def _prepare(
+    console: Console, robot_file: Path | None, plan_text: str | None, max_leg_m: float
+) -> tuple[str, Plan]:
+    if robot_file is None:
+        _fail(console, Check("robot description", False, "a new session needs --robot FILE"))
+    try:
+        load_robot_description(robot_file)
+        text = robot_file.read_text(encoding="utf-8")
+    except (OdohilError, OSError) as exc:
+        _fail(console, Check("robot description", False, str(exc)))
+    console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))
+    try:
+        plan = parse_plan(plan_text or DEFAULT_PLAN)
+    except OdohilError as exc:
+        _fail(console, Check("plan feasible", False, str(exc)))
+    for check in plan_checks(plan, max_leg_m):
+        if not check.ok:
+            _fail(console, check)
+        console.print(check_line(check))
+    return text, plan
+
+
+def _start(
+    console: Console, folder: Path, text: str, plan: Plan, robot_file: Path, port: str, baud: int
+) -> Opened:
+    try:
+        journal, state = start_session(
+            folder,
+            text,
+            plan,
+            measure="operator",
+            settings={"port": port, "baud": baud},
+            robot_path=str(robot_file),
+        )
+    except OdohilError as exc:
+        _fail(console, Check("session", False, str(exc)))
+    console.print(check_line(Check("session", True, f"new session in {folder}")))
+    return Opened(journal, state)
+
+
+def _connect(console: Console, port: str, baud: int) -> LiveRobot:
+    try:
+        robot = LiveRobot.connect(port, baud)
+    except OdohilError as exc:
+        _fail(console, Check("robot answers", False, f"{port}: {exc}"))
+    assert isinstance(robot, LiveRobot)
+    sample = robot.state()
+    console.print(
+        check_line(
+            Check(
+                "robot answers",
+                True,
+                f"{port} at {baud} baud; encoders x={sample.x_m:+.3f} m y={sample.y_m:+.3f} m, "
+                + ("MOVING (it will be stopped first)" if sample.moving else "standing still"),
+            )
+        )
+    )
+    return robot
+
+
+def wizard(
+    port: Annotated[
+        str, typer.Option("--port", help="Serial port (or pyserial URL) of the robot.")
+    ],
+    robot_file: Annotated[
+        Path | None,
+        typer.Option("--robot", help="Robot description TOML (new sessions)."),
+    ] = None,
+    plan_text: Annotated[
+        str | None,
+        typer.Option("--plan", help=f'Designs and trial counts (default "{DEFAULT_PLAN}").'),
+    ] = None,
+    session: Annotated[
+        Path | None,
+        typer.Option("--session", help="Session folder; an existing one is resumed."),
+    ] = None,
+    baud: Annotated[int, typer.Option("--baud", help="Line speed.")] = DEFAULT_BAUD,
+    max_leg_m: Annotated[
+        float, typer.Option("--max-leg", help="Longest leg the floor allows, m.")
+    ] = DEFAULT_MAX_LEG_M,
+) -> None:
+    """Guide a calibration session beside the robot, one trial at a time."""
+    console = Console(highlight=False)
+    interrupts = Interrupts()
+    interrupts.install()
+    folder = session or default_session_folder()
+    console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
+    try:
+        if journal_path(folder).exists():
+            opened = _resume(console, folder, max_leg_m, port)
+            robot = _connect(console, port, baud)
+        else:
+            text, plan = _prepare(console, robot_file, plan_text, max_leg_m)
+            robot = _connect(console, port, baud)
+            assert robot_file is not None
+            opened = _start(console, folder, text, plan, robot_file, port, baud)
+    except KeyboardInterrupt:
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    with opened.journal, robot:
+        code = _run(console, opened, robot, interrupts, port, baud)
+    if code == EXIT_INTERRUPTED:
+        console.print(
+            f"Stopped. The journal is in {folder}; run the wizard again with "
+            f"--session {folder} to continue."
+        )
+    raise typer.Exit(code)
+
+
+def _run(
+    console: Console, opened: Opened, robot: LiveRobot, interrupts: Interrupts, port: str, baud: int
+) -> int:
+    description = description_of(opened.state)
+    progress = MotionProgress(console)
+    prompts = WizardPrompts(console, description, interrupts, progress)
+    observer = WizardObserver(console, prompts, interrupts, progress, robot)
+    if opened.state.last_estimate is not None:
+        prompts.estimate = _params_of(opened.state.last_estimate.get("result"))
+    engine = SessionEngine(
+        opened.journal,
+        opened.state,
+        robot,
+        OperatorSource(prompts),
+        estimator=IncrementalLiveEstimator(),
+        observer=observer,
+        connection={"port": port, "baud": baud},
+    )
+    try:
+        engine.run()
+    except KeyboardInterrupt:
+        progress.stop()
+        console.print("\n[yellow]Interrupted:[/] robot stopped, journal written.")
+        return EXIT_INTERRUPTED
+    except OdohilError as exc:
+        progress.stop()
+        console.print(f"[red]error:[/] {exc}")
+        return EXIT_ERROR
+    finally:
+        progress.stop()
+    return 0
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``wizard`` to the ``odohil`` app."""
+    app.command("wizard")(wizard)
