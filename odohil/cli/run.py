@@ -138,7 +138,7 @@ class ProgressObserver:
         """Advance on each solved trial; print voids and rejections."""
         if record.kind == ev.SOLVED:
             self.progress.update(self.task, completed=len(state.completed))
-        elif record.kind == ev.ESTIMATE:
+        elif record.kind == ev.ESTIMATE and record.data.get("result"):
             params = record.data["result"].get("parameters", {})
             e_r = params.get("E_R", {}).get("value")
             if e_r is not None:

@@ -155,9 +155,10 @@ def start_session(
                 "robot_path": robot_path,
                 "measure": measure,
                 "settings": dict(settings),
+                "plan": plan.to_json(),
             },
         )
-        state = replay([header, journal.append(ev.PLAN, plan.to_json())])
+        state = replay([header])
     except BaseException:
         journal.close()
         raise
@@ -336,7 +337,8 @@ class SessionEngine:
         if self.estimator is None:
             return
         for trial in self.state.completed[self._estimated :]:
-            self.latest_estimate = self.estimator.add(trial)
+            with contextlib.suppress(OdohilError):
+                self.latest_estimate = self.estimator.add(trial)
         self._estimated = len(self.state.completed)
 
     def _connect(self) -> None:
@@ -480,11 +482,19 @@ class SessionEngine:
             },
         )
         if self.estimator is not None:
-            result = self.estimator.add(self.state.completed[-1])
-            self._estimated = len(self.state.completed)
+            n_trials = len(self.state.completed)
+            try:
+                result = self.estimator.add(self.state.completed[-1])
+            except OdohilError as exc:
+                # the live estimate is a display aid: a fit that fails on few
+                # trials must not stop the session (the trial is journaled)
+                self._estimated = n_trials
+                self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": None, "error": str(exc)})
+                return
+            self._estimated = n_trials
             self.latest_estimate = result
             if result is not None:
-                self._log(ev.ESTIMATE, {"n_trials": len(self.state.completed), "result": result})
+                self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": result})
 
 
 def _sample_json(sample: EncoderSample) -> dict[str, Any]:

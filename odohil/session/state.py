@@ -2,10 +2,11 @@
 
 Event kinds, in the order a session writes them (``data`` members in brackets):
 
-- ``session`` (always record 1): format, robot description TOML text, the
-  measurement source, settings [``format``, ``robot_toml``, ``robot_path``,
-  ``measure``, ``settings``];
-- ``plan`` [the :meth:`Plan.to_json` object];
+- ``session`` (always record 1, written whole so that a session always has
+  its plan): format, robot description TOML text, the measurement source,
+  settings, plan [``format``, ``robot_toml``, ``robot_path``, ``measure``,
+  ``settings``, ``plan``: the :meth:`Plan.to_json` object];
+- ``plan``: the plan, for a session record without one;
 - ``robot``: identity and settings of the robot, after each connect;
 - ``resumed``: a later process took the session over;
 - ``torn_record``: the torn last record found on resume was kept aside
@@ -212,7 +213,13 @@ def replay(records: Iterable[Record]) -> SessionState:
                 raise JournalError(
                     f"record {record.seq}: journal format {fmt!r}, this odohil reads {FORMAT}"
                 )
-            state = SessionState(header=record.data, n_records=1)
+            plan = None
+            if "plan" in record.data:
+                try:
+                    plan = Plan.from_json(record.data["plan"])
+                except ParameterError as exc:
+                    raise JournalError(f"record {record.seq}: bad plan: {exc}") from None
+            state = SessionState(header=record.data, plan=plan, n_records=1)
             continue
         state = apply(state, record)
     if state is None:

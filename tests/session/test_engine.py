@@ -250,5 +250,5 @@ def test_records_go_to_the_observer_in_order(tmp_path: Path) -> None:
     kinds = [kind for _, kind, _ in seen]
     assert kinds[:4] == [ev.ROBOT, ev.TRIAL_START, ev.MOTION_START, ev.MOTION_DONE]
     assert kinds[-2:] == [ev.SOLVED, ev.FINISHED]
-    assert [seq for seq, _, _ in seen] == list(range(3, 3 + len(seen)))
+    assert [seq for seq, _, _ in seen] == list(range(2, 2 + len(seen)))
     assert seen[-1][2] == 1

@@ -193,3 +193,11 @@ def test_malformed_record_names_its_sequence_number() -> None:
     log.add(ev.MOTION_DONE, {"trial": 1, "attempt": 1, "encoder_end_pose": [1, 2]})
     with pytest.raises(JournalError, match=r"record 5 \(motion_done\) is malformed"):
         replay(log.records)
+
+
+def test_the_plan_may_come_with_the_session_record() -> None:
+    state = replay([Record(1, ev.SESSION, 0.0, {"format": ev.FORMAT, "plan": PLAN.to_json()})])
+    assert state.plan == PLAN
+    assert state.next_trial() == 1
+    with pytest.raises(JournalError, match="bad plan"):
+        replay([Record(1, ev.SESSION, 0.0, {"format": ev.FORMAT, "plan": {"designs": 3}})])

@@ -1,0 +1,200 @@
+"""``odohil run`` and ``odohil resume`` as console commands, against the fake
+robot on a real pseudo-terminal (``python -m fakes.nomad``)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import signal
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from fakes.nomad.process import EmulatorProcess
+from odohil.science.estimators import estimate
+from odohil.session import state as ev
+from odohil.session.journal import JOURNAL_NAME, read_journal
+from odohil.session.state import (
+    Phase,
+    load_session,
+    load_session_trials,
+    replay,
+    trials_to_observations,
+)
+from tests.session.helpers import write_robot
+
+ODOHIL = shutil.which("odohil") or "odohil"
+EMULATOR = ["--time-scale", "20000", "--E-R", "-1", "--K-theta", "0.3", "--K-rho", "0.0009"]
+
+
+@pytest.fixture
+def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
+    args = [*EMULATOR, "--seed", "5", "--no-pacing", "--truth-socket", str(tmp_path / "t.sock")]
+    with EmulatorProcess(args) as process:
+        yield process
+
+
+def _run_args(emulator: EmulatorProcess, tmp_path: Path, plan: str) -> list[str]:
+    return [
+        ODOHIL, "run",
+        "--port", emulator.device,
+        "--truth-socket", emulator.truth_socket,
+        "--robot", str(write_robot(tmp_path)),
+        "--plan", plan,
+        "--measure", "fake",
+        "--session", str(tmp_path / "session"),
+        "--seed", "2",
+        "--json",
+    ]  # fmt: skip
+
+
+def _resume_args(tmp_path: Path) -> list[str]:
+    return [ODOHIL, "resume", str(tmp_path / "session"), "--json"]
+
+
+def _records(tmp_path: Path) -> int:
+    try:
+        return (tmp_path / "session" / JOURNAL_NAME).read_bytes().count(b"\n")
+    except FileNotFoundError:
+        return 0
+
+
+def _wait_stopped(emulator: EmulatorProcess, within_s: float = 5.0) -> bool:
+    deadline = time.monotonic() + within_s
+    while emulator.truth().moving:
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(0.01)
+    return True
+
+
+def test_run_prints_the_estimate_of_the_session(emulator: EmulatorProcess, tmp_path: Path) -> None:
+    plan = "k=1,l=0.5,n=4;k=0.5,l=0.5,n=4"
+    done = subprocess.run(
+        _run_args(emulator, tmp_path, plan), capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout)
+    assert result["n_trials"] == 8
+    assert set(result["parameters"]) == {"E_R", "E_T", "K_theta", "K_rho"}
+    state = load_session(tmp_path / "session").state
+    assert state.finished
+    assert sorted(t.trial for t in state.completed) == list(range(1, 9))
+    # offline re-estimation of the session folder gives the same object
+    offline = estimate(trials_to_observations(load_session_trials(tmp_path / "session")))
+    assert json.loads(json.dumps(offline.to_json_dict())) == result
+    assert _wait_stopped(emulator)
+
+
+def test_sigkill_anywhere_then_resume_counts_every_trial_once(
+    emulator: EmulatorProcess, tmp_path: Path
+) -> None:
+    n_trials = 16
+    plan = f"k=1,l=0.5,n={n_trials // 2};k=0.5,l=0.5,n={n_trials // 2}"
+    kills = 0
+    phases: list[str] = []
+    expected_voids = 0
+    command = _run_args(emulator, tmp_path, plan)
+    while kills < 21:
+        before = _records(tmp_path)
+        # let each process write 1..11 records of its own, then kill it
+        target = before + 1 + (kills * 5) % 11
+        process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        deadline = time.monotonic() + 60
+        while _records(tmp_path) < target and process.poll() is None:
+            assert time.monotonic() < deadline, "the session made no progress"
+            time.sleep(0.002)
+        if process.poll() is not None:
+            break  # the session finished before this kill
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        kills += 1
+        state = replay(read_journal(tmp_path / "session").records)
+        opened = state.open_trial
+        phases.append(opened.phase.value if opened else "between trials")
+        if opened is not None and opened.phase in (Phase.MARKED, Phase.MOVING):
+            expected_voids += 1
+        command = _resume_args(tmp_path)
+    assert kills >= 20, f"the session ended after {kills} kills; make it longer"
+    assert len(set(phases)) >= 3, phases  # the kills hit different steps of a trial
+
+    final = subprocess.run(_resume_args(tmp_path), capture_output=True, text=True, timeout=120)
+    assert final.returncode == 0, final.stderr
+    assert json.loads(final.stdout)["n_trials"] == n_trials
+    records = read_journal(tmp_path / "session").records
+    solved = [r.data["trial"] for r in records if r.kind == ev.SOLVED]
+    assert sorted(solved) == list(range(1, n_trials + 1))
+    state = replay(records)
+    assert state.finished
+    assert state.voided == expected_voids
+    assert [r.kind for r in records].count(ev.RESUMED) == kills
+    assert _wait_stopped(emulator)
+
+
+def test_ctrl_c_stops_journals_and_exits_130(emulator: EmulatorProcess, tmp_path: Path) -> None:
+    process = subprocess.Popen(
+        _run_args(emulator, tmp_path, "k=1,l=0.5,n=30"),
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while _records(tmp_path) < 12 and process.poll() is None:
+        assert time.monotonic() < deadline
+        time.sleep(0.002)
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 130, err
+    assert "odohil resume" in err
+    records = read_journal(tmp_path / "session").records
+    assert records[-1].kind == ev.STOPPED
+    assert records[-1].data["reason"] == "interrupted"
+    assert _wait_stopped(emulator)
+    assert not emulator.truth().moving
+
+    # a torn last record (a crash while writing) is reported, kept aside, and skipped
+    journal = tmp_path / "session" / JOURNAL_NAME
+    with journal.open("ab") as handle:
+        handle.write(b'{"seq":999,"kind":"meas')
+    resumed = subprocess.run(
+        [ODOHIL, "resume", str(tmp_path / "session"), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert resumed.returncode == 0, resumed.stderr
+    assert "torn" in resumed.stderr
+    assert json.loads(resumed.stdout)["n_trials"] == 30
+    kept = list((tmp_path / "session").glob("journal.torn-*.bin"))
+    assert [p.read_bytes() for p in kept] == [b'{"seq":999,"kind":"meas']
+
+
+def test_a_failing_robot_exits_non_zero_with_the_session_journaled(tmp_path: Path) -> None:
+    args = [*EMULATOR, "--no-pacing", "--fault", "disconnect:pr@3"]
+    args += ["--truth-socket", str(tmp_path / "t.sock")]
+    with EmulatorProcess(args) as emulator:
+        done = subprocess.run(
+            _run_args(emulator, tmp_path, "k=1,l=0.5,n=3"),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    assert done.returncode == 1
+    assert "error" in done.stderr
+    assert "odohil resume" in done.stderr
+    records = read_journal(tmp_path / "session").records
+    assert records[-1].kind == ev.STOPPED
+    assert records[-1].data["reason"] == "error"
+    assert records[-2].kind == ev.VOID
+
+
+def test_resume_refuses_a_finished_or_missing_session(tmp_path: Path) -> None:
+    done = subprocess.run(
+        [ODOHIL, "resume", str(tmp_path / "nothing")], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 1
+    assert "cannot open the session journal" in done.stderr
+    assert not (tmp_path / "nothing").exists()
