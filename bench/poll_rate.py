@@ -2,9 +2,9 @@
 
 Starts ``odohil emulate --baud B`` (the fake paces its bytes at B baud), connects
 the driver to its pty and calls ``NomadRobot.state()`` (one ``gs`` exchange:
-6 bytes out, 48 in) for a fixed time. Ceiling: B / 10 bits per byte / 54 bytes.
-The fake paces only the bytes it sends (the host's 6 bytes cross the pty at
-once), so its own ceiling is B / 10 / 48; both are printed.
+6 bytes out, 48 in) for a fixed time. The fake paces both directions at B
+baud (a request reaches it only when its last byte would have crossed a real
+line), so the ceiling is B / 10 bits per byte / 54 bytes per exchange.
 
 Run: python bench/poll_rate.py [--seconds 5] [--baud 9600 --baud 38400]
 """
@@ -18,7 +18,6 @@ from fakes.nomad.process import EmulatorProcess
 from odohil.driver.robot import NomadRobot
 
 BYTES_PER_POLL = 6 + 48
-REPLY_BYTES = 48
 BITS_PER_BYTE = 10
 
 
@@ -46,11 +45,9 @@ def main() -> None:
     for baud in args.baud or [9600, 38400]:
         rate = measure(baud, args.seconds)
         line = baud / BITS_PER_BYTE / BYTES_PER_POLL
-        paced = baud / BITS_PER_BYTE / REPLY_BYTES
         print(
-            f"{baud:>6} baud: {rate:7.2f} polls/s; 54-byte ceiling {line:6.2f} "
-            f"({100 * rate / line:5.1f}%); reply-only ceiling {paced:6.2f} "
-            f"({100 * rate / paced:5.1f}%)"
+            f"{baud:>6} baud: {rate:7.2f} polls/s; line-rate ceiling {line:6.2f} "
+            f"({100 * rate / line:5.1f}%)"
         )
 
 

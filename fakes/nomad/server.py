@@ -44,7 +44,9 @@ class PtyServer:
     Args:
         engine: the robot.
         baud: line rate for pacing and the pty's nominal speed.
-        pacing: trickle replies out at ``baud`` (10 bits per byte).
+        pacing: model the line rate in both directions (10 bits per byte):
+            requests reach the engine, and replies reach the host, no faster
+            than a real serial line at ``baud`` would carry them.
         truth_path: where to create the truth socket.
     """
 
@@ -52,6 +54,7 @@ class PtyServer:
         self.engine = engine
         self.baud = baud
         self.pacer = LinePacer(baud if pacing else None)
+        self.inbound = LinePacer(baud if pacing else None)
         self.truth_path = truth_path
         self.device = ""
         self._master: int | None = None
@@ -108,7 +111,11 @@ class PtyServer:
     # ---- internals ------------------------------------------------------------
     def _wait(self, now: float) -> None:
         deadlines = [now + POLL_S]
-        for t in (self.engine.next_output_wall(), self.pacer.next_release()):
+        for t in (
+            self.engine.next_output_wall(),
+            self.pacer.next_release(),
+            self.inbound.next_release(),
+        ):
             if t is not None:
                 deadlines.append(t)
         timeout = max(0.0, min(deadlines) - now)
@@ -140,9 +147,12 @@ class PtyServer:
                 # nobody holds the slave open; cannot happen while we keep it
                 return
             raise
-        self.engine.receive(data)
+        self.inbound.push(data, time.monotonic())
 
     def _pump(self, now: float) -> None:
+        arrived = self.inbound.release(now)
+        if arrived:
+            self.engine.receive(arrived)
         for item in self.engine.take_output(now):
             if isinstance(item, Disconnect):
                 _LOG.info("fault disconnect: closing the pty")
