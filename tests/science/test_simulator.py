@@ -19,6 +19,7 @@ from odohil.errors import ParameterError
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import EncoderPath, Leg, Turn, forth_and_back, square
 from odohil.science.simulator import (
+    discrete_means,
     drive_straight,
     make_rng,
     segments_per_leg,
@@ -161,6 +162,17 @@ def test_mean_square_distance_is_the_exact_discrete_sum(name: str) -> None:
     pose = simulate(path, LOUD, 100_000, seed=13, segment_m=segment_m).pose_change
     distance2 = pose[:, 0] ** 2 + pose[:, 1] ** 2
     assert_mean(distance2, discrete_mean_square_distance(path, LOUD, segment_m), "<D^2>")
+
+
+@pytest.mark.parametrize("name", sorted(PATHS))
+def test_library_discrete_means_match_the_direct_pair_sums(name: str) -> None:
+    path = PATHS[name]
+    means = discrete_means(path, LOUD, 0.011)
+    position = discrete_mean_position(path, LOUD, 0.011)
+    assert means.x == pytest.approx(position.real, abs=1e-12)
+    assert means.y == pytest.approx(position.imag, abs=1e-12)
+    expected = discrete_mean_square_distance(path, LOUD, 0.011)
+    assert means.square_distance == pytest.approx(expected, rel=1e-12)
 
 
 def _straight_leg_limit(params: ErrorParameters, length_m: float) -> complex:
