@@ -139,9 +139,11 @@ def covariance(
     ),
     as_json: bool = typer.Option(False, "--json", help="Print SI values as JSON."),
 ) -> None:
-    """Mean and covariance of the pose change (x, y, Delta) after a path: closed
-    form, and simulated if asked. Parameters in the paper's units (default:
-    Nomad 150)."""
+    """Mean and covariance of the pose change (x, y, Delta) after a path.
+
+    Closed form, and simulated if asked. Parameters in the paper's units
+    (default: Nomad 150).
+    """
     if n_simulate is not None and n_simulate < 2:
         raise typer.BadParameter(f"--simulate needs at least 2 trials, got {n_simulate}")
     try:

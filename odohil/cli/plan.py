@@ -168,8 +168,7 @@ def plan(
     ),
     as_json: bool = typer.Option(False, "--json", help="Print the plan as JSON."),
 ) -> None:
-    """Recommend forth-and-back designs for a budget and print the expected
-    standard error of each parameter.
+    """Recommend designs for a budget; print each parameter's expected stderr.
 
     Priors are in the paper's units (default: the Nomad 150 values). With
     targets, the plan minimises the largest stderr/target ratio; without, the
