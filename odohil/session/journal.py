@@ -27,9 +27,10 @@ import fcntl
 import json
 import math
 import os
+import signal
 import time
 import zlib
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
@@ -225,6 +226,7 @@ class Journal:
         self.folder = folder
         self._fd: int | None = fd
         self._next_seq = next_seq
+        self._broken = False
 
     @property
     def path(self) -> Path:
@@ -335,19 +337,31 @@ class Journal:
         """
         if self._fd is None:
             raise JournalError(f"the journal of {self.folder} is closed")
+        if self._broken:
+            raise JournalError(
+                f"an earlier write to {self.path} failed half-way; resume the session to recover"
+            )
         when = time.time()
         line = encode_record(self._next_seq, kind, data, when)
-        try:
-            view = memoryview(line)
-            while view:
-                written = os.write(self._fd, view)
-                view = view[written:]
-            os.fsync(self._fd)
-        except OSError as exc:
-            raise JournalError(f"cannot write the session journal {self.path}: {exc}") from exc
-        record = Record(seq=self._next_seq, kind=kind, time=when, data=json.loads(json.dumps(data)))
-        self._next_seq += 1
-        return record
+        # Ctrl-C (or SIGTERM) is held back until the record is whole and on
+        # disk, so that the record and the sequence count never disagree.
+        with _signals_deferred():
+            try:
+                view = memoryview(line)
+                while view:
+                    written = os.write(self._fd, view)
+                    view = view[written:]
+                os.fsync(self._fd)
+            except BaseException as exc:
+                self._broken = True
+                if isinstance(exc, OSError):
+                    raise JournalError(
+                        f"cannot write the session journal {self.path}: {exc}"
+                    ) from exc
+                raise
+            seq = self._next_seq
+            self._next_seq += 1
+        return Record(seq=seq, kind=kind, time=when, data=json.loads(json.dumps(data)))
 
     def close(self) -> None:
         """Release the journal (idempotent)."""
@@ -366,6 +380,19 @@ class Journal:
         tb: TracebackType | None,
     ) -> None:
         self.close()
+
+
+_DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextlib.contextmanager
+def _signals_deferred() -> Iterator[None]:
+    """Block SIGINT and SIGTERM in this thread; pending ones fire on exit."""
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _read_all(fd: int) -> bytes:

@@ -136,7 +136,7 @@ def test_sigkill_anywhere_then_resume_counts_every_trial_once(
 
 def test_ctrl_c_stops_journals_and_exits_130(emulator: EmulatorProcess, tmp_path: Path) -> None:
     process = subprocess.Popen(
-        _run_args(emulator, tmp_path, "k=1,l=0.5,n=30"),
+        _run_args(emulator, tmp_path, "k=1,l=0.5,n=8"),
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -167,7 +167,7 @@ def test_ctrl_c_stops_journals_and_exits_130(emulator: EmulatorProcess, tmp_path
     )
     assert resumed.returncode == 0, resumed.stderr
     assert "torn" in resumed.stderr
-    assert json.loads(resumed.stdout)["n_trials"] == 30
+    assert json.loads(resumed.stdout)["n_trials"] == 8
     kept = list((tmp_path / "session").glob("journal.torn-*.bin"))
     assert [p.read_bytes() for p in kept] == [b'{"seq":999,"kind":"meas']
 

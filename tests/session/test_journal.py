@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import signal
 import zlib
 from pathlib import Path
 
@@ -166,3 +168,25 @@ def test_empty_journal_has_no_records() -> None:
     contents = parse_journal(b"")
     assert contents.records == ()
     assert contents.torn is None
+
+
+def test_ctrl_c_during_an_append_waits_for_the_record(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    real_fsync = os.fsync
+
+    def fsync_with_ctrl_c(fd: int) -> None:
+        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while the record goes to disk
+        real_fsync(fd)
+
+    with Journal.create(tmp_path) as journal:
+        journal.append("session", {"format": 1})
+        monkeypatch.setattr(os, "fsync", fsync_with_ctrl_c)
+        with pytest.raises(KeyboardInterrupt):
+            journal.append("measurement", {"value_m": 1.0})
+        monkeypatch.undo()
+        # the interrupted record is whole and counted; the journal goes on
+        journal.append("stopped", {})
+    contents = read_journal(tmp_path)
+    assert contents.torn is None
+    assert [r.kind for r in contents.records] == ["session", "measurement", "stopped"]
