@@ -103,7 +103,7 @@ def test_score_covariance_matches_information() -> None:
 
 
 def test_one_sided_derivatives_at_zero_variance_rate() -> None:
-    # K_rho = 0 uses one-sided differences, 2.1e-8 m central ones; with a large
+    # K_rho = 0 uses one-sided differences, 2.1e-8 m central ones (step 1e-9 m); with a large
     # measurement variance the information barely changes between the two
     meas = np.diag([1e-4, 1e-4, 1e-4])
     at_zero = ErrorParameters(NOMAD150.e_r, NOMAD150.e_t, NOMAD150.k_theta, 0.0)
