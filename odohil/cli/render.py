@@ -102,10 +102,17 @@ def more_trials_text(result: Mapping[str, Any], remaining_in_plan: int) -> Text:
     if suff.get("sufficient"):
         return Text("Target precision reached for every parameter.", style="green")
     lines = [str(suff.get("verdict", "precision target not reached"))]
+    # One suggestion per parameter and design: the design needs the largest.
+    needed: dict[str, int | None] = {}
     for s in suff.get("suggestions", []):
-        more = s.get("more_trials")
+        design, more = str(s.get("design")), s.get("more_trials")
+        if design not in needed or (
+            needed[design] is not None and (more is None or more > needed[design])
+        ):
+            needed[design] = more
+    for design, more in needed.items():
         lines.append(
-            f"  {s.get('design')}: "
+            f"  {design}: "
             + ("cannot reach it alone" if more is None else f"{more} more trials reach the target")
         )
     lines.append(f"  ({remaining_in_plan} trials remain in the plan)")

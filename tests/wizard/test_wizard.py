@@ -1,0 +1,184 @@
+"""The real ``odohil wizard`` in a pseudo-terminal against the fake robot process.
+
+One session of three trials: bad inputs and an inconsistent set are refused
+with their reasons, Ctrl-C during the third motion stops the robot, journals
+and exits 130, and a second wizard on the same session completes it with
+exactly three trials. The distances typed are the forward model of the fake's
+true pose change (its truth side channel).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import sys
+import time
+from pathlib import Path
+
+import pexpect
+
+from fakes.nomad.process import EmulatorProcess
+from fakes.nomad.truth import TruthClient
+from odohil.science.floor_marks import distance_labels, marks_from_pose
+from odohil.science.robot_description import parse_robot_description
+from odohil.session import state as ev
+from odohil.session.journal import read_journal
+from odohil.session.sources import relative_true_pose
+from odohil.session.state import replay
+
+ROBOT_TOML = """\
+[screws]
+A = [0.20, 0.0]
+B = [-0.10, 0.173]
+C = [-0.10, -0.173]
+[measurement]
+sigma_m = 0.0005
+cross = [["A", "B"], ["B", "C"]]
+"""
+DESCRIPTION = parse_robot_description(ROBOT_TOML)
+LABELS = distance_labels(DESCRIPTION)
+TIMEOUT_S = 90
+LOG = Path(os.environ["WIZARD_TEST_LOG"]) if os.environ.get("WIZARD_TEST_LOG") else None
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env.update({"NO_COLOR": "1", "COLUMNS": "250", "LINES": "50", "TERM": "xterm"})
+    return env
+
+
+def _spawn(args: list[str]) -> pexpect.spawn:
+    return pexpect.spawn(
+        sys.executable,
+        ["-m", "odohil", "wizard", *args],
+        env=_env(),
+        encoding="utf-8",
+        timeout=TIMEOUT_S,
+        dimensions=(50, 250),
+        logfile=LOG.open("a") if LOG else None,
+    )
+
+
+def _pose(truth: TruthClient) -> tuple[float, float, float]:
+    snap = truth.snapshot()
+    return (snap.true_x_m, snap.true_y_m, snap.true_theta_rad)
+
+
+def _prompt(index: int) -> str:
+    return re.escape(f"{LABELS[index]}, metres (")
+
+
+def _answer(child: pexpect.spawn, text: str, then: str) -> None:
+    """Type ``text``; confirm it if the wizard asks; wait for ``then``."""
+    child.sendline(text)
+    while child.expect([then, "type the same value again"]) == 1:
+        child.sendline(text)
+
+
+def _marks(child: pexpect.spawn, truth: TruthClient) -> list[float]:
+    """Start marks, motion, end marks; the exact distances of the true pose change."""
+    child.expect("Mark the floor at the 3 screws")
+    start = _pose(truth)
+    child.sendline("")
+    child.expect(r"end marks\), then press Enter")
+    end = _pose(truth)
+    child.sendline("")
+    change = relative_true_pose(start, end, 0.0)
+    return [float(v) for v in marks_from_pose(DESCRIPTION, change).as_array()]
+
+
+def _type_all(child: pexpect.spawn, values: list[float], done: str) -> None:
+    for i, value in enumerate(values):
+        then = _prompt(i + 1) if i + 1 < len(values) else done
+        _answer(child, repr(value), then)
+
+
+def _refused(child: pexpect.spawn, text: str, reason: str) -> None:
+    child.sendline(text)
+    child.expect(reason)
+    child.expect(_prompt(0))
+
+
+def test_three_trial_session_with_bad_inputs_interrupt_and_resume(tmp_path: Path) -> None:
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT_TOML)
+    folder = tmp_path / "session"
+    args = ["--seed", "21", "--time-scale", "8", "--no-pacing"]
+    with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
+        plan = "k=1,l=1,n=3"
+        child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", plan,
+                        "--session", str(folder)])  # fmt: skip
+        for check in ("robot description", "plan feasible", "robot answers", "session"):
+            child.expect(r"\[ok\]\s+(\x1b\[[0-9;]*m)*" + re.escape(check))
+
+        # Trial 1: every kind of bad input, then the true distances (one in mm).
+        values = _marks(child, truth)
+        child.expect(_prompt(0))
+        _refused(child, "abc", "is not a number of metres")
+        _refused(child, "-0.01", "cannot be negative")
+        _refused(child, "nan", "is not a finite number")
+        _refused(child, "1000", "is implausible")
+        _answer(child, f"{values[0] * 1000!r} mm", _prompt(1))
+        _type_all_from(child, values, 1, "Trial 1 solved")
+        child.expect("No estimate yet")
+
+        # Trial 2: a set no rigid motion explains (cross distance 2 off by 5 cm).
+        values = _marks(child, truth)
+        child.expect(_prompt(0))
+        wrong = list(values)
+        wrong[4] += 0.05
+        _type_all(child, wrong, "fit no rigid motion")
+        child.expect(re.escape(LABELS[4]))  # the suspect is named
+        child.expect(_prompt(0))
+        _type_all_from(child, values, 0, "Trial 2 solved")
+        for name in (
+            "phi1 deg",
+            "Estimate after 2 trials",
+            "E_R",
+            "deg/m",
+            "E_T",
+            "K_theta",
+            "deg^2/m",
+            "K_rho",
+        ):
+            child.expect(re.escape(name))
+        child.expect("more trials reach the target|Target precision reached")
+
+        # Trial 3: Ctrl-C during the motion.
+        child.expect("Mark the floor at the 3 screws")
+        child.sendline("")
+        child.expect("driving k=1")
+        child.sendintr()
+        child.expect("Interrupted: robot stopped, journal written")
+        child.expect(pexpect.EOF)
+        child.close()
+        assert child.exitstatus == 130
+        assert not truth.snapshot().moving
+        time.sleep(0.3)
+        assert not truth.snapshot().moving
+        kinds = [r.kind for r in read_journal(folder).records]
+        assert kinds[-2:] == [ev.VOID, ev.STOPPED]
+        assert kinds.count(ev.SOLVED) == 2
+
+        # Resume: the wizard again on the same session redoes trial 3.
+        child = _spawn(["--port", emu.device, "--session", str(folder)])
+        child.expect(re.escape("resuming"))
+        values = _marks(child, truth)
+        child.expect(_prompt(0))
+        _type_all(child, values, "Trial 3 solved")
+        child.expect(r"Session complete:\S* 3 trials")
+        child.expect(pexpect.EOF)
+        child.close()
+        assert child.exitstatus == 0
+
+    state = replay(read_journal(folder).records)
+    assert state.finished
+    assert [t.trial for t in state.completed] == [1, 2, 3]
+    assert [t.attempt for t in state.completed] == [1, 1, 2]
+    assert state.voided == 1
+
+
+def _type_all_from(child: pexpect.spawn, values: list[float], first: int, done: str) -> None:
+    for i in range(first, len(values)):
+        then = _prompt(i + 1) if i + 1 < len(values) else done
+        _answer(child, repr(values[i]), then)
