@@ -28,12 +28,13 @@ import json
 import math
 import os
 import signal
+import threading
 import time
 import zlib
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
+from types import FrameType, TracebackType
 from typing import Any
 
 from odohil.errors import JournalError
@@ -382,17 +383,34 @@ class Journal:
         self.close()
 
 
-_DEFERRED_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
 
 @contextlib.contextmanager
 def _signals_deferred() -> Iterator[None]:
-    """Block SIGINT and SIGTERM in this thread; pending ones fire on exit."""
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _DEFERRED_SIGNALS)
+    """Hold SIGINT and SIGTERM back (main thread only); on exit the previous
+    handlers get what arrived. A thread signal mask would not do: the kernel
+    may hand the signal to another thread, and Python still raises it here."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[tuple[int, FrameType | None]] = []
+
+    def hold(signum: int, frame: FrameType | None) -> None:
+        received.append((signum, frame))
+
+    previous = {signum: signal.signal(signum, hold) for signum in _DEFERRED_SIGNALS}
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        for restored, handler in previous.items():
+            signal.signal(restored, handler)
+        for got, frame in received:
+            before = previous[signal.Signals(got)]
+            if callable(before):
+                before(got, frame)
+            elif before != signal.SIG_IGN:
+                signal.raise_signal(got)
 
 
 def _read_all(fd: int) -> bytes:

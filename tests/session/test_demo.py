@@ -7,6 +7,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
+import pytest
+
 from odohil.cli.demo import DEMO_PLAN, DEMO_TRUTH
 from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS
 from odohil.session.plan import parse_plan
@@ -15,6 +17,7 @@ from odohil.session.state import load_session
 ODOHIL = shutil.which("odohil") or "odohil"
 
 
+@pytest.mark.slow
 def test_demo_estimates_contain_the_true_values(tmp_path: Path) -> None:
     done = subprocess.run(
         [ODOHIL, "demo", "--json", "--seed", "3", "--session", str(tmp_path / "s")],
