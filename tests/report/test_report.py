@@ -1,0 +1,122 @@
+"""``odohil report`` on a real session (engine against the in-process fake robot)."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import pytest
+
+from odohil.science.estimators import estimate
+from odohil.session.journal import read_journal
+from odohil.session.state import SessionState, replay, session_observations
+
+from .session_factory import build_session
+
+PLAN = "k=1,l=2,n=6;k=4,l=0.5,n=6"
+SVG = "{http://www.w3.org/2000/svg}"
+
+
+@pytest.fixture(scope="module")
+def session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, SessionState]:
+    folder = tmp_path_factory.mktemp("report") / "session"
+    return folder, build_session(folder, PLAN, seed=5)
+
+
+def _report(session: Path, out: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "odohil", "report", str(session), "--out", str(out)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+
+
+def test_report_is_self_contained_and_matches_the_estimate(
+    session: tuple[Path, SessionState], tmp_path: Path
+) -> None:
+    folder, state = session
+    assert state.finished
+    out = tmp_path / "out"
+    run = _report(folder, out)
+    assert run.returncode == 0, run.stderr
+
+    page = (out / "index.html").read_text()
+    refs = re.findall(r'(?:src|href)="([^"]+)"', page)
+    assert refs, "the page shows no plots"
+    for ref in refs:
+        assert "/" not in ref
+        assert ":" not in ref
+        assert (out / ref).is_file(), ref
+    lowered = page.lower()
+    for external in ("http:", "https:", "<script", "<link", "@import", "url("):
+        assert external not in lowered
+
+    svgs = sorted(out.glob("*.svg"))
+    assert {p.name for p in svgs} >= {
+        "end_points_1.svg",
+        "end_points_2.svg",
+        "phi1.svg",
+        "model_check.svg",
+        "convergence_E_R.svg",
+        "convergence_K_rho.svg",
+    }
+    for path in svgs:
+        root = ET.parse(path).getroot()
+        assert root.tag == f"{SVG}svg"
+        text = path.read_text()
+        assert "href" not in text
+        assert "http:" not in text.replace('xmlns="http://www.w3.org/2000/svg"', "")
+
+    # One dot per trial of the design on its end-point plot.
+    dots = ET.parse(out / "end_points_1.svg").getroot().iter(f"{SVG}circle")
+    assert len(list(dots)) == 6
+
+    expected = estimate(session_observations(state), "joint").to_json_dict()
+    written = json.loads((out / "parameters.json").read_text())
+    assert written == json.loads(json.dumps(expected))
+
+    yaml = (out / "odometry_covariance.yaml").read_text()
+    values = dict(re.findall(r"^\s+(\w+): (-?[0-9.e+-]+)", yaml, flags=re.MULTILINE))
+    params = written["parameters"]
+    assert float(values["heading_rad2_per_m"]) == pytest.approx(params["K_theta"]["value"], 1e-6)
+    assert float(values["translation_m2_per_m"]) == pytest.approx(params["K_rho"]["value"], 1e-6)
+    assert float(values["heading_drift_rad_per_m"]) == pytest.approx(params["E_R"]["value"], 1e-6)
+    assert float(values["distance_scale"]) == pytest.approx(1 + params["E_T"]["value"], 1e-8)
+
+
+def test_report_converges_over_trials(session: tuple[Path, SessionState], tmp_path: Path) -> None:
+    from odohil.session.report import load_report
+
+    folder, _ = session
+    report = load_report(folder)
+    assert report.result is not None
+    # The estimate exists from the second trial of the first design on, one per trial.
+    assert [p.n_trials for p in report.convergence] == list(range(2, 13))
+    last = report.convergence[-1]
+    final = report.result.params.as_tuple()
+    for i in range(4):
+        # The incremental and the batch optimum agree to well within a standard error.
+        assert abs(last.values[i] - final[i]) < 0.05 * last.stderr[i]
+
+
+def test_report_without_an_estimate_says_why(tmp_path: Path) -> None:
+    folder = tmp_path / "short"
+    build_session(folder, "k=1,l=1,n=1", seed=2)
+    out = tmp_path / "out"
+    run = _report(folder, out)
+    assert run.returncode == 0, run.stderr
+    assert "No estimate" in (out / "index.html").read_text()
+    assert "error" in json.loads((out / "parameters.json").read_text())
+    assert replay(read_journal(folder).records).finished
+
+
+def test_report_of_a_missing_session_fails_cleanly(tmp_path: Path) -> None:
+    run = _report(tmp_path / "nothing", tmp_path / "out")
+    assert run.returncode == 2
+    assert "journal" in run.stderr
