@@ -1,4 +1,5 @@
-"""``odohil estimate FILE``: the four parameters from a trial file, with checks."""
+"""``odohil estimate FILE|SESSION``: the four parameters from a trial file or a
+session folder, with checks."""
 
 from __future__ import annotations
 
@@ -19,7 +20,8 @@ from odohil.science.moments import PoseMoments, pose_moments
 from odohil.science.parameters import NOMAD150, PAPER_UNITS
 from odohil.science.paths import Design
 from odohil.session.robot_file import load_robot_description
-from odohil.session.trial_files import Trial, read_trials
+from odohil.session.state import load_session, session_trials
+from odohil.session.trial_files import Trial, TrialSet, read_trials
 
 
 class MethodChoice(StrEnum):
@@ -39,6 +41,22 @@ def observation_of(trial: Trial) -> Observation:
     """A trial-file row as the estimators see it."""
     cov = trial.pose_cov if trial.pose_cov is not None else np.zeros((3, 3))
     return Observation(trial.design, trial.pose_change, cov, line=trial.line)
+
+
+def _load(source: Path, robot: Path | None, err: Console) -> TrialSet:
+    """The trials of a trial file, or the completed trials of a session folder
+    (a torn last journal record is reported on stderr and not used)."""
+    if source.is_dir():
+        loaded = load_session(source)
+        if loaded.torn is not None:
+            err.print(
+                f"[yellow]warning:[/yellow] {source}: the last journal record (line "
+                f"{loaded.torn.line_number}) is torn and was not used: {loaded.torn.reason}",
+                highlight=False,
+            )
+        return session_trials(loaded.state, source=str(source))
+    description = load_robot_description(robot) if robot is not None else None
+    return read_trials(source, description, _prior if description is not None else None)
 
 
 def _paper(name: str, value: float) -> float:
@@ -72,7 +90,10 @@ def register(app: typer.Typer) -> None:
 
     @app.command("estimate")
     def estimate_command(
-        file: Annotated[Path, typer.Argument(help="Trial file (pose rows or raw floor marks).")],
+        file: Annotated[
+            Path,
+            typer.Argument(help="Trial file (pose rows or raw floor marks), or a session folder."),
+        ],
         robot: Annotated[
             Path | None,
             typer.Option("--robot", help="Robot description (TOML); needed for raw marks."),
@@ -82,14 +103,13 @@ def register(app: typer.Typer) -> None:
         ] = MethodChoice.joint,
         as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
     ) -> None:
-        """Estimate E_R, E_T, K_theta, K_rho from a trial file, with model and sufficiency checks.
+        """Estimate E_R, E_T, K_theta, K_rho from a trial file or a session folder.
 
         Exit status 2 on a bad file (every bad row listed by line) or too few trials.
         """
         err = Console(stderr=True)
         try:
-            description = load_robot_description(robot) if robot is not None else None
-            trials = read_trials(file, description, _prior if description is not None else None)
+            trials = _load(file, robot, err)
             if len(trials) == 0:
                 raise OdohilError(f"{file}: no trials")
             result = estimate([observation_of(t) for t in trials.trials], method.value)

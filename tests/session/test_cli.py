@@ -86,6 +86,15 @@ def test_run_prints_the_estimate_of_the_session(emulator: EmulatorProcess, tmp_p
     # offline re-estimation of the session folder gives the same object
     offline = estimate(trials_to_observations(load_session_trials(tmp_path / "session")))
     assert json.loads(json.dumps(offline.to_json_dict())) == result
+    # and so does the console command on the folder
+    again = subprocess.run(
+        [ODOHIL, "estimate", str(tmp_path / "session"), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert again.returncode == 0, again.stderr
+    assert json.loads(again.stdout)["parameters"] == result["parameters"]
     assert _wait_stopped(emulator)
 
 
