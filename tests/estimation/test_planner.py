@@ -1,5 +1,5 @@
 """The experiment planner: NOTES.md section 4's design rules, and its expected
-standard errors confirmed by simulated experiments fitted by maximum likelihood."""
+standard errors confirmed by simulated experiments fitted by the joint estimator."""
 
 from __future__ import annotations
 
@@ -7,12 +7,11 @@ import math
 
 import numpy as np
 import pytest
-from scipy import optimize
 
 from odohil.errors import ParameterError
+from odohil.science.estimators import Observation, estimate
 from odohil.science.fisher import default_description, measurement_covariance
-from odohil.science.moments import pose_moments
-from odohil.science.parameters import NOMAD150, PARAMETER_NAMES, ErrorParameters
+from odohil.science.parameters import NOMAD150, PARAMETER_NAMES
 from odohil.science.paths import Design
 from odohil.science.planner import (
     design_grid,
@@ -118,34 +117,6 @@ def test_bad_input_is_a_parameter_error(kwargs: dict[str, object], message: str)
 
 # --- the expected errors, confirmed by simulated experiments -----------------
 
-SCALE = np.array([1e-3, 1e-2, 1e-6, 1e-5])
-
-
-def _fit(
-    designs: list[Design], poses: list[np.ndarray], meas: list[np.ndarray], start: np.ndarray
-) -> np.ndarray:
-    """Maximum likelihood of the Gaussian model: each trial N(mu, Sigma + C_i)."""
-    paths = [d.path() for d in designs]
-
-    def nll(u: np.ndarray) -> float:
-        theta = u * SCALE
-        if theta[2] <= 0 or theta[3] <= 0 or theta[1] <= -1:
-            return 1e30
-        params = ErrorParameters(*theta)
-        total = 0.0
-        for path, y, c in zip(paths, poses, meas, strict=True):
-            m = pose_moments(path, params)
-            s = m.cov[None] + c
-            r = y - m.mean
-            total += 0.5 * float(
-                np.einsum("ni,nij,nj->", r, np.linalg.inv(s), r) + np.linalg.slogdet(s)[1].sum()
-            )
-        return total
-
-    result = optimize.minimize(nll, start / SCALE, method="Nelder-Mead",
-                               options={"xatol": 1e-6, "fatol": 1e-9, "maxiter": 4000})  # fmt: skip
-    return np.asarray(result.x) * SCALE
-
 
 def test_expected_errors_are_confirmed_by_simulation() -> None:
     plan = plan_experiment(
@@ -155,7 +126,7 @@ def test_expected_errors_are_confirmed_by_simulation() -> None:
     predicted = plan.standard_errors
     truth = np.array(NOMAD150.as_tuple())
     rng = np.random.default_rng(7)
-    n_experiments = 150
+    n_experiments = 200
     designs = [item.design for item in plan.items]
     sims = [
         simulate(item.design.path(), NOMAD150, item.n_trials * n_experiments, seed=rng,
@@ -164,16 +135,20 @@ def test_expected_errors_are_confirmed_by_simulation() -> None:
     ]  # fmt: skip
     estimates = []
     for e in range(n_experiments):
-        poses, meas = [], []
-        for sim in sims:
+        observations = []
+        for design, sim in zip(designs, sims, strict=True):
             true_poses = sim[e]
+            # each trial's recovered pose: its own linearised floor-mark error
             covs = measurement_covariance(ONE_MM, true_poses)
             noise = np.einsum(
                 "nij,nj->ni", np.linalg.cholesky(covs), rng.standard_normal(true_poses.shape)
             )
-            poses.append(true_poses + noise)
-            meas.append(covs)
-        estimates.append(_fit(designs, poses, meas, truth))
+            observations += [
+                Observation(design, pose, cov)
+                for pose, cov in zip(true_poses + noise, covs, strict=True)
+            ]
+        result = estimate(observations, "joint")
+        estimates.append([p.value for p in result.parameters])
     errors = np.array(estimates) - truth
     rmse = np.sqrt((errors**2).mean(axis=0))
     # Monte Carlo SE of an RMSE from n experiments: about RMSE / sqrt(2 n) for
