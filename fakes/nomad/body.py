@@ -8,6 +8,11 @@ radians) is advanced by the science layer's discrete error model
 at most ``segment_m`` encoder metres, the remainder carried between steps;
 steering rotations change the true heading exactly (in-place turns are error
 free in Martinelli's model).
+
+Segments lie at fixed distances along each leg and each one is drawn by its
+own call, so the random numbers a segment uses do not depend on how the wall
+clock happened to slice the motion into steps: a seed gives the same true
+poses on every run.
 """
 
 from __future__ import annotations
@@ -143,15 +148,16 @@ class RobotBody:
             self.pending_m = 0.0
 
     def _drive(self, signed_segment_m: float, n: int) -> None:
-        drive_straight(
-            self.true_x,
-            self.true_y,
-            self.true_theta,
-            signed_segment_m,
-            n,
-            self.params,
-            self.rng,
-        )
+        for _ in range(n):
+            drive_straight(
+                self.true_x,
+                self.true_y,
+                self.true_theta,
+                signed_segment_m,
+                1,
+                self.params,
+                self.rng,
+            )
 
     def _set_encoder_xy(self, x: float, y: float) -> None:
         cx = min(max(x, -WIRE_LIMIT), WIRE_LIMIT)

@@ -20,7 +20,7 @@ ODOHIL = shutil.which("odohil") or "odohil"
 @pytest.mark.slow
 def test_demo_estimates_contain_the_true_values(tmp_path: Path) -> None:
     done = subprocess.run(
-        [ODOHIL, "demo", "--json", "--seed", "3", "--session", str(tmp_path / "s")],
+        [ODOHIL, "demo", "--json", "--session", str(tmp_path / "s")],
         capture_output=True,
         text=True,
         timeout=300,
@@ -33,14 +33,15 @@ def test_demo_estimates_contain_the_true_values(tmp_path: Path) -> None:
     assert result["truth"] == {
         name: {"value": truth[name], "unit": SI_UNITS[name]} for name in PARAMETER_NAMES
     }
+    # The fake's true pose depends only on its seed (not on how the wall clock
+    # slices the motion), so the demo a user runs with the default seed is
+    # this very run: its 95 % intervals must contain the true values. Over
+    # many seeds all four intervals together hold in about 80-85 % of runs
+    # (BENCHMARKS.md); the default seed is one of those, and stays one.
     for name in PARAMETER_NAMES:
         entry = result["parameters"][name]
         low, high = entry["ci95"]
-        assert low < entry["value"] < high
-        # statistical check at 4 standard errors: each 95 % interval alone
-        # misses the truth in 5 % of runs, all four together in about 15 %
-        # (docs/sessions.md), so the test does not ask that of one run
-        assert abs(entry["value"] - truth[name]) <= 4 * entry["stderr"], (name, entry)
+        assert low < truth[name] < high, (name, entry)
     state = load_session(tmp_path / "s").state
     assert state.finished
     assert sorted(t.trial for t in state.completed) == list(range(1, n_trials + 1))
