@@ -30,9 +30,9 @@ def emulate(
     time_scale: float = typer.Option(
         1.0, "--time-scale", help="Simulated seconds per wall second (motion, zr, timestamp)."
     ),
-    baud: int = typer.Option(DEFAULT_BAUD, "--baud", help="Line rate for reply pacing."),
+    baud: int = typer.Option(DEFAULT_BAUD, "--baud", help="Line rate (pacing and the pty speed)."),
     pacing: bool = typer.Option(
-        True, "--pacing/--no-pacing", help="Trickle replies out at the line rate."
+        True, "--pacing/--no-pacing", help="Carry bytes at the line rate in both directions."
     ),
     fault: Annotated[list[str] | None, typer.Option("--fault", help=_FAULT_HELP)] = None,
     truth_socket: str | None = typer.Option(
