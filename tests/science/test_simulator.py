@@ -19,6 +19,7 @@ from odohil.errors import ParameterError
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import EncoderPath, Leg, Turn, forth_and_back, square
 from odohil.science.simulator import (
+    _drive_blocks,
     discrete_means,
     drive_straight,
     make_rng,
@@ -276,6 +277,37 @@ def test_driving_in_pieces_is_distributed_like_one_call() -> None:
     for i, label in enumerate(("x", "y", "theta")):
         assert_same_mean(whole[:, i], ticks[:, i], f"<{label}>")
     assert_same_covariance(whole, ticks, "(x, y, theta)")
+
+
+def test_tick_sized_calls_are_distributed_like_one_call() -> None:
+    """One segment per call, as the fake robot drives, for a few hundred trials at a time."""
+    groups, size = 50, 200
+    rng = make_rng(43)
+    poses = []
+    for _ in range(groups):
+        x, y, theta = np.zeros(size), np.zeros(size), np.full(size, 0.3)
+        for _ in range(300):
+            drive_straight(x, y, theta, -0.004, 1, LOUD, rng)
+        poses.append(np.column_stack([x, y, theta]))
+    ticks = np.vstack(poses)
+    whole = _drive([300], groups * size, seed=44)
+    for i, label in enumerate(("x", "y", "theta")):
+        assert_same_mean(whole[:, i], ticks[:, i], f"<{label}>")
+    assert_same_covariance(whole, ticks, "(x, y, theta)")
+
+
+@pytest.mark.parametrize("count", [1, 2, 5, 128])
+def test_single_trial_calls_match_the_block_path_draw_for_draw(count: int) -> None:
+    """One trial (the fake robot) takes a scalar path with the same draws as the block path."""
+    for seed in range(20):
+        poses = []
+        for drive in (drive_straight, _drive_blocks):
+            rng = make_rng(seed)
+            x, y, theta = np.array([0.1]), np.array([-0.2]), np.array([2.0])
+            for _ in range(3):
+                drive(x, y, theta, -0.02, count, LOUD, rng)
+            poses.append(np.concatenate([x, y, theta, rng.random(1)]))
+        np.testing.assert_allclose(poses[0], poses[1], rtol=0, atol=1e-5)
 
 
 def test_seeds_reproduce_exactly() -> None:
