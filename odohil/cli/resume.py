@@ -42,6 +42,11 @@ def resume(
             if resumed.torn is not None:
                 console.print(f"[yellow]warning[/]: {resumed.torn.describe()}")
             state = resumed.state
+            if state.header.get("measure") == "operator":
+                raise InitError(
+                    f"{session} is a wizard session (the operator measures): continue it "
+                    f"with `odohil wizard --port PORT --session {session}`"
+                )
             settings = dict(state.header.get("settings", {}))
             port_url = port or settings.get("port")
             if not port_url:

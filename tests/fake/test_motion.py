@@ -9,11 +9,13 @@ from typing import Any
 
 import pytest
 
+from odohil import units
 from odohil.protocol import messages as m
 from odohil.protocol.codes import Code
 from odohil.protocol.numbers import decode_s16, decode_u16
 from odohil.protocol.replies import decode_reply
 from odohil.protocol.state import N150_MASK, RobotState
+from odohil.science.parameters import NOMAD150
 
 
 def _state(robot: Any, req: m.Request) -> RobotState:
@@ -150,7 +152,11 @@ def test_zr_turns_back_zeroes_everything_and_replies_when_done(pty_robot: Any) -
     assert _rc(robot) == (0, 0, 0, 0)
     truth = robot.truth()
     assert truth.true_theta_rad == pytest.approx(0.0, abs=0.02)  # the wheels really turned back
-    assert truth.true_y_m == pytest.approx(0.508, abs=0.02)  # but the robot stays where it is
+    # but the robot stays where it drove: 200 wire units at the default 1 + E_T,
+    # within 4 standard deviations of the distance noise (K_rho per metre)
+    encoder_m = units.wire_to_metres(200)
+    spread = 4.0 * math.sqrt(NOMAD150.k_rho * encoder_m)
+    assert truth.true_y_m == pytest.approx((1.0 + NOMAD150.e_t) * encoder_m, abs=spread)
 
 
 def test_watchdog_stops_a_motion_when_the_host_goes_quiet(pty_robot: Any) -> None:
