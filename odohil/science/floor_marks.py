@@ -52,9 +52,14 @@ CONSISTENCY_LEVEL = 1e-3
 _LOG_CLEAR_CUT = math.log(CLEAR_CUT_LIKELIHOOD_RATIO)
 _TRANSLATION_SEED_DIRECTIONS = 12
 _LM_ITERATIONS = 80
-_CONVERGED_DECREMENT = 1e-4
+_CONVERGED_DECREMENT = 1e-2
 """A refined seed counts as a local minimum when a Gauss-Newton step could
-lower its chi^2 by less than this."""
+lower its chi^2 by less than this (a likelihood change under 0.5 %). Small
+motions have long, curved chi^2 valleys (the direction of a 1 cm translation
+is poorly determined), where Levenberg-Marquardt creeps: a stricter threshold
+threw away the true minimum and left only a spurious one."""
+_POLISH_ROUNDS = 4
+"""Further Levenberg-Marquardt rounds for seeds that have not converged yet."""
 _SAME_CANDIDATE = 0.05
 """Two minima are one candidate when they differ by less than this many tape
 sigmas (positions, and heading times the screws' radius)."""
@@ -463,6 +468,13 @@ def _local_minima(
 ) -> tuple[FloatArray, FloatArray]:
     """Distinct converged minima from the seeds, with their chi^2, best first."""
     poses, chi2, decrement = _levenberg_marquardt(seeds, geometry, measured, weights)
+    for _ in range(_POLISH_ROUNDS):
+        slow = decrement >= _CONVERGED_DECREMENT
+        if not slow.any():
+            break
+        poses[slow], chi2[slow], decrement[slow] = _levenberg_marquardt(
+            poses[slow], geometry, measured, weights
+        )
     poses[:, 2] = np.remainder(poses[:, 2] + math.pi, 2.0 * math.pi) - math.pi
     converged = decrement < _CONVERGED_DECREMENT
     if not converged.any():

@@ -333,3 +333,25 @@ def test_rotation_is_a_rotation() -> None:
     r = rotation(0.7)
     assert r @ r.T == pytest.approx(np.eye(2))
     assert r @ np.array([1.0, 0.0]) == pytest.approx([math.cos(0.7), math.sin(0.7)])
+
+
+def test_short_motion_keeps_the_true_minimum_in_a_creeping_valley() -> None:
+    """A design-B-like trial (k=20, l=0.5 m: 1.4 cm and -3.6 deg) whose chi^2
+    valley is long and curved: Levenberg-Marquardt creeps towards the true
+    minimum. It must still be a candidate and win over the spurious solution
+    about 8 deg away, which the model's prior makes very unlikely."""
+    description = circle()
+    truth = np.array([8.70496837e-05, 1.39618055e-02, -6.35487764e-02])
+    noise = np.array([-0.00068231, -0.00109056, 0.0009444, 0.00105347])  # 1 mm tape errors
+    measured = np.abs(marks_from_pose(description, truth).as_array() + noise)
+    prior = PosePrior(
+        mean=np.array([0.00061773, 0.01726033, -0.0705113]),
+        cov=np.diag([0.02681056, 0.0026542, 0.00855033]) ** 2,
+    )
+    solution = solve_marks(
+        description, MarkDistances(tuple(measured[:3]), tuple(measured[3:])), ORIGIN, prior
+    )
+    error = pose_error(solution, truth)
+    assert abs(error[2]) < 5.0 * math.sqrt(solution.cov[2, 2]), (solution.pose_change, truth)
+    spurious = [c for c in solution.candidates if abs(c.pose[2] - truth[2]) > math.radians(5)]
+    assert spurious  # the spurious solution was found, and lost
