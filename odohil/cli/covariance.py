@@ -11,14 +11,26 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from odohil.cli.options import (
+    E_R_DEFAULT,
+    E_T_DEFAULT,
+    K_RHO_DEFAULT,
+    K_THETA_DEFAULT,
+    ERDegPerM,
+    ETOption,
+    KRhoM,
+    KThetaDeg2PerM,
+    VariantChoice,
+    VariantOption,
+    parameters_from_paper_units,
+)
 from odohil.errors import OdohilError
 from odohil.science.covariance import SimulatedMoments, predicted_moments, simulated_moments
 from odohil.science.moments import PoseMoments
-from odohil.science.parameters import NOMAD150, ErrorParameters
+from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design, EncoderPath, square
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 
-_PAPER = NOMAD150.to_paper_units()
 COMPONENTS = ("x", "y", "Delta")
 COMPONENT_UNITS = ("m", "m", "rad")
 
@@ -28,13 +40,6 @@ class PathChoice(StrEnum):
 
     forth_and_back = "forth-and-back"
     square = "square"
-
-
-class VariantChoice(StrEnum):
-    """How the robot comes back: turn in place, or drive backwards."""
-
-    turn = "turn"
-    reverse = "reverse"
 
 
 def _path(
@@ -121,15 +126,12 @@ def covariance(
     path_kind: Annotated[PathChoice, typer.Option("--path", help="forth-and-back or square.")],
     k: float | None = typer.Option(None, "--k", help="Forth-and-back pairs, a multiple of 1/2."),
     l_m: float | None = typer.Option(None, "--l", help="Forth-and-back leg length, m."),
-    variant: Annotated[
-        VariantChoice,
-        typer.Option("--variant", help="turn: 180 deg in place; reverse: drive back."),
-    ] = VariantChoice.turn,
+    variant: VariantOption = VariantChoice.turn,
     side: float | None = typer.Option(None, "--side", help="Square side, m."),
-    e_r: float = typer.Option(_PAPER["E_R"], "--E-R", help="E_R, deg/m."),
-    e_t: float = typer.Option(_PAPER["E_T"], "--E-T", help="E_T (no unit)."),
-    k_theta: float = typer.Option(_PAPER["K_theta"], "--K-theta", help="K_theta, deg^2/m."),
-    k_rho: float = typer.Option(_PAPER["K_rho"], "--K-rho", help="K_rho, m."),
+    e_r: ERDegPerM = E_R_DEFAULT,
+    e_t: ETOption = E_T_DEFAULT,
+    k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
+    k_rho: KRhoM = K_RHO_DEFAULT,
     n_simulate: int | None = typer.Option(
         None, "--simulate", help="Also simulate this many trials (discrete model)."
     ),
@@ -148,7 +150,7 @@ def covariance(
         raise typer.BadParameter(f"--simulate needs at least 2 trials, got {n_simulate}")
     try:
         path = _path(path_kind, k, l_m, variant, side)
-        params = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
+        params = parameters_from_paper_units(e_r, e_t, k_theta, k_rho)
         exact = predicted_moments(path, params)
         sim = (
             simulated_moments(path, params, n_simulate, seed=seed, segment_m=segment_m)

@@ -11,10 +11,18 @@ from fakes.nomad.config import build_config
 from fakes.nomad.faults import FAULT_NAMES
 from fakes.nomad.pacing import DEFAULT_BAUD
 from fakes.nomad.run import run_emulator
+from odohil.cli.options import (
+    E_R_DEFAULT,
+    E_T_DEFAULT,
+    K_RHO_DEFAULT,
+    K_THETA_DEFAULT,
+    ERDegPerM,
+    ETOption,
+    KRhoM,
+    KThetaDeg2PerM,
+)
 from odohil.errors import OdohilError
-from odohil.science.parameters import NOMAD150
 
-_PAPER = NOMAD150.to_paper_units()
 _FAULT_HELP = (
     "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
     f"repeatable; NAME one of {', '.join(FAULT_NAMES)}. See docs/fake-robot.md."
@@ -23,10 +31,10 @@ _FAULT_HELP = (
 
 def emulate(
     seed: int | None = typer.Option(None, "--seed", help="Seed of the odometry noise."),
-    e_r: float = typer.Option(_PAPER["E_R"], "--E-R", help="Systematic E_R, deg/m."),
-    e_t: float = typer.Option(_PAPER["E_T"], "--E-T", help="Systematic E_T (no unit)."),
-    k_theta: float = typer.Option(_PAPER["K_theta"], "--K-theta", help="K_theta, deg^2/m."),
-    k_rho: float = typer.Option(_PAPER["K_rho"], "--K-rho", help="K_rho, m."),
+    e_r: ERDegPerM = E_R_DEFAULT,
+    e_t: ETOption = E_T_DEFAULT,
+    k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
+    k_rho: KRhoM = K_RHO_DEFAULT,
     time_scale: float = typer.Option(
         1.0, "--time-scale", help="Simulated seconds per wall second (motion, zr, timestamp)."
     ),

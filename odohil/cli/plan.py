@@ -12,10 +12,10 @@ from rich.console import Console
 from rich.table import Table
 
 from odohil import units
+from odohil.cli.options import E_R_DEFAULT, E_T_DEFAULT, K_RHO_DEFAULT, K_THETA_DEFAULT
 from odohil.errors import OdohilError
 from odohil.science.fisher import default_description
 from odohil.science.parameters import (
-    NOMAD150,
     PAPER_UNITS,
     PARAMETER_NAMES,
     SI_UNITS,
@@ -25,7 +25,6 @@ from odohil.science.planner import DEFAULT_MAX_LEG_M, MAX_DESIGNS, Plan, plan_ex
 from odohil.science.robot_description import RobotDescription
 from odohil.session.robot_file import load_robot_description
 
-_PAPER = NOMAD150.to_paper_units()
 DEFAULT_SIGMA_M = 0.001
 
 
@@ -140,10 +139,10 @@ def plan(
     max_trials: int | None = typer.Option(
         None, "--max-trials", help="Most trials in all (each is marked and measured)."
     ),
-    e_r: float = typer.Option(_PAPER["E_R"], "--E-R", help="Prior guess of E_R, deg/m."),
-    e_t: float = typer.Option(_PAPER["E_T"], "--E-T", help="Prior guess of E_T (no unit)."),
-    k_theta: float = typer.Option(_PAPER["K_theta"], "--K-theta", help="Prior K_theta, deg^2/m."),
-    k_rho: float = typer.Option(_PAPER["K_rho"], "--K-rho", help="Prior K_rho, m."),
+    e_r: float = typer.Option(E_R_DEFAULT, "--E-R", help="Prior guess of E_R, deg/m."),
+    e_t: float = typer.Option(E_T_DEFAULT, "--E-T", help="Prior guess of E_T (no unit)."),
+    k_theta: float = typer.Option(K_THETA_DEFAULT, "--K-theta", help="Prior K_theta, deg^2/m."),
+    k_rho: float = typer.Option(K_RHO_DEFAULT, "--K-rho", help="Prior K_rho, m."),
     sigma_m: float | None = typer.Option(
         None,
         "--sigma-m",

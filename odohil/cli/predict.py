@@ -3,20 +3,29 @@
 from __future__ import annotations
 
 import json
-from enum import StrEnum
-from typing import Annotated
 
 import typer
 from rich.console import Console
 from rich.table import Table
 
 from odohil import units
+from odohil.cli.options import (
+    E_R_DEFAULT,
+    E_T_DEFAULT,
+    K_RHO_DEFAULT,
+    K_THETA_DEFAULT,
+    ERDegPerM,
+    ETOption,
+    KRhoM,
+    KThetaDeg2PerM,
+    VariantChoice,
+    VariantOption,
+    parameters_from_paper_units,
+)
 from odohil.errors import OdohilError
 from odohil.science.closed_forms import ObservableMeans, forth_and_back_means
-from odohil.science.parameters import NOMAD150, SI_UNITS, ErrorParameters
+from odohil.science.parameters import SI_UNITS, ErrorParameters
 from odohil.science.paths import Design
-
-_PAPER = NOMAD150.to_paper_units()
 
 SI_OBSERVABLE_UNITS = {
     "phi1": "rad",
@@ -37,13 +46,6 @@ _MEANING = {
     "x": "<x>",
     "y": "<y>",
 }
-
-
-class VariantChoice(StrEnum):
-    """How the robot comes back: turn in place, or drive backwards."""
-
-    turn = "turn"
-    reverse = "reverse"
 
 
 def _degrees(key: str, value: float) -> str:
@@ -89,16 +91,11 @@ def _json(design: Design, params: ErrorParameters, means: ObservableMeans) -> st
 def predict(
     k: float = typer.Option(..., "--k", help="Forth-and-back pairs k, a multiple of 1/2."),
     l_m: float = typer.Option(..., "--l", help="Leg length l, metres."),
-    variant: Annotated[
-        VariantChoice,
-        typer.Option("--variant", help="turn: 180 deg in place; reverse: drive back."),
-    ] = VariantChoice.turn,
-    e_r: float = typer.Option(_PAPER["E_R"], "--E-R", help="Systematic E_R, deg/m."),
-    e_t: float = typer.Option(
-        _PAPER["E_T"], "--E-T", help="Systematic E_T (no unit; the paper's 1+E_T = 0.98 is -0.02)."
-    ),
-    k_theta: float = typer.Option(_PAPER["K_theta"], "--K-theta", help="K_theta, deg^2/m."),
-    k_rho: float = typer.Option(_PAPER["K_rho"], "--K-rho", help="K_rho, m."),
+    variant: VariantOption = VariantChoice.turn,
+    e_r: ERDegPerM = E_R_DEFAULT,
+    e_t: ETOption = E_T_DEFAULT,
+    k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
+    k_rho: KRhoM = K_RHO_DEFAULT,
     as_json: bool = typer.Option(False, "--json", help="Print SI values as JSON."),
 ) -> None:
     """Predict phi1..phi5, <x>, <y> for k forth-and-back runs of length l.
@@ -110,9 +107,9 @@ def predict(
             raise typer.BadParameter(f"{option} is a variance rate and cannot be negative: {value}")
     try:
         design = Design(k, l_m, variant.value)
-        params = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
+    params = parameters_from_paper_units(e_r, e_t, k_theta, k_rho)
     means = forth_and_back_means(design, params)
     if as_json:
         typer.echo(_json(design, params, means))

@@ -13,14 +13,24 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TimeRemainingColumn
 
-from odohil.cli.predict import VariantChoice
+from odohil.cli.options import (
+    E_R_DEFAULT,
+    E_T_DEFAULT,
+    K_RHO_DEFAULT,
+    K_THETA_DEFAULT,
+    ERDegPerM,
+    ETOption,
+    KRhoM,
+    KThetaDeg2PerM,
+    VariantChoice,
+    VariantOption,
+    parameters_from_paper_units,
+)
 from odohil.errors import OdohilError
-from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import Design, FloatArray
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.science.simulator import simulate as run_simulation
 
-_PAPER = NOMAD150.to_paper_units()
 TRIAL_FILE_HEADER = "k,l_m,variant,dx_m,dy_m,dtheta_rad"
 _PROGRESS_AFTER_S = 1.0
 
@@ -84,16 +94,11 @@ def simulate(
     l_m: Annotated[float, typer.Option("--l", help="Leg length l, metres.")],
     trials: Annotated[int, typer.Option("--trials", help="Number of simulated trials.")],
     out: Annotated[Path, typer.Option("--out", help="Trial file to write (CSV).")],
-    variant: Annotated[
-        VariantChoice,
-        typer.Option("--variant", help="turn: 180 deg in place; reverse: drive back."),
-    ] = VariantChoice.turn,
-    e_r: float = typer.Option(_PAPER["E_R"], "--E-R", help="Systematic E_R, deg/m."),
-    e_t: float = typer.Option(
-        _PAPER["E_T"], "--E-T", help="Systematic E_T (no unit; the paper's 1+E_T = 0.98 is -0.02)."
-    ),
-    k_theta: float = typer.Option(_PAPER["K_theta"], "--K-theta", help="K_theta, deg^2/m."),
-    k_rho: float = typer.Option(_PAPER["K_rho"], "--K-rho", help="K_rho, m."),
+    variant: VariantOption = VariantChoice.turn,
+    e_r: ERDegPerM = E_R_DEFAULT,
+    e_t: ETOption = E_T_DEFAULT,
+    k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
+    k_rho: KRhoM = K_RHO_DEFAULT,
     seed: int | None = typer.Option(
         None, "--seed", help="Random seed (a non-negative integer); default: fresh, reported."
     ),
@@ -110,9 +115,9 @@ def simulate(
     err = Console(stderr=True)
     try:
         design = Design(k, l_m, variant.value)
-        params = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
+    params = parameters_from_paper_units(e_r, e_t, k_theta, k_rho)
     if trials < 1:
         raise typer.BadParameter(f"must be at least 1, got {trials}", param_hint="--trials")
     if not np.isfinite(segment_m) or segment_m <= 0:

@@ -1,0 +1,53 @@
+"""Command-line options shared by several commands: the four error parameters
+in the paper's units (defaults: the paper's Nomad 150 values) and the
+forth-and-back variant."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import Annotated
+
+import typer
+
+from odohil.errors import OdohilError
+from odohil.science.parameters import NOMAD150, ErrorParameters
+
+PAPER_DEFAULTS = NOMAD150.to_paper_units()
+"""The Nomad 150 values in the paper's units (deg/m, 1, deg^2/m, m)."""
+
+E_R_DEFAULT = PAPER_DEFAULTS["E_R"]
+E_T_DEFAULT = PAPER_DEFAULTS["E_T"]
+K_THETA_DEFAULT = PAPER_DEFAULTS["K_theta"]
+K_RHO_DEFAULT = PAPER_DEFAULTS["K_rho"]
+
+ERDegPerM = Annotated[float, typer.Option("--E-R", help="Systematic E_R, deg/m.")]
+ETOption = Annotated[
+    float,
+    typer.Option("--E-T", help="Systematic E_T (no unit; the paper's 1+E_T = 0.98 is -0.02)."),
+]
+KThetaDeg2PerM = Annotated[float, typer.Option("--K-theta", help="K_theta, deg^2/m.")]
+KRhoM = Annotated[float, typer.Option("--K-rho", help="K_rho, m.")]
+
+
+class VariantChoice(StrEnum):
+    """How the robot comes back: turn in place, or drive backwards."""
+
+    turn = "turn"
+    reverse = "reverse"
+
+
+VariantOption = Annotated[
+    VariantChoice,
+    typer.Option("--variant", help="turn: 180 deg in place; reverse: drive back."),
+]
+
+
+def parameters_from_paper_units(
+    e_r: float, e_t: float, k_theta: float, k_rho: float
+) -> ErrorParameters:
+    """The parameters given on the command line, or a usage error (exit 2)
+    that says what is wrong with them."""
+    try:
+        return ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc)) from exc
