@@ -2,14 +2,19 @@
 
 from __future__ import annotations
 
+import math
 import time
 
+import numpy as np
 import pytest
 
 from fakes.nomad.process import EmulatorProcess
+from odohil import units
 from odohil.driver.motion import forth_and_back
 from odohil.driver.robot import NomadRobot
 from odohil.errors import DisconnectedError, OdohilTimeoutError
+from odohil.science.moments import pose_moments
+from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design
 
 
@@ -60,3 +65,40 @@ def test_disconnect_over_pty_is_eio() -> None:
         truth = emu.truth()
         assert [r.command for r in truth.motion_log].count("pr") == 1
         assert truth.disconnected
+
+
+def test_repeated_forth_and_back_runs_drift_as_the_parameters_say() -> None:
+    """The issue's acceptance run, repeated: k=2, l=1 m against ``odohil emulate``
+    at time scale 50. The encoders come back to the start every time, and the
+    true pose changes (read from the fake's side channel) have the mean and
+    the heading variance that the model predicts for the commanded path."""
+    runs = 30
+    paper_units = {"--E-R": 3.0, "--E-T": 0.03, "--K-theta": 3.0, "--K-rho": 2e-4}
+    params = ErrorParameters.from_paper_units(*paper_units.values())
+    args = ["--seed", "21", "--time-scale", "50", "--no-pacing"]
+    args += [str(v) for item in paper_units.items() for v in item]
+    changes = []
+    with EmulatorProcess(args, use_cli=True) as emu, NomadRobot.connect(emu.device) as robot:
+        for _ in range(runs):
+            before = emu.truth()
+            record = forth_and_back(robot, Design(2, 1.0))
+            after = emu.truth()
+            assert abs(record.end.x_wire - record.start.x_wire) <= 1
+            assert abs(record.end.y_wire - record.start.y_wire) <= 1
+            c, s = math.cos(before.true_theta_rad), math.sin(before.true_theta_rad)
+            dx, dy = after.true_x_m - before.true_x_m, after.true_y_m - before.true_y_m
+            turned = after.true_theta_rad - before.true_theta_rad
+            changes.append((c * dx + s * dy, -s * dx + c * dy, math.remainder(turned, math.tau)))
+        assert not emu.truth().moving
+    # the legs are realised in whole wire units: 394 x 0.1 in
+    commanded = Design(2, units.wire_to_metres(units.metres_to_wire(1.0)))
+    model = pose_moments(commanded.path(), params)
+    data = np.array(changes)
+    standard_errors = np.sqrt(np.diag(model.cov) / runs)
+    assert np.all(np.abs(data.mean(axis=0) - model.mean) < 4.0 * standard_errors)
+    heading_variance = model.cov[2, 2]  # K_theta * 2kl
+    assert abs(data[:, 2].var(ddof=1) - heading_variance) < 4.0 * heading_variance * math.sqrt(
+        2.0 / (runs - 1)
+    )
+    # and the drift is real: the mean heading change is many standard errors from 0
+    assert abs(data[:, 2].mean()) > 4.0 * standard_errors[2]
