@@ -323,7 +323,7 @@ def finish(
         if json_out:
             typer.echo(json.dumps({**outcome.estimate, **(extra or {})}))
         else:
-            print_summary(outcome.estimate, Console(), truth)
+            print_summary(outcome.estimate, Console(width=max(110, Console().width)), truth)
     if outcome.exit_code:
         raise typer.Exit(outcome.exit_code)
 
