@@ -16,14 +16,12 @@ import typer
 from rich.console import Console
 
 from odohil.cli.run import (
-    EXIT_ERROR,
-    EXIT_INTERRUPTED,
     SnapshotTruth,
     connect,
     execute,
     finish,
+    session_exit_codes,
 )
-from odohil.errors import OdohilError
 from odohil.science.parameters import SI_UNITS, ErrorParameters
 from odohil.science.robot_description import parse_robot_description
 from odohil.session.engine import start_session
@@ -63,7 +61,7 @@ def demo(
     console = Console(stderr=True)
     truth = DEMO_TRUTH.to_si_dict()
     paper = DEMO_TRUTH.to_paper_units()
-    try:
+    with session_exit_codes(console):
         from fakes.nomad.process import EmulatorProcess
 
         with tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
@@ -98,12 +96,6 @@ def demo(
                     )
                     with journal:
                         outcome = execute(journal, state, robot, source, settings, console)
-    except KeyboardInterrupt:
-        console.print("[yellow]interrupted[/]")
-        raise typer.Exit(EXIT_INTERRUPTED) from None
-    except (OdohilError, OSError) as exc:
-        console.print(f"[red]error[/]: {exc}")
-        raise typer.Exit(EXIT_ERROR) from None
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
     }

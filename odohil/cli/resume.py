@@ -8,9 +8,15 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil.cli.run import EXIT_ERROR, EXIT_INTERRUPTED, connect, execute, finish, make_source
+from odohil.cli.run import (
+    connect,
+    execute,
+    finish,
+    make_source,
+    session_exit_codes,
+)
 from odohil.driver.link import DEFAULT_BAUD
-from odohil.errors import InitError, OdohilError
+from odohil.errors import InitError
 from odohil.session.engine import description_of, resume_session
 
 
@@ -36,7 +42,7 @@ def resume(
     motion finished resumes at its next missing measurement.
     """
     console = Console(stderr=True)
-    try:
+    with session_exit_codes(console):
         resumed = resume_session(session)
         with resumed.journal:
             if resumed.torn is not None:
@@ -70,12 +76,6 @@ def resume(
                 connection = {**settings, "port": port_url, "baud": line_baud}
                 connection["truth_socket"] = socket_path
                 outcome = execute(resumed.journal, state, robot, source, connection, console)
-    except KeyboardInterrupt:
-        console.print("[yellow]interrupted[/]")
-        raise typer.Exit(EXIT_INTERRUPTED) from None
-    except (OdohilError, OSError) as exc:
-        console.print(f"[red]error[/]: {exc}")
-        raise typer.Exit(EXIT_ERROR) from None
     finish(outcome, json_out, console)
 
 

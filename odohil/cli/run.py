@@ -247,6 +247,20 @@ def _num(value: float | None) -> str:
     return "-" if value is None else f"{value:.4g}"
 
 
+@contextlib.contextmanager
+def session_exit_codes(console: Console) -> Iterator[None]:
+    """Turn Ctrl-C into exit 130 and an odohil or OS error into its message and
+    exit 1 (the robot was already stopped and the journal written below)."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        console.print("[yellow]interrupted[/]")
+        raise typer.Exit(EXIT_INTERRUPTED) from None
+    except (OdohilError, OSError) as exc:
+        console.print(f"[red]error[/]: {exc}")
+        raise typer.Exit(EXIT_ERROR) from None
+
+
 def default_session_folder() -> Path:
     """``odohil-session-YYYYmmdd-HHMMSS`` in the current directory."""
     return Path(f"odohil-session-{time.strftime('%Y%m%d-%H%M%S')}")
@@ -282,7 +296,7 @@ def run(
     """Run a calibration session unattended: n trials, no prompts, journaled."""
     console = Console(stderr=True)
     folder = session or default_session_folder()
-    try:
+    with session_exit_codes(console):
         plan = parse_plan(plan_text)
         description = load_robot_description(robot_file)
         toml = robot_file.read_text(encoding="utf-8")
@@ -302,12 +316,6 @@ def run(
             console.print(f"session {folder}")
             with journal:
                 outcome = execute(journal, state, robot, source, settings, console)
-    except KeyboardInterrupt:
-        console.print("[yellow]interrupted[/]")
-        raise typer.Exit(EXIT_INTERRUPTED) from None
-    except (OdohilError, OSError) as exc:
-        console.print(f"[red]error[/]: {exc}")
-        raise typer.Exit(EXIT_ERROR) from None
     finish(outcome, json_out, console)
 
 

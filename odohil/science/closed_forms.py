@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import cmath
 import math
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 
@@ -64,15 +64,7 @@ class ObservableMeans:
 
     def as_dict(self) -> dict[str, float]:
         """The seven values, keyed phi1..phi5, x, y (SI)."""
-        return {
-            "phi1": self.phi1,
-            "phi2": self.phi2,
-            "phi3": self.phi3,
-            "phi4": self.phi4,
-            "phi5": self.phi5,
-            "x": self.x,
-            "y": self.y,
-        }
+        return asdict(self)
 
 
 def phi1(w: complex) -> complex:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -34,13 +34,7 @@ class Observables:
 
     def as_dict(self) -> dict[str, float]:
         """phi1..phi5 keyed by name (SI)."""
-        return {
-            "phi1": self.phi1,
-            "phi2": self.phi2,
-            "phi3": self.phi3,
-            "phi4": self.phi4,
-            "phi5": self.phi5,
-        }
+        return {key: value for key, value in asdict(self).items() if key != "n_trials"}
 
 
 def observables(pose_changes: npt.ArrayLike) -> Observables:

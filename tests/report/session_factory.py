@@ -18,16 +18,7 @@ from odohil.session.engine import (
 from odohil.session.plan import parse_plan
 from odohil.session.sources import FakeTruthSource
 from odohil.session.state import SessionState
-
-ROBOT_TOML = """\
-[screws]
-A = [0.20, 0.0]
-B = [-0.10, 0.173]
-C = [-0.10, -0.173]
-[measurement]
-sigma_m = 0.0005
-cross = [["A", "B"], ["B", "C"]]
-"""
+from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 
 
 class PortTruth:

@@ -22,6 +22,9 @@ sigma_m = 0.001
 cross = [["A", "B"], ["B", "C"]]
 """
 
+FINE_TAPE_ROBOT_TOML = ROBOT_TOML.replace("sigma_m = 0.001", "sigma_m = 0.0005")
+"""The same robot, measured with a tape of 0.5 mm standard deviation."""
+
 FAST = "time_scale=20000"
 """Fake robot time scale for tests: motions take well under a millisecond."""
 

@@ -25,16 +25,8 @@ from odohil.session import state as ev
 from odohil.session.journal import read_journal
 from odohil.session.sources import relative_true_pose
 from odohil.session.state import replay
+from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 
-ROBOT_TOML = """\
-[screws]
-A = [0.20, 0.0]
-B = [-0.10, 0.173]
-C = [-0.10, -0.173]
-[measurement]
-sigma_m = 0.0005
-cross = [["A", "B"], ["B", "C"]]
-"""
 DESCRIPTION = parse_robot_description(ROBOT_TOML)
 LABELS = distance_labels(DESCRIPTION)
 TIMEOUT_S = 90
