@@ -62,13 +62,19 @@ def _records(tmp_path: Path) -> int:
         return 0
 
 
-def _last_kind(tmp_path: Path) -> str:
-    """The kind of the last complete journal record ("" if none)."""
+def _kinds(tmp_path: Path, after: int = 0) -> list[str]:
+    """The kinds of the complete journal records after the first ``after``."""
     try:
         lines = (tmp_path / "session" / JOURNAL_NAME).read_bytes().split(b"\n")[:-1]
     except FileNotFoundError:
-        return ""
-    return str(json.loads(lines[-1])["kind"]) if lines else ""
+        return []
+    return [str(json.loads(line)["kind"]) for line in lines[after:]]
+
+
+def _last_kind(tmp_path: Path) -> str:
+    """The kind of the last complete journal record ("" if none)."""
+    kinds = _kinds(tmp_path)
+    return kinds[-1] if kinds else ""
 
 
 def _wait_stopped(emulator: EmulatorProcess, within_s: float = 5.0) -> bool:
@@ -139,9 +145,10 @@ def test_sigkill_anywhere_then_resume_counts_every_trial_once(
         with log.open("wb") as stderr:
             process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=stderr)
         deadline = time.monotonic() + 60
-        while process.poll() is None and not (
-            _records(tmp_path) > before and _last_kind(tmp_path) == wanted
-        ):
+        # a record of the wanted kind since this process started: kill now (on a
+        # busy machine the poll may see it only after a few more records, but
+        # never a whole trial later)
+        while process.poll() is None and wanted not in _kinds(tmp_path, before):
             assert time.monotonic() < deadline, "the session made no progress"
             time.sleep(0.001)
         if process.poll() is not None:
