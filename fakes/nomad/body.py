@@ -9,10 +9,14 @@ at most ``segment_m`` encoder metres, the remainder carried between steps;
 steering rotations change the true heading exactly (in-place turns are error
 free in Martinelli's model).
 
-Segments lie at fixed distances along each leg and each one is drawn by its
-own call, so the random numbers a segment uses do not depend on how the wall
-clock happened to slice the motion into steps: a seed gives the same true
-poses on every run.
+Segments lie at fixed distances along each straight leg (measured from the
+axis position where the leg began, never summed step by step) and each one is
+drawn by its own call, so the random numbers a segment uses do not depend on
+how the wall clock happened to slice the motion into steps: a seed gives the
+same true poses on every run. A leg ends when the translation stops or
+reverses, or at every step of a move that steers while it translates; such
+coupled moves are integrated in steps that follow the wall clock, so only
+their true poses may vary (slightly) from run to run.
 """
 
 from __future__ import annotations
@@ -44,6 +48,9 @@ COUPLED_STEP_S = 0.02
 MAX_COUPLED_STEPS = 64
 """...unless one advance would need more steps than this (a high time scale): then
 the steps grow, so that the robot keeps up with the wall clock."""
+NEGLIGIBLE_REST_M = 1e-9
+"""A leg's last partial segment shorter than this (m) is not driven: it is float
+rounding of a leg that is a whole number of segments long."""
 
 
 class Axis:
@@ -102,7 +109,10 @@ class RobotBody:
         self.true_x = np.zeros(1)
         self.true_y = np.zeros(1)
         self.true_theta = np.zeros(1)
-        self.pending_m = 0.0
+        self.leg_origin = 0.0
+        """Translation-axis position (wire) where the current straight leg began."""
+        self.leg_segments = 0
+        """Whole segments of the current leg already driven."""
         self.speed = list(map(float, POWER_ON_SPEED))
         self.accel = list(map(float, POWER_ON_ACCEL))
         self.limp = False
@@ -131,21 +141,26 @@ class RobotBody:
                 self.enc_x + d_trans * math.cos(heading),
                 self.enc_y + d_trans * math.sin(heading),
             )
-            self.pending_m += units.wire_to_metres(d_trans)
-        self._drive_true(flush=d_steer != 0.0 or not trans.moving)
+            if (trans0 - self.leg_origin) * d_trans < 0.0:
+                self._drive_leg(trans0, end_leg=True)  # reversed: the leg ended at trans0
+        self._drive_leg(trans.pos, end_leg=d_steer != 0.0 or not trans.moving)
         if d_steer != 0.0:
             self.true_theta += units.wire_to_radians(d_steer)
 
-    def _drive_true(self, flush: bool) -> None:
+    def _drive_leg(self, position: float, end_leg: bool) -> None:
+        """Drive the true pose along the current leg up to translation ``position`` (wire)."""
         seg = self.segment_m
-        n = int(abs(self.pending_m) / seg)
-        if n > 0:
-            signed = math.copysign(seg, self.pending_m)
-            self._drive(signed, n)
-            self.pending_m -= n * signed
-        if flush and self.pending_m != 0.0:
-            self._drive(self.pending_m, 1)
-            self.pending_m = 0.0
+        travelled_m = units.wire_to_metres(position - self.leg_origin)
+        due = int(abs(travelled_m) / seg)
+        if due > self.leg_segments:
+            self._drive(math.copysign(seg, travelled_m), due - self.leg_segments)
+            self.leg_segments = due
+        if end_leg:
+            rest_m = abs(travelled_m) - self.leg_segments * seg
+            if rest_m > NEGLIGIBLE_REST_M:
+                self._drive(math.copysign(rest_m, travelled_m), 1)
+            self.leg_origin = position
+            self.leg_segments = 0
 
     def _drive(self, signed_segment_m: float, n: int) -> None:
         for _ in range(n):
