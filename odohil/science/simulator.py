@@ -330,6 +330,17 @@ def _drive_one(
     y[0] += step * sum_sin
     if rho_sd > 0.0:
         z0, z1 = rng.standard_normal(2).tolist()
+        if n_segments == 1:
+            # One segment: the noise lies along its heading (what the factor below
+            # gives exactly); the general factor would take the square root of the
+            # rounding left in n - c2 - l21^2, ~1e-8, which makes poses that differ
+            # by 1e-16 rad in heading differ by ~1e-11 m (the fake robot drives
+            # one segment per call and must be reproducible). z1 is drawn all the
+            # same, so that the stream of draws matches the blocks path.
+            along = rho_sd * z0 * math.copysign(1.0, sum_cos)
+            x[0] += along * sum_cos
+            y[0] += along * sum_sin
+            return
         c2 = 0.5 * (n_segments + sum_cos2)
         l11 = math.sqrt(max(c2, 0.0))
         l21 = 0.5 * sum_sin2 / l11 if l11 > 0.0 else 0.0
