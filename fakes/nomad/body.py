@@ -5,7 +5,7 @@ The encoder pose is the ideal integration of the commanded motion
 (x += d cos(steer), y += d sin(steer), CHOICE C8). The true pose (metres,
 radians) is advanced by the science layer's discrete error model
 (:func:`odohil.science.simulator.drive_straight`): translation in segments of
-at most ``segment_m`` encoder metres, the remainder carried between steps;
+at most ``segment_m`` encoder metres (see below);
 steering rotations change the true heading exactly (in-place turns are error
 free in Martinelli's model).
 
