@@ -1,6 +1,6 @@
 """The one exception hierarchy of odohil.
 
-Every error odohil raises on purpose is an :class:`OdohilError`, in one of four
+Every error odohil raises on purpose is an :class:`OdohilError`, in one of five
 branches, so callers can catch exactly what they can handle:
 
 - :class:`InitError`: bad configuration or set-up (parameters, robot description,
@@ -10,7 +10,9 @@ branches, so callers can catch exactly what they can handle:
 - :class:`OdohilTimeoutError`: the robot did not answer, or did not finish a
   motion, within the allowed time (float seconds);
 - :class:`MeasurementError`: floor-mark distances or trial data that cannot be
-  used (not a number, negative, no rigid motion explains them, bad file rows).
+  used (not a number, negative, no rigid motion explains them, bad file rows);
+- :class:`SafetyError`: the robot is not known to be safe (its stop could not
+  be confirmed, or it is not where the next motion must start).
 
 :class:`MotionError` (a motion that did not end where the encoders say it
 should) sits under :class:`OdohilError` directly.
@@ -86,3 +88,11 @@ class TrialFileError(MeasurementError):
 class JournalError(OdohilError):
     """A session journal that cannot be trusted: unreadable, or corrupt before
     its last record (a torn last record is reported, not raised)."""
+
+
+class SafetyError(OdohilError):
+    """The robot is not known to be safe to leave or to move."""
+
+
+class StopUnconfirmedError(SafetyError):
+    """A stop was sent but the robot did not report standing still: it may still be moving."""
