@@ -7,7 +7,9 @@
 | 2 | bad input: an option, file or session that cannot be used; nothing moved |
 | 3 | an estimate is printed but its verdict is doubtful or failed |
 | 4 | the robot's stop could not be confirmed: it may still be moving |
-| 128 + N | ended by signal N after the robot was stopped (130 Ctrl-C, 143 SIGTERM, 129 SIGHUP, 131 SIGQUIT) |
+| 128 + N | ended by signal N after the robot was stopped |
+
+128 + N: 130 Ctrl-C (SIGINT), 143 SIGTERM, 129 SIGHUP, 131 SIGQUIT.
 """
 
 from __future__ import annotations
