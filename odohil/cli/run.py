@@ -26,6 +26,7 @@ from odohil.driver.robot import NomadRobot
 from odohil.errors import InitError, OdohilError, ParameterError
 from odohil.science.estimators import estimate
 from odohil.science.parameters import PARAMETER_NAMES
+from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
 from odohil.session.engine import (
@@ -299,6 +300,7 @@ def run(
     with session_exit_codes(console):
         plan = parse_plan(plan_text)
         description = load_robot_description(robot_file)
+        check_redundancy(description, [item.design for item in plan.items])
         toml = robot_file.read_text(encoding="utf-8")
         kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
         settings = {

@@ -35,6 +35,7 @@ from odohil.science.moments import pose_moments
 from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MAX_LEG_M
+from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
 from odohil.session.engine import (
@@ -276,6 +277,22 @@ class WizardPrompts:
                 continue
             return repr(value)
 
+    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> str:
+        """The slip check doubts the trial: ask for the suspect distance again."""
+        label = ctx.labels[index]
+        previous = ctx.measurements[index] if index < len(ctx.measurements) else float("nan")
+        self.console.print(f"[yellow]check the marks:[/] {reason}")
+        while True:
+            text = self._input(
+                f"Re-measure {label}, metres (you typed {previous:.4f}; press Enter to keep it): "
+            )
+            if not text.strip():
+                return ""
+            try:
+                return repr(parse_metres(text))
+            except MeasurementError as exc:
+                self.console.print(f"[red]refused:[/] {exc}; type it again")
+
     def show_rejection(self, ctx: TrialContext, reason: str) -> None:
         """The set of distances fits no rigid motion: say why, then re-ask the set."""
         self.console.print(
@@ -430,7 +447,17 @@ def _prepare(
         if not check.ok:
             _fail(console, check)
         console.print(check_line(check))
+    _check_redundancy(console, robot_file, plan)
     return text, plan
+
+
+def _check_redundancy(console: Console, robot_file: Path, plan: Plan) -> None:
+    """Refuse designs the description's cross distances cannot disambiguate."""
+    try:
+        check_redundancy(load_robot_description(robot_file), [i.design for i in plan.items])
+    except OdohilError as exc:
+        _fail(console, Check("cross distances", False, str(exc)))
+    console.print(check_line(Check("cross distances", True, "enough for every design")))
 
 
 def _start(

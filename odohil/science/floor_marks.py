@@ -213,6 +213,19 @@ def marks_from_pose(
     )
 
 
+def linearised_marks(
+    description: RobotDescription, pose_change: Sequence[float] | FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """The distances a pose change leaves (metres, shape (m,)) and their
+    Jacobian with respect to (dx m, dy m, dtheta rad), shape (m, 3)."""
+    pose = _pose3(pose_change, "pose_change")
+    geometry = _geometry(description)
+    ones = np.ones(len(geometry.source))
+    zero = np.zeros(len(geometry.source))
+    residuals, jacobian = _residuals(pose[None, :], geometry, zero, ones)
+    return residuals[0] * geometry.sigma, jacobian[0] * geometry.sigma
+
+
 def solve_marks(
     description: RobotDescription,
     marks: MarkDistances,

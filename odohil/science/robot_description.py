@@ -14,6 +14,19 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
     port = "/dev/ttyUSB0"    # or any pyserial URL
     baud = 38400             # 4800, 9600, 19200 or 38400
     timeout_s = 1.0
+    [priors]                 # optional: belief in the four parameters before any trial
+    E_R_deg_per_m = -0.202   # (paper units; defaults: the paper's Nomad 150 values)
+    E_R_sd_deg_per_m = 0.5   # one standard deviation of that belief
+    E_T = -0.02
+    E_T_sd = 0.05
+    K_theta_deg2_per_m = 0.012
+    K_theta_sd_deg2_per_m = 0.05
+    K_rho_m = 3.6e-5
+    K_rho_sd_m = 2e-4
+
+The priors only steer the choice among the poses the floor marks allow and the
+operator-slip check (odohil/science/pose_selection.py); they never enter the
+estimate.
 """
 
 from __future__ import annotations
@@ -26,7 +39,9 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from odohil.errors import RobotDescriptionError
+from odohil import units
+from odohil.errors import ParameterError, RobotDescriptionError
+from odohil.science.parameters import NOMAD150, ErrorParameters
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -41,7 +56,21 @@ MIN_SPREAD_RATIO = 0.1
 is less than this fraction of their spread along it (ratio of the singular
 values of the centred positions); the pose from such marks is ill-conditioned."""
 
-_TOP_KEYS = ("screws", "measurement", "serial")
+_TOP_KEYS = ("screws", "measurement", "serial", "priors")
+_PRIOR_KEYS = (
+    "E_R_deg_per_m",
+    "E_R_sd_deg_per_m",
+    "E_T",
+    "E_T_sd",
+    "K_theta_deg2_per_m",
+    "K_theta_sd_deg2_per_m",
+    "K_rho_m",
+    "K_rho_sd_m",
+)
+DEFAULT_PRIOR_SD_PAPER: tuple[float, float, float, float] = (0.5, 0.05, 0.05, 2e-4)
+"""Default prior spreads (deg/m, 1, deg^2/m, m): 2.5 times |E_R|, 5 % on the
+distance scale, 4 times K_theta and 5 times K_rho of the Nomad 150, so that a
+robot several times worse than the paper's still lies within two of them."""
 _MEASUREMENT_KEYS = ("sigma_m", "cross")
 _SERIAL_KEYS = ("port", "baud", "timeout_s")
 
@@ -76,6 +105,39 @@ class SerialSettings:
     timeout_s: float = DEFAULT_TIMEOUT_S
 
 
+def _paper_to_si(values: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
+    return (
+        units.deg_per_m_to_rad_per_m(values[0]),
+        values[1],
+        units.deg2_per_m_to_rad2_per_m(values[2]),
+        values[3],
+    )
+
+
+@dataclass(frozen=True)
+class ParameterPriors:
+    """A Gaussian belief in the four parameters before any trial (SI).
+
+    Attributes:
+        mean: the believed values (default: the paper's Nomad 150).
+        sd: one standard deviation each, (rad/m, 1, rad^2/m, m), all positive.
+    """
+
+    mean: ErrorParameters = NOMAD150
+    sd: tuple[float, float, float, float] = _paper_to_si(DEFAULT_PRIOR_SD_PAPER)
+
+    def __post_init__(self) -> None:
+        for name, value in zip(_PRIOR_KEYS[1::2], self.sd, strict=True):
+            if not math.isfinite(value) or value <= 0:
+                raise RobotDescriptionError(
+                    f"priors.{name} must be a positive number, got {value!r}"
+                )
+
+    def cov(self) -> FloatArray:
+        """The 4x4 covariance (SI), diagonal."""
+        return np.diag(np.square(np.array(self.sd, dtype=np.float64)))
+
+
 @dataclass(frozen=True)
 class RobotDescription:
     """A validated robot description (SI units).
@@ -86,12 +148,14 @@ class RobotDescription:
         cross_pairs: (i, j) screw names, at most two: the distance from the start
             mark of screw i to the end mark of screw j is measured.
         serial: serial-line settings for the driver.
+        priors: belief in the parameters before any trial (``[priors]``).
     """
 
     screws: tuple[Screw, ...]
     sigma_m: float
     cross_pairs: tuple[tuple[str, str], ...] = ()
     serial: SerialSettings = field(default_factory=SerialSettings)
+    priors: ParameterPriors = field(default_factory=ParameterPriors)
 
     def __post_init__(self) -> None:
         _check_screws(self.screws)
@@ -148,7 +212,31 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
     serial_table = _table(data, "serial", required=False)
     _reject_unknown(serial_table, _SERIAL_KEYS, "serial.")
     serial = _serial(serial_table)
-    return RobotDescription(screws=screws, sigma_m=sigma_m, cross_pairs=cross_pairs, serial=serial)
+    priors = _priors(_table(data, "priors", required=False))
+    return RobotDescription(
+        screws=screws, sigma_m=sigma_m, cross_pairs=cross_pairs, serial=serial, priors=priors
+    )
+
+
+def _priors(table: dict[str, Any]) -> ParameterPriors:
+    _reject_unknown(table, _PRIOR_KEYS, "priors.")
+    default_mean = NOMAD150.to_paper_units()
+    means = tuple(
+        _number(table.get(key, default_mean[name]), f"priors.{key}")
+        for key, name in zip(_PRIOR_KEYS[0::2], default_mean, strict=True)
+    )
+    sds = tuple(
+        _number(table.get(key, default), f"priors.{key}")
+        for key, default in zip(_PRIOR_KEYS[1::2], DEFAULT_PRIOR_SD_PAPER, strict=True)
+    )
+    for key, value in zip(_PRIOR_KEYS[1::2], sds, strict=True):
+        if value <= 0:
+            raise RobotDescriptionError(f"priors.{key} must be a positive number, got {value!r}")
+    try:
+        mean = ErrorParameters.from_paper_units(*means)
+    except ParameterError as exc:
+        raise RobotDescriptionError(f"priors: {exc}") from None
+    return ParameterPriors(mean=mean, sd=_paper_to_si((sds[0], sds[1], sds[2], sds[3])))
 
 
 def _reject_unknown(table: dict[str, Any], known: tuple[str, ...], prefix: str) -> None:

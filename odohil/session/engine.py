@@ -10,8 +10,15 @@ One trial attempt:
 4. the source makes the end marks; the encoder end pose and trajectory are
    journaled as ``motion_done``;
 5. each distance is taken and journaled (``measurement``);
-6. the pose change is solved from the floor marks (``solved``; distances no
-   rigid motion explains are rejected and taken again, ``measurements_rejected``);
+6. the pose change is chosen from the floor marks by the one pose-selection
+   path (odohil/science/pose_selection.py: candidates scored against the
+   encoders and the model's predictive distribution at the current estimate,
+   or the description's priors before there is one) and journaled
+   (``solved``). Distances no rigid motion explains are rejected and taken
+   again (``measurements_rejected``); when the slip check doubts the pose, the
+   suspect distance is taken again or kept (``remeasured``; a kept value flags
+   the trial); a trial whose candidates stay ambiguous is journaled with
+   ``ambiguous`` and left out of every estimate;
 7. the live estimate is updated (``estimate``).
 
 Every record is on disk (fsync) before the next step starts, so after a crash
@@ -50,7 +57,9 @@ from odohil.driver.robot import NomadRobot
 from odohil.driver.sample import EncoderSample
 from odohil.errors import InconsistentMeasurementError, JournalError, MeasurementError, OdohilError
 from odohil.science.estimators import IncrementalEstimator, Observation
-from odohil.science.floor_marks import MarkDistances, distance_labels, solve_marks
+from odohil.science.floor_marks import MarkDistances, distance_labels
+from odohil.science.parameters import PARAMETER_NAMES
+from odohil.science.pose_selection import ParameterBelief, predictive_pose, select_pose
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session import state as ev
 from odohil.session.journal import Journal, Record, TornRecord
@@ -68,6 +77,9 @@ from odohil.session.state import (
 
 MAX_REJECTIONS = 3
 """How many times one attempt's distances may be rejected before giving up."""
+MAX_REMEASURES = 2
+"""How many times the slip check may ask for a suspect distance again; a
+trial it still doubts after that is journaled flagged."""
 
 
 class SessionObserver(Protocol):
@@ -263,6 +275,7 @@ class SessionEngine:
         motion: MotionSettings | None = None,
         connection: Mapping[str, Any] | None = None,
         max_rejections: int = MAX_REJECTIONS,
+        max_remeasures: int = MAX_REMEASURES,
     ) -> None:
         if state.plan is None:
             raise JournalError("the session has no plan")
@@ -276,6 +289,7 @@ class SessionEngine:
         self.motion = motion or MotionSettings()
         self.connection = dict(connection or {})
         self.max_rejections = max_rejections
+        self.max_remeasures = max_remeasures
         self.description = description_of(state)
         self.labels = distance_labels(self.description)
         self.latest_estimate: Mapping[str, Any] | None = None
@@ -337,6 +351,8 @@ class SessionEngine:
         if self.estimator is None:
             return
         for trial in self.state.completed[self._estimated :]:
+            if trial.ambiguous:
+                continue
             with contextlib.suppress(OdohilError):
                 self.latest_estimate = self.estimator.add(trial)
         self._estimated = len(self.state.completed)
@@ -383,6 +399,7 @@ class SessionEngine:
             encoder_end_pose=opened.encoder_end_pose,
             measurements=opened.measurements,
             rejections=opened.rejections,
+            remeasures=opened.remeasures,
         )
 
     def _settle(self) -> EncoderSample:
@@ -438,28 +455,49 @@ class SessionEngine:
         )
         self._measure_and_solve()
 
-    def _measure_and_solve(self) -> None:
-        while True:
+    def _belief(self) -> ParameterBelief:
+        """The current estimate as a belief, or the description's priors."""
+        priors = self.description.priors
+        result = self.latest_estimate
+        if not result:
+            return ParameterBelief.from_priors(priors)
+        try:
+            parameters = result["parameters"]
+            values = [float(parameters[name]["value"]) for name in PARAMETER_NAMES]
+            stderrs = [parameters[name]["stderr"] for name in PARAMETER_NAMES]
+            return ParameterBelief.from_estimate(values, stderrs, result.get("correlation"), priors)
+        except (KeyError, TypeError, ValueError, OdohilError):
+            return ParameterBelief.from_priors(priors)
+
+    def _measure_missing(self) -> OpenTrial:
+        opened = self.state.open_trial
+        assert opened is not None
+        ids = {"trial": opened.trial, "attempt": opened.attempt}
+        for index in range(len(opened.measurements), len(self.labels)):
+            ctx = self._context(opened)
+            value = check_distance(self.source.distance(ctx, index), self.labels[index])
+            self._log(
+                ev.MEASUREMENT,
+                {**ids, "index": index, "label": self.labels[index], "value_m": value},
+            )
             opened = self.state.open_trial
             assert opened is not None
+        return opened
+
+    def _measure_and_solve(self) -> None:
+        while True:
+            opened = self._measure_missing()
             ids = {"trial": opened.trial, "attempt": opened.attempt}
-            for index in range(len(opened.measurements), len(self.labels)):
-                ctx = self._context(opened)
-                value = check_distance(self.source.distance(ctx, index), self.labels[index])
-                self._log(
-                    ev.MEASUREMENT,
-                    {**ids, "index": index, "label": self.labels[index], "value_m": value},
-                )
-                opened = self.state.open_trial
-                assert opened is not None
             n_same = len(self.description.screws)
             marks = MarkDistances(
                 same_m=opened.measurements[:n_same], cross_m=opened.measurements[n_same:]
             )
             end_pose = opened.encoder_end_pose
             assert end_pose is not None
+            design = self.plan.items[opened.design_index].design
+            predicted = predictive_pose(design, self._belief(), end_pose)
             try:
-                solution = solve_marks(self.description, marks, end_pose)
+                selection = select_pose(self.description, marks, end_pose, predicted)
             except InconsistentMeasurementError as exc:
                 if opened.rejections >= self.max_rejections:
                     raise MeasurementError(
@@ -469,18 +507,48 @@ class SessionEngine:
                 self.source.rejected(self._context(opened), str(exc))
                 self._log(ev.MEASUREMENTS_REJECTED, {**ids, "reason": str(exc)})
                 continue
+            slip = selection.slip
+            if slip.tripped and not opened.slip and opened.remeasures < self.max_remeasures:
+                reason = slip.message()
+                previous = opened.measurements[slip.suspect]
+                value = self.source.remeasure(self._context(opened), slip.suspect, reason)
+                if value is not None:
+                    value = check_distance(value, self.labels[slip.suspect])
+                self._log(
+                    ev.REMEASURED,
+                    {
+                        **ids,
+                        "index": slip.suspect,
+                        "label": self.labels[slip.suspect],
+                        "reason": reason,
+                        "previous_m": previous,
+                        "value_m": value,
+                        "kept": value is None,
+                    },
+                )
+                if value is not None:
+                    continue
             break
-        self._log(
-            ev.SOLVED,
-            {
-                **ids,
-                "pose_change": [float(v) for v in solution.pose_change],
-                "cov": [[float(v) for v in row] for row in solution.cov],
-                "chi2": float(solution.chi2),
-                "clear_cut": bool(solution.clear_cut),
-                "reason": solution.reason,
-            },
-        )
+        final = self.state.open_trial
+        assert final is not None
+        solution = selection.solution
+        slip_note = final.slip or (selection.slip.message() if selection.slip.tripped else "")
+        data: dict[str, Any] = {
+            **ids,
+            "pose_change": [float(v) for v in solution.pose_change],
+            "cov": [[float(v) for v in row] for row in solution.cov],
+            "chi2": float(solution.chi2),
+            "clear_cut": bool(solution.clear_cut),
+            "reason": solution.reason,
+        }
+        if slip_note:
+            data["slip"] = slip_note
+        if selection.ambiguous:
+            data["ambiguous"] = True
+            data["candidates"] = [[float(v) for v in c.pose] for c in selection.plausible]
+        self._log(ev.SOLVED, data)
+        if self.state.completed[-1].ambiguous:
+            return
         if self.estimator is not None:
             n_trials = len(self.state.completed)
             try:

@@ -51,6 +51,7 @@ class TrialContext:
         encoder_end_pose: (x m, y m, theta rad) once the motion is done.
         measurements: the distances already taken, metres.
         rejections: how many times this attempt's distances were rejected.
+        remeasures: how many suspect distances were taken again.
     """
 
     trial: int
@@ -63,6 +64,7 @@ class TrialContext:
     encoder_end_pose: tuple[float, float, float] | None = None
     measurements: tuple[float, ...] = ()
     rejections: int = 0
+    remeasures: int = 0
 
 
 class MeasurementSource(Protocol):
@@ -89,6 +91,12 @@ class MeasurementSource(Protocol):
         asked for again (raise MeasurementError to give up instead)."""
         ...
 
+    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+        """The slip check doubts the trial and suspects distance ``index``
+        (``reason`` says why): that distance taken again, metres, or None to
+        keep the value taken (the trial is then flagged)."""
+        ...
+
 
 class OperatorPrompts(Protocol):
     """The operator's side of a measurement (implemented by a user interface)."""
@@ -109,6 +117,11 @@ class OperatorPrompts(Protocol):
 
     def show_rejection(self, ctx: TrialContext, reason: str) -> None:
         """Tell the operator the distances are inconsistent and will be retaken."""
+        ...
+
+    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> str:
+        """Ask to measure distance ``ctx.labels[index]`` again (``reason``: the
+        slip check's message); return what was typed, empty to keep the value."""
         ...
 
 
@@ -142,6 +155,17 @@ class OperatorSource:
     def rejected(self, ctx: TrialContext, reason: str) -> None:
         """Tell the operator."""
         self.prompts.show_rejection(ctx, reason)
+
+    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+        """Ask the operator to re-enter the suspect distance; None keeps it."""
+        while True:
+            answer = self.prompts.ask_remeasure(ctx, index, reason).strip()
+            if not answer:
+                return None
+            try:
+                return check_distance(answer, ctx.labels[index])
+            except MeasurementError as exc:
+                reason = str(exc)
 
 
 def check_distance(value: object, label: str) -> float:
@@ -225,13 +249,22 @@ class FakeTruthSource:
 
     def distance(self, ctx: TrialContext, index: int) -> float:
         """The noisy forward-model distance number ``index``, metres."""
+        return self._draw(ctx, index, [self.seed, ctx.trial, ctx.attempt, ctx.rejections])
+
+    def _draw(self, ctx: TrialContext, index: int, seed: list[int]) -> float:
         exact = marks_from_pose(self.description, self.true_pose_change(ctx)).as_array()
-        rng = np.random.default_rng([self.seed, ctx.trial, ctx.attempt, ctx.rejections])
+        rng = np.random.default_rng(seed)
         noisy = np.abs(exact + rng.normal(0.0, self.sigma_m, exact.size))
         return float(noisy[index])
 
     def rejected(self, ctx: TrialContext, reason: str) -> None:
         """Nothing to do: the next draw differs (``rejections`` is in the seed)."""
+
+    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float:
+        """The suspect distance with a new noise draw (seeded by the attempt and
+        the number of re-measures so far)."""
+        seed = [self.seed, ctx.trial, ctx.attempt, ctx.rejections, 1 + ctx.remeasures]
+        return self._draw(ctx, index, seed)
 
 
 class RecordedSource:
@@ -284,6 +317,10 @@ class RecordedSource:
                 f"trial {ctx.trial} runs {ctx.design.label()}"
             )
         return check_distance(self.rows[row][index], ctx.labels[index])
+
+    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> None:
+        """Recorded distances cannot be retaken: keep the value (the trial is flagged)."""
+        return None
 
     def rejected(self, ctx: TrialContext, reason: str) -> None:
         """Recorded distances cannot be retaken."""

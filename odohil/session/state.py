@@ -21,8 +21,15 @@ Event kinds, in the order a session writes them (``data`` members in brackets):
   ``value_m``];
 - ``measurements_rejected``: the distances of this attempt are discarded and
   taken again [``trial``, ``attempt``, ``reason``];
+- ``remeasured``: the slip check doubted the trial's pose; the suspect
+  distance was taken again, or the operator kept it [``trial``, ``attempt``,
+  ``index``, ``label``, ``reason``, ``previous_m``, ``value_m`` (null when
+  kept), ``kept``]; a kept value flags the trial;
 - ``solved``: the pose change; the trial is complete [``trial``, ``attempt``,
-  ``pose_change``, ``cov``, ``chi2``, ``clear_cut``, ``reason``];
+  ``pose_change``, ``cov``, ``chi2``, ``clear_cut``, ``reason``, and
+  optionally ``ambiguous`` (two candidate poses stay plausible: the trial is
+  left out of every estimate), ``candidates`` (their poses), ``slip`` (why
+  the slip check still doubts the trial)];
 - ``estimate`` [``n_trials``, ``result``: the estimate's JSON object];
 - ``void``: the attempt is discarded and the trial redone [``trial``,
   ``attempt``, ``reason``];
@@ -66,6 +73,7 @@ MOTION_START = "motion_start"
 MOTION_DONE = "motion_done"
 MEASUREMENT = "measurement"
 MEASUREMENTS_REJECTED = "measurements_rejected"
+REMEASURED = "remeasured"
 SOLVED = "solved"
 ESTIMATE = "estimate"
 VOID = "void"
@@ -100,6 +108,9 @@ class OpenTrial:
         end: the measurement source's end-mark data once the motion is done.
         measurements: the distances taken so far, metres, in order.
         rejections: how many times this attempt's distances were rejected.
+        remeasures: how many suspect distances were taken again.
+        slip: why the slip check doubts the trial, when the operator kept the
+            suspect value (empty otherwise).
     """
 
     trial: int
@@ -112,6 +123,8 @@ class OpenTrial:
     end: Mapping[str, Any] = field(default_factory=dict)
     measurements: tuple[float, ...] = ()
     rejections: int = 0
+    remeasures: int = 0
+    slip: str = ""
 
 
 @dataclass(frozen=True)
@@ -132,6 +145,10 @@ class CompletedTrial:
         end: the measurement source's end data.
         note: why the solution is in doubt (empty when clear-cut).
         seq: sequence number (= line in the journal file) of the ``solved`` record.
+        ambiguous: two candidate poses stayed plausible; the trial is left
+            out of every estimate.
+        candidates: the plausible poses of an ambiguous trial (dx m, dy m, dtheta rad).
+        slip: why the slip check doubts the trial (empty when it does not).
     """
 
     trial: int
@@ -147,6 +164,9 @@ class CompletedTrial:
     end: Mapping[str, Any]
     note: str = ""
     seq: int = 0
+    ambiguous: bool = False
+    candidates: tuple[tuple[float, float, float], ...] = ()
+    slip: str = ""
 
 
 @dataclass(frozen=True)
@@ -298,6 +318,21 @@ def _apply(state: SessionState, record: Record) -> SessionState:
             state,
             open_trial=replace(opened, measurements=(), rejections=opened.rejections + 1),
         )
+    if kind == REMEASURED:
+        _expect(opened, record, Phase.MEASURING)
+        index = int(data["index"])
+        if not 0 <= index < len(opened.measurements):
+            raise JournalError(f"record {record.seq}: re-measured distance {index} was not taken")
+        if bool(data["kept"]):
+            return replace(state, open_trial=replace(opened, slip=str(data["reason"])))
+        values = list(opened.measurements)
+        values[index] = float(data["value_m"])
+        return replace(
+            state,
+            open_trial=replace(
+                opened, measurements=tuple(values), remeasures=opened.remeasures + 1
+            ),
+        )
     if kind == VOID:
         return replace(state, open_trial=None, voided=state.voided + 1)
     if kind == SOLVED:
@@ -322,6 +357,9 @@ def _apply(state: SessionState, record: Record) -> SessionState:
             end=opened.end,
             note=str(data.get("reason", "")),
             seq=record.seq,
+            ambiguous=bool(data.get("ambiguous", False)),
+            candidates=tuple(_triple(c) for c in data.get("candidates", [])),
+            slip=str(data.get("slip", "")),
         )
         return replace(state, completed=(*state.completed, done), open_trial=None)
     raise JournalError(f"record {record.seq}: unknown event kind {kind!r}")
@@ -386,10 +424,12 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
     """The completed trials as a trial set (raw-marks kind), in completion order.
 
     Each trial's ``line`` is the journal line of its ``solved`` record;
-    ``flagged``/``note`` say when the floor-mark solution was not clear-cut.
+    ``flagged``/``note`` say when the floor-mark solution was not clear-cut or
+    the slip check doubts it. Ambiguous trials are left out of ``trials`` and
+    listed in ``ambiguous``.
     """
     n_screws = len(description_of_header(state).screws)
-    trials = tuple(
+    as_trials = [
         Trial(
             design=t.design,
             pose_change=np.array(t.pose_change, dtype=np.float64),
@@ -398,19 +438,27 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
                 same_m=t.measurements[:n_screws], cross_m=t.measurements[n_screws:]
             ),
             odometry_end_pose=np.array(t.encoder_end_pose, dtype=np.float64),
-            flagged=not t.clear_cut,
-            note=t.note,
+            flagged=not t.clear_cut or bool(t.slip),
+            note="; ".join(part for part in (t.note, t.slip) if part),
             line=t.seq,
         )
         for t in state.completed
-    )
-    return TrialSet(trials=trials, kind="marks", source=source)
+    ]
+    used = tuple(x for x, t in zip(as_trials, state.completed, strict=True) if not t.ambiguous)
+    left_out = tuple(x for x, t in zip(as_trials, state.completed, strict=True) if t.ambiguous)
+    return TrialSet(trials=used, kind="marks", source=source, ambiguous=left_out)
 
 
 def session_observations(state: SessionState) -> list[Observation]:
     """The completed trials as the estimators' observations (with the
     floor-mark covariance as measurement covariance)."""
     return trials_to_observations(session_trials(state))
+
+
+def ambiguous_trials(state: SessionState) -> tuple[CompletedTrial, ...]:
+    """The completed trials left out of every estimate because two candidate
+    poses stayed plausible (for the verdict: "ambiguous trials left out")."""
+    return tuple(t for t in state.completed if t.ambiguous)
 
 
 def trials_to_observations(trials: TrialSet) -> list[Observation]:

@@ -26,8 +26,9 @@ import numpy as np
 import numpy.typing as npt
 
 from odohil.errors import MeasurementError, ParameterError, TrialFileError
-from odohil.science.floor_marks import MarkDistances, PoseDistribution, solve_marks
+from odohil.science.floor_marks import MarkDistances, PoseDistribution
 from odohil.science.paths import VARIANTS, Design, Variant
+from odohil.science.pose_selection import ParameterBelief, predictive_pose, select_pose
 from odohil.science.robot_description import RobotDescription
 
 FloatArray = npt.NDArray[np.float64]
@@ -74,11 +75,14 @@ class TrialSet:
         trials: the trials.
         kind: ``pose`` or ``marks``, the file's format.
         source: where the trials came from (a path).
+        ambiguous: trials left out because two candidate poses stayed
+            plausible (odohil/science/pose_selection.py); not in ``trials``.
     """
 
     trials: tuple[Trial, ...]
     kind: TrialKind
     source: str = ""
+    ambiguous: tuple[Trial, ...] = ()
 
     def __len__(self) -> int:
         return len(self.trials)
@@ -107,7 +111,11 @@ def read_trials(
         path: the file.
         description: the robot description; required for raw-mark files.
         prior: optional model prediction per design, used to choose among
-            candidate poses of raw-mark rows.
+            candidate poses of raw-mark rows; by default the predictive
+            distribution from the description's ``[priors]`` and the row's
+            odometry (odohil/science/pose_selection.py, as in a live session).
+            Rows whose candidates stay ambiguous are left out and listed in
+            :attr:`TrialSet.ambiguous`; rows the slip check doubts are flagged.
 
     Raises:
         TrialFileError: the file cannot be read, its header is wrong, or any
@@ -140,18 +148,21 @@ def parse_trials(
     kind, columns = _layout(header, description, f"{source}, line {header_line}")
     parser = _RowParser(kind, header, columns, description, prior)
     trials: list[Trial] = []
+    ambiguous: list[Trial] = []
     problems: list[str] = []
     for number, line in lines[1:]:
         fields = [field.strip() for field in next(csv.reader([line]))]
         try:
-            trials.append(parser.parse(fields, number))
+            trial = parser.parse(fields, number)
         except MeasurementError as exc:
             problems.append(f"line {number}: {exc}")
+            continue
+        (ambiguous if number in parser.ambiguous_lines else trials).append(trial)
     if problems:
         raise TrialFileError(
             f"{source}: {len(problems)} bad row(s), none used:\n  " + "\n  ".join(problems)
         )
-    return TrialSet(trials=tuple(trials), kind=kind, source=source)
+    return TrialSet(trials=tuple(trials), kind=kind, source=source, ambiguous=tuple(ambiguous))
 
 
 def write_pose_trials(path: str | Path, rows: Iterable[Trial]) -> None:
@@ -257,6 +268,7 @@ class _RowParser:
         self._description = description
         self._prior = prior
         self._priors: dict[Design, PoseDistribution] = {}
+        self.ambiguous_lines: set[int] = set()
 
     def parse(self, fields: list[str], line: int) -> Trial:
         if len(fields) != len(self._header):
@@ -299,20 +311,28 @@ class _RowParser:
         assert description is not None  # checked with the header
         n_same = len(description.screws)
         marks = MarkDistances(tuple(numbers[:n_same]), tuple(numbers[n_same:]))
-        prior = None
         if self._prior is not None:
             if design not in self._priors:
                 self._priors[design] = self._prior(design)
-            prior = self._priors[design]
-        solution = solve_marks(description, marks, odometry_end, prior=prior)
+            predicted = self._priors[design]
+        else:
+            belief = ParameterBelief.from_priors(description.priors)
+            predicted = predictive_pose(design, belief, odometry_end)
+        selection = select_pose(description, marks, odometry_end, predicted)
+        solution = selection.solution
+        notes = [solution.reason] if solution.reason else []
+        if selection.ambiguous:
+            self.ambiguous_lines.add(line)
+        if selection.slip.tripped:
+            notes.append(selection.slip.message())
         return Trial(
             design=design,
             pose_change=solution.pose_change,
             pose_cov=solution.cov,
             marks=marks,
             odometry_end_pose=odometry_end,
-            flagged=not solution.clear_cut,
-            note=solution.reason,
+            flagged=not solution.clear_cut or selection.slip.tripped,
+            note="; ".join(notes),
             line=line,
         )
 

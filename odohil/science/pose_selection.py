@@ -1,0 +1,334 @@
+"""One pose-selection path for every source: candidates from the floor marks,
+scored against the encoders and the model's predictive distribution, and the
+operator-slip check.
+
+Used the same way live (odohil/session/engine.py) and offline
+(odohil/session/trial_files.py); see docs/measurements.md.
+
+1. **Predictive distribution** of one trial's pose change (dx m, dy m,
+   dtheta rad): the model's moments (odohil/science/moments.py) at a
+   :class:`ParameterBelief` (the current estimate, or the robot description's
+   ``[priors]`` before there is one), widened by the belief's parameter
+   uncertainty (mean derivatives J: J^T Sigma J) and with the variance rates
+   raised by one of their standard deviations; its mean is shifted by how far
+   the encoders' end pose lies from the design's ideal encoder end pose (the
+   motion's tolerance), so candidates are scored against the encoders too.
+2. **Choice**: :func:`odohil.science.floor_marks.solve_marks` with that
+   distribution as prior. The trial is **ambiguous** when a second candidate
+   is within a likelihood ratio of
+   :data:`odohil.science.floor_marks.CLEAR_CUT_LIKELIHOOD_RATIO` of the best.
+3. **Slip check**: linearising the distances at the chosen pose x (Jacobian
+   G, tape sigma s), the innovation of the distances against the prediction
+   is v = (measured - d(x)) + G (x - mu), with covariance S = G P G^T + s^2 I
+   (mu, P the predictive mean and covariance). T = v^T S^-1 v is chi^2 with m
+   degrees of freedom for m clean distances; beyond its (1 - :data:`SLIP_LEVEL`)
+   quantile the check trips. The suspect is the distance whose single
+   outlier shift explains most of T: argmax_k (S^-1 v)_k^2 / (S^-1)_kk.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+import numpy.typing as npt
+from scipy import stats
+
+from odohil.errors import RobotDescriptionError
+from odohil.science.fisher import moment_derivatives
+from odohil.science.floor_marks import (
+    CLEAR_CUT_LIKELIHOOD_RATIO,
+    MarkCandidate,
+    MarkDistances,
+    MarkSolution,
+    PoseDistribution,
+    PosePrior,
+    distance_labels,
+    linearised_marks,
+    solve_marks,
+)
+from odohil.science.parameters import ErrorParameters
+from odohil.science.paths import Design
+from odohil.science.robot_description import ParameterPriors, RobotDescription
+
+FloatArray = npt.NDArray[np.float64]
+
+SLIP_LEVEL = 1e-3
+"""Level of the slip check: clean distances trip it about this rarely when
+the predictive distribution is right (measured in tests/science/
+test_pose_selection.py)."""
+ESTIMATE_INFLATION = 2.0
+"""An estimate's standard errors are widened by this factor before they
+predict the next trial: a belief from few trials must not be overconfident."""
+_LOG_AMBIGUOUS = math.log(CLEAR_CUT_LIKELIHOOD_RATIO)
+
+
+@dataclass(frozen=True, eq=False)
+class ParameterBelief:
+    """A Gaussian belief in the four parameters (SI).
+
+    Attributes:
+        mean: the believed values.
+        cov: 4x4 covariance, order (E_R, E_T, K_theta, K_rho).
+        source: ``priors`` or ``estimate``, for messages.
+    """
+
+    mean: ErrorParameters
+    cov: FloatArray
+    source: str = "priors"
+
+    @classmethod
+    def from_priors(cls, priors: ParameterPriors) -> ParameterBelief:
+        """The robot description's ``[priors]``."""
+        return cls(priors.mean, priors.cov(), "priors")
+
+    @classmethod
+    def from_estimate(
+        cls,
+        values: Sequence[float],
+        stderrs: Sequence[float | None],
+        correlation: Sequence[Sequence[float | None]] | None,
+        priors: ParameterPriors,
+    ) -> ParameterBelief:
+        """An estimate's values, standard errors (None or inf when unknown) and
+        correlation, SI. Standard errors are widened by
+        :data:`ESTIMATE_INFLATION`; a parameter the estimate does not pin (or
+        pins less well than the priors) keeps its prior. Negative variance
+        rates are clipped to 0."""
+        mean = list(float(v) for v in values)
+        mean[2], mean[3] = max(mean[2], 0.0), max(mean[3], 0.0)
+        sd = np.empty(4)
+        corr = np.eye(4)
+        use = np.zeros(4, dtype=bool)
+        for a in range(4):
+            s = stderrs[a]
+            if s is not None and math.isfinite(s) and ESTIMATE_INFLATION * s < priors.sd[a]:
+                sd[a] = ESTIMATE_INFLATION * float(s)
+                use[a] = True
+            else:
+                sd[a] = priors.sd[a]
+                mean[a] = priors.mean.as_tuple()[a]
+        if correlation is not None:
+            for a in range(4):
+                for b in range(4):
+                    r = correlation[a][b]
+                    if a != b and use[a] and use[b] and r is not None and math.isfinite(r):
+                        corr[a, b] = float(r)
+        cov = corr * np.outer(sd, sd)
+        eig = np.linalg.eigvalsh(0.5 * (cov + cov.T))
+        if eig.min() <= 0:
+            cov = np.diag(sd**2)
+        return cls(ErrorParameters(*mean), cov, "estimate")
+
+
+@dataclass(frozen=True, eq=False)
+class SlipCheck:
+    """Does the solved pose agree with the prediction and the distances?
+
+    Attributes:
+        statistic: T (see the module docstring), chi^2 with ``dof`` degrees of
+            freedom for clean distances.
+        dof: the number of distances.
+        limit: the (1 - :data:`SLIP_LEVEL`) quantile.
+        tripped: ``statistic > limit``.
+        suspect: index of the most likely wrong distance.
+        suspect_label: its name (e.g. ``d3 (screw C)``).
+        shift_m: the error of the suspect distance that best explains T, metres
+            (measured minus expected).
+    """
+
+    statistic: float
+    dof: int
+    limit: float
+    tripped: bool
+    suspect: int
+    suspect_label: str
+    shift_m: float
+
+    def message(self) -> str:
+        """Plain-language summary for the operator."""
+        return (
+            f"the trial does not fit the other trials and the encoders (T = "
+            f"{self.statistic:.1f}, limit {self.limit:.1f} at level {SLIP_LEVEL:g}); the "
+            f"most likely wrong distance is {self.suspect_label} (about "
+            f"{self.shift_m * 1000:+.0f} mm off)"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class PoseSelection:
+    """The chosen pose of one trial and what the checks say.
+
+    Attributes:
+        solution: the floor-mark solution, chosen with the predictive prior.
+        predicted: the predictive distribution used.
+        ambiguous: a second candidate stays plausible.
+        plausible: the plausible candidates (best first; one unless ambiguous).
+        slip: the slip check of the chosen pose.
+    """
+
+    solution: MarkSolution
+    predicted: PoseDistribution
+    ambiguous: bool
+    plausible: tuple[MarkCandidate, ...]
+    slip: SlipCheck
+
+
+def predictive_pose(
+    design: Design,
+    belief: ParameterBelief,
+    encoder_end_pose: Sequence[float] | FloatArray | None = None,
+) -> PosePrior:
+    """The predictive distribution of one trial's pose change (dx m, dy m,
+    dtheta rad) under ``belief``, shifted by the encoders' departure from the
+    design's ideal end pose (see the module docstring)."""
+    mean, cov = _moments(design, belief.mean.as_tuple(), _key(belief.cov))
+    mean = mean.copy()
+    if encoder_end_pose is not None:
+        ideal = np.array(design.path().encoder_end_pose())
+        offset = np.asarray(encoder_end_pose, dtype=np.float64) - ideal
+        offset[2] = math.remainder(float(offset[2]), 2.0 * math.pi)
+        mean += offset
+    return PosePrior(mean=mean, cov=cov)
+
+
+def _key(cov: FloatArray) -> tuple[float, ...]:
+    return tuple(float(v) for v in np.asarray(cov, dtype=np.float64).ravel())
+
+
+@lru_cache(maxsize=256)
+def _moments(
+    design: Design, values: tuple[float, ...], cov_key: tuple[float, ...]
+) -> tuple[FloatArray, FloatArray]:
+    params = ErrorParameters(*values)
+    cov_params = np.array(cov_key).reshape(4, 4)
+    derivatives = moment_derivatives(design.path(), params)
+    sd = np.sqrt(np.clip(np.diag(cov_params), 0.0, None))
+    widened = ErrorParameters(params.e_r, params.e_t, params.k_theta + sd[2], params.k_rho + sd[3])
+    # the widened rates give the model's spread; the mean's dependence on
+    # the parameters adds their uncertainty
+    model_cov = moment_derivatives(design.path(), widened).cov
+    cov = model_cov + derivatives.d_mean.T @ cov_params @ derivatives.d_mean
+    return derivatives.mean.copy(), 0.5 * (cov + cov.T)
+
+
+def select_pose(
+    description: RobotDescription,
+    marks: MarkDistances,
+    encoder_end_pose: Sequence[float] | FloatArray,
+    predicted: PoseDistribution,
+) -> PoseSelection:
+    """Choose the pose of one trial and check it (see the module docstring).
+
+    Raises:
+        MeasurementError: malformed distances or poses.
+        InconsistentMeasurementError: no rigid motion explains the distances.
+    """
+    solution = solve_marks(description, marks, encoder_end_pose, prior=predicted)
+    best = solution.candidates[0]
+    plausible = tuple(
+        c
+        for c in solution.candidates
+        if best.log_likelihood - c.log_likelihood < _LOG_AMBIGUOUS and np.isfinite(c.log_likelihood)
+    )
+    slip = slip_check(description, marks, solution.pose_change, predicted)
+    return PoseSelection(
+        solution=solution,
+        predicted=predicted,
+        ambiguous=len(plausible) > 1,
+        plausible=plausible or (best,),
+        slip=slip,
+    )
+
+
+def slip_check(
+    description: RobotDescription,
+    marks: MarkDistances,
+    pose_change: Sequence[float] | FloatArray,
+    predicted: PoseDistribution,
+) -> SlipCheck:
+    """The slip check of a solved pose against the predictive distribution
+    (see the module docstring)."""
+    pose = np.asarray(pose_change, dtype=np.float64)
+    distances, jac = linearised_marks(description, pose)
+    measured = marks.as_array()
+    delta = pose - np.asarray(predicted.mean, dtype=np.float64)
+    delta[2] = math.remainder(float(delta[2]), 2.0 * math.pi)
+    innovation = measured - distances + jac @ delta
+    m = measured.size
+    s = jac @ np.asarray(predicted.cov, dtype=np.float64) @ jac.T
+    s += description.sigma_m**2 * np.eye(m)
+    s_inv = np.linalg.inv(0.5 * (s + s.T))
+    weighted = s_inv @ innovation
+    statistic = float(innovation @ weighted)
+    explained = weighted**2 / np.diag(s_inv)
+    suspect = int(np.argmax(explained))
+    limit = float(stats.chi2.isf(SLIP_LEVEL, m))
+    return SlipCheck(
+        statistic=statistic,
+        dof=m,
+        limit=limit,
+        tripped=statistic > limit,
+        suspect=suspect,
+        suspect_label=distance_labels(description)[suspect],
+        shift_m=float(weighted[suspect] / s_inv[suspect, suspect]),
+    )
+
+
+def required_cross_distances(design: Design) -> int:
+    """How many cross distances a trial of ``design`` needs for its pose to be
+    picked reliably (docs/measurements.md, "How many cross distances"):
+    two for a one-way design (an odd number of legs, k = 1/2, 3/2, ...), one
+    for a closed design."""
+    return 2 if design.n_legs % 2 == 1 else 1
+
+
+def redundancy_problems(description: RobotDescription, designs: Sequence[Design]) -> list[str]:
+    """Why the description's cross distances cannot disambiguate some designs
+    (empty when they can)."""
+    have = len(description.cross_pairs)
+    problems: list[str] = []
+    for design in dict.fromkeys(designs):
+        need = required_cross_distances(design)
+        if have < need:
+            kind = "a one-way design" if need == 2 else "a closed design"
+            problems.append(
+                f"design {design.label()} is {kind} and needs at least {need} cross "
+                f"distance(s) in the robot description's measurement.cross, which lists "
+                f"{have}"
+            )
+    return problems
+
+
+def check_redundancy(description: RobotDescription, designs: Sequence[Design]) -> None:
+    """Refuse, before anything moves, designs the description's cross
+    distances cannot disambiguate.
+
+    Raises:
+        RobotDescriptionError: the reasons, one per design.
+    """
+    problems = redundancy_problems(description, designs)
+    if problems:
+        raise RobotDescriptionError(
+            "the floor marks cannot pick this plan's poses reliably: "
+            + "; ".join(problems)
+            + " (see docs/measurements.md, 'How many cross distances')"
+        )
+
+
+__all__ = [
+    "ESTIMATE_INFLATION",
+    "SLIP_LEVEL",
+    "ParameterBelief",
+    "PoseSelection",
+    "SlipCheck",
+    "check_redundancy",
+    "predictive_pose",
+    "redundancy_problems",
+    "required_cross_distances",
+    "select_pose",
+    "slip_check",
+]

@@ -1,0 +1,64 @@
+"""Issue 8, acceptance: unattended sessions over several seeds end either
+trusted and within 4 standard errors of the fake's truth, or with exit 3 and
+the reason (``verdict.reasons``).
+
+Runs the real ``odohil run ... --measure fake --json`` as a subprocess against
+the fake robot (``fakerobot://``), with the README's robot description (two
+cross distances). The fake runs at the paper's Nomad 150 values.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from odohil.science.parameters import NOMAD150, PARAMETER_NAMES
+
+README = Path(__file__).resolve().parents[2] / "README.md"
+PLANS = ("k=1,l=2,n=20;k=0.5,l=2,n=20", "k=1,l=3,n=15;k=10,l=0.5,n=15")
+SEEDS = (1, 2, 11)
+LIMIT_SE = 4.0
+
+
+def readme_robot() -> str:
+    """The robot.toml of the README's quick start."""
+    text = README.read_text(encoding="utf-8")
+    block = text.split("```toml", 1)[1].split("```", 1)[0]
+    return "\n".join(line.strip() for line in block.strip().splitlines()) + "\n"
+
+
+def _run(tmp_path: Path, plan: str, seed: int) -> subprocess.CompletedProcess[str]:
+    robot = tmp_path / "robot.toml"
+    robot.write_text(readme_robot(), encoding="utf-8")
+    port = f"fakerobot://?seed={seed}&time_scale=2000"
+    args = ["run", "--port", port, "--robot", str(robot), "--plan", plan, "--measure", "fake"]
+    return subprocess.run(
+        [sys.executable, "-m", "odohil", *args, "--session", str(tmp_path / "s"), "--json"],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        env=dict(os.environ),
+        check=False,
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("plan", PLANS)
+@pytest.mark.parametrize("seed", SEEDS)
+def test_session_is_right_or_says_why_not(tmp_path: Path, plan: str, seed: int) -> None:
+    done = _run(tmp_path, plan, seed)
+    assert done.returncode in (0, 3), done.stderr
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    if done.returncode == 3:
+        assert result["verdict"]["reasons"], result.get("verdict")
+        return
+    truth = NOMAD150.to_si_dict()
+    for name in PARAMETER_NAMES:
+        p = result["parameters"][name]
+        off = abs(p["value"] - truth[name]) / p["stderr"]
+        assert off <= LIMIT_SE, f"{name}: {p['value']} is {off:.1f} SE from {truth[name]}"
