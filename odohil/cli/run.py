@@ -21,6 +21,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from odohil.cli.exit_codes import EXIT_BAD_INPUT
 from odohil.driver.link import DEFAULT_BAUD, open_port
 from odohil.driver.robot import NomadRobot
 from odohil.errors import InitError, OdohilError, ParameterError
@@ -37,7 +38,7 @@ from odohil.session.engine import (
     start_session,
 )
 from odohil.session.journal import Journal, Record
-from odohil.session.plan import parse_plan
+from odohil.session.plan import Plan, parse_plan
 from odohil.session.robot_file import load_robot_description
 from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
 from odohil.session.state import SessionState, session_observations
@@ -262,6 +263,16 @@ def session_exit_codes(console: Console) -> Iterator[None]:
         raise typer.Exit(EXIT_ERROR) from None
 
 
+def refuse_unredundant(description: RobotDescription, plan: Plan, console: Console) -> None:
+    """Pre-flight: exit 2 (bad input, nothing moved) when the description's cross
+    distances cannot disambiguate the plan's designs."""
+    try:
+        check_redundancy(description, [item.design for item in plan.items])
+    except OdohilError as exc:
+        console.print(f"[red]error[/]: {exc}")
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+
+
 def default_session_folder() -> Path:
     """``odohil-session-YYYYmmdd-HHMMSS`` in the current directory."""
     return Path(f"odohil-session-{time.strftime('%Y%m%d-%H%M%S')}")
@@ -300,7 +311,7 @@ def run(
     with session_exit_codes(console):
         plan = parse_plan(plan_text)
         description = load_robot_description(robot_file)
-        check_redundancy(description, [item.design for item in plan.items])
+        refuse_unredundant(description, plan, console)
         toml = robot_file.read_text(encoding="utf-8")
         kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
         settings = {
