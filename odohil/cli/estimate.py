@@ -16,9 +16,7 @@ from rich.table import Table
 from odohil import units
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult, Observation, estimate
-from odohil.science.moments import PoseMoments, pose_moments
-from odohil.science.parameters import NOMAD150, PAPER_UNITS
-from odohil.science.paths import Design
+from odohil.science.parameters import PAPER_UNITS
 from odohil.session.robot_file import load_robot_description
 from odohil.session.state import load_session, session_trials
 from odohil.session.trial_files import Trial, TrialSet, read_trials
@@ -29,12 +27,6 @@ class MethodChoice(StrEnum):
 
     joint = "joint"
     paper = "paper"
-
-
-def _prior(design: Design) -> PoseMoments:
-    """The model's prediction at the paper's Nomad 150 values: only used to
-    choose among candidate poses of raw-mark rows."""
-    return pose_moments(design.path(), NOMAD150)
 
 
 def observation_of(trial: Trial) -> Observation:
@@ -56,7 +48,7 @@ def _load(source: Path, robot: Path | None, err: Console) -> TrialSet:
             )
         return session_trials(loaded.state, source=str(source))
     description = load_robot_description(robot) if robot is not None else None
-    return read_trials(source, description, _prior if description is not None else None)
+    return read_trials(source, description)
 
 
 def _paper(name: str, value: float) -> float:
@@ -120,6 +112,7 @@ def register(app: typer.Typer) -> None:
         if as_json:
             data = result.to_json_dict()
             data["flagged_lines"] = [t.line for t in flagged]
+            data["ambiguous_lines"] = [t.line for t in trials.ambiguous]
             typer.echo(json.dumps(data, indent=2))
             return
         out = Console(width=max(120, Console().width))
@@ -130,6 +123,13 @@ def register(app: typer.Typer) -> None:
             out.print(f"  - {reason}", highlight=False)
         for note in result.notes:
             out.print(f"note: {note}", highlight=False)
+        if trials.ambiguous:
+            left_out = ", ".join(str(t.line) for t in trials.ambiguous)
+            out.print(
+                f"ambiguous trials left out (two candidate poses stay plausible), lines: "
+                f"{left_out}",
+                highlight=False,
+            )
         if flagged:
             lines = ", ".join(f"{t.line} ({t.note})" for t in flagged)
             out.print(f"flagged trials (pose from the marks in doubt), lines: {lines}")
