@@ -188,7 +188,8 @@ def test_redundancy_rule() -> None:
 
 
 def test_priors_table() -> None:
-    base = "[screws]\nA = [0.2, 0]\nB = [-0.1, 0.17]\nC = [-0.1, -0.17]\n[measurement]\nsigma_m = 0.001\n"
+    screws = "[screws]\nA = [0.2, 0]\nB = [-0.1, 0.17]\nC = [-0.1, -0.17]\n"
+    base = screws + "[measurement]\nsigma_m = 0.001\n"
     default = parse_robot_description(base)
     assert default.priors.mean == NOMAD150
     custom = parse_robot_description(base + "[priors]\nE_R_deg_per_m = 1.0\nK_rho_sd_m = 1e-3\n")
