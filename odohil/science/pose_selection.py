@@ -16,7 +16,10 @@ Used the same way live (odohil/session/engine.py) and offline
 2. **Choice**: :func:`odohil.science.floor_marks.solve_marks` with that
    distribution as prior. The trial is **ambiguous** when a second candidate
    is within a likelihood ratio of
-   :data:`odohil.science.floor_marks.CLEAR_CUT_LIKELIHOOD_RATIO` of the best.
+   :data:`odohil.science.floor_marks.CLEAR_CUT_LIKELIHOOD_RATIO` of the best
+   AND lies more than :data:`AMBIGUITY_SEPARATION` standard deviations (of
+   the chosen pose's covariance, in some component) away from it: two minima
+   of one bent valley (small, near-identity motions) are not two answers.
 3. **Slip check**: linearising the distances at the chosen pose x (Jacobian
    G, tape sigma s), the innovation of the distances against the prediction
    is v = (measured - d(x)) + G (x - mu), with covariance S = G P G^T + s^2 I
@@ -63,6 +66,9 @@ test_pose_selection.py)."""
 ESTIMATE_INFLATION = 2.0
 """An estimate's standard errors are widened by this factor before they
 predict the next trial: a belief from few trials must not be overconfident."""
+AMBIGUITY_SEPARATION = 5.0
+"""Candidates closer than this many standard deviations of the chosen pose
+(in every component) count as the same answer."""
 _LOG_AMBIGUOUS = math.log(CLEAR_CUT_LIKELIHOOD_RATIO)
 
 
@@ -229,19 +235,29 @@ def select_pose(
     """
     solution = solve_marks(description, marks, encoder_end_pose, prior=predicted)
     best = solution.candidates[0]
-    plausible = tuple(
+    sd = np.sqrt(np.clip(np.diag(solution.cov), 0.0, None)) + 1e-12
+    rivals = [
         c
-        for c in solution.candidates
-        if best.log_likelihood - c.log_likelihood < _LOG_AMBIGUOUS and np.isfinite(c.log_likelihood)
-    )
+        for c in solution.candidates[1:]
+        if best.log_likelihood - c.log_likelihood < _LOG_AMBIGUOUS
+        and np.isfinite(c.log_likelihood)
+        and _separation(c.pose, best.pose, sd) > AMBIGUITY_SEPARATION
+    ]
+    plausible = (best, *rivals)
     slip = slip_check(description, marks, solution.pose_change, predicted)
     return PoseSelection(
         solution=solution,
         predicted=predicted,
         ambiguous=len(plausible) > 1,
-        plausible=plausible or (best,),
+        plausible=plausible,
         slip=slip,
     )
+
+
+def _separation(a: FloatArray, b: FloatArray, sd: FloatArray) -> float:
+    delta = np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)
+    delta[2] = math.remainder(float(delta[2]), 2.0 * math.pi)
+    return float(np.max(np.abs(delta) / sd))
 
 
 def slip_check(

@@ -500,7 +500,7 @@ def model_check_svg(report: SessionReport) -> str:
     assert result is not None
     d2 = list(result.model_check.mahalanobis2)
     n = len(d2)
-    trials = [float(t.trial) for t in report.state.completed]
+    trials = [float(t.trial) for t in report.state.completed if not t.ambiguous]
     limit = float(stats.chi2.isf(0.01 / max(n, 1), 3))
     plot = SvgPlot(
         "Model check: squared Mahalanobis distance per trial",
