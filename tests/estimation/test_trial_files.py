@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from odohil.errors import TrialFileError
-from odohil.science.floor_marks import PosePrior, marks_from_pose
+from odohil.science.floor_marks import MarkDistances, PosePrior, marks_from_pose, solve_marks
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription, Screw
 from odohil.session.trial_files import Trial, read_trials, write_pose_trials
@@ -133,9 +133,18 @@ def test_doubtful_marks_are_flagged_with_a_note_and_the_prior_can_decide(tmp_pat
         tmp_path,
         "k,l_m,variant,d1_m,d2_m,d3_m,cross1_m\n" + mark_row(ONE_CROSS, "0.5,1,turn", pose) + "\n",
     )
-    (alone,) = read_trials(path, ONE_CROSS).trials
-    assert alone.flagged
-    assert "equally well" in alone.note
+    # Without a prior the marks alone cannot choose (the old path).
+    n = len(ONE_CROSS.screws)
+    values = [float(v) for v in mark_row(ONE_CROSS, "0.5,1,turn", pose).split(",")[3:]]
+    marks = MarkDistances(tuple(values[:n]), tuple(values[n:]))
+    alone = solve_marks(ONE_CROSS, marks, (1.0, 0.0, 0.0))
+    assert not alone.clear_cut
+    assert "equally well" in alone.reason
+    # By default a trial file takes the one selection path: the description's
+    # priors and the odometry end pose decide.
+    (default,) = read_trials(path, ONE_CROSS).trials
+    assert not default.flagged, default.note
+    assert default.pose_change == pytest.approx(pose, abs=1e-8)
 
     asked: list[Design] = []
 
