@@ -1,0 +1,160 @@
+"""The one pose-selection path in a real session (engine against fakerobot://):
+ambiguous trials are journaled, left out of every estimate and listed; an
+operator's slip is caught and the suspect distance re-measured.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import serial
+
+import fakes  # noqa: F401  (registers fakerobot://)
+from odohil.driver.robot import NomadRobot
+from odohil.science.robot_description import RobotDescription
+from odohil.session import state as ev
+from odohil.session.engine import (
+    IncrementalLiveEstimator,
+    MotionSettings,
+    SessionEngine,
+    description_of,
+    start_session,
+)
+from odohil.session.journal import read_journal
+from odohil.session.plan import parse_plan
+from odohil.session.sources import FakeTruthSource, MeasurementSource, TrialContext
+from odohil.session.state import (
+    SessionState,
+    ambiguous_trials,
+    replay,
+    session_observations,
+    session_trials,
+)
+from tests.report.session_factory import PortTruth
+from tests.session.helpers import ROBOT_TOML
+
+NO_CROSS_TOML = ROBOT_TOML.replace('cross = [["A", "B"], ["B", "C"]]\n', "")
+TYPO_M = 0.01
+
+
+class TypingSlips(FakeTruthSource):
+    """The fake's tape readings, but from trial ``first`` on the operator types
+    distance ``trial % m`` 10 mm too long on the first reading of the attempt
+    (a re-measure, or the set taken again after a rejection, is typed right)."""
+
+    def __init__(self, *args: Any, first: int, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.first = first
+        self.slipped: dict[int, int] = {}
+
+    def distance(self, ctx: TrialContext, index: int) -> float:
+        value = super().distance(ctx, index)
+        slip = ctx.trial >= self.first and ctx.rejections == 0
+        if slip and index == ctx.trial % len(ctx.labels):
+            self.slipped[ctx.trial] = index
+            return value + TYPO_M
+        return value
+
+
+def _run(
+    folder: Path,
+    toml: str,
+    plan_text: str,
+    seed: int,
+    make_source: Any = None,
+) -> tuple[SessionState, MeasurementSource]:
+    plan = parse_plan(plan_text)
+    journal, state = start_session(folder, toml, plan, measure="fake", settings={})
+    port = serial.serial_for_url(f"fakerobot://?seed={seed}&time_scale=2000", timeout=0.5)
+    with journal, NomadRobot.from_port(port) as robot:
+        description: RobotDescription = description_of(state)
+        source = (make_source or FakeTruthSource)(PortTruth(port), description, seed=seed)
+        engine = SessionEngine(
+            journal,
+            state,
+            robot,
+            source,
+            estimator=IncrementalLiveEstimator(),
+            motion=MotionSettings(speeds=(1.0, 3.0), accelerations=(2.0, 6.0), watchdog_s=0.0),
+        )
+        return engine.run(), source
+
+
+def _records(folder: Path, kind: str) -> list[Mapping[str, Any]]:
+    return [r.data for r in read_journal(folder).records if r.kind == kind]
+
+
+def test_ambiguous_trials_are_journaled_left_out_and_listed(tmp_path: Path) -> None:
+    """Without cross distances a closed trial's motion and its inverse leave the
+    same marks and the prediction sits between them: ambiguous (pre-flight
+    would refuse this robot; the engine must still be honest)."""
+    folder = tmp_path / "s"
+    state, _ = _run(folder, NO_CROSS_TOML, "k=1,l=1,n=8", seed=4)
+    solved = _records(folder, ev.SOLVED)
+    flagged = [d for d in solved if d.get("ambiguous")]
+    assert flagged, "expected ambiguous trials without cross distances"
+    for data in flagged:
+        assert len(data["candidates"]) >= 2
+    replayed = replay(read_journal(folder).records)
+    left_out = ambiguous_trials(replayed)
+    assert [t.trial for t in left_out] == [d["trial"] for d in flagged]
+    trials = session_trials(replayed)
+    assert len(trials.trials) + len(trials.ambiguous) == len(state.completed)
+    assert len(session_observations(replayed)) == len(state.completed) - len(left_out)
+    estimates = _records(folder, ev.ESTIMATE)
+    assert all(e["n_trials"] <= len(state.completed) for e in estimates)
+
+    done = subprocess.run(
+        [sys.executable, "-m", "odohil", "estimate", str(folder), "--json"],
+        capture_output=True,
+        text=True,
+        env=dict(os.environ),
+        check=False,
+    )
+    if done.returncode in (0, 3):
+        result = json.loads(done.stdout)
+        assert result["ambiguous_lines"] == [t.seq for t in left_out]
+        assert result["n_trials"] == len(state.completed) - len(left_out)
+
+
+def test_a_slip_is_remeasured_and_journaled(tmp_path: Path) -> None:
+    """From trial 5 on every trial has one distance typed 10 mm long. Each is
+    either refused as inconsistent (the old check) or caught by the slip check,
+    which names the typed distance and re-measures just that one."""
+    folder = tmp_path / "s"
+
+    def source(*args: Any, **kwargs: Any) -> TypingSlips:
+        return TypingSlips(*args, first=5, **kwargs)
+
+    state, used = _run(folder, ROBOT_TOML, "k=1,l=2,n=6;k=4,l=0.5,n=6", seed=7, make_source=source)
+    assert isinstance(used, TypingSlips)
+    remeasured = _records(folder, ev.REMEASURED)
+    assert remeasured, "no slip was caught"
+    for data in remeasured:
+        assert data["index"] == used.slipped[data["trial"]]
+        assert not data["kept"]
+        assert data["value_m"] != data["previous_m"]
+        assert data["label"] in data["reason"]
+    by_trial = {t.trial: t for t in state.completed}
+    for data in remeasured:
+        trial = by_trial[data["trial"]]
+        assert trial.measurements[data["index"]] == data["value_m"]
+    caught = {d["trial"] for d in remeasured} | {
+        d["trial"] for d in _records(folder, ev.MEASUREMENTS_REJECTED)
+    }
+    passed = [t for t in state.completed if t.trial >= 5 and t.trial not in caught]
+    # a typo that neither check catches must leave the pose within 4 sd
+    for t in passed:
+        truth = FakeTruthSource.true_pose_change  # the fake's truth, journaled
+        ctx = TrialContext(t.trial, t.attempt, 12, t.design, (), t.start, t.end)
+        true = truth(used, ctx)
+        sd = t.cov[2][2] ** 0.5
+        error = abs(math.remainder(t.pose_change[2] - true[2], 2 * math.pi))
+        assert error <= 4 * sd, (t.trial, error / sd)
