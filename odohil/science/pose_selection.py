@@ -10,7 +10,9 @@ Used the same way live (odohil/session/engine.py) and offline
    :class:`ParameterBelief` (the current estimate, or the robot description's
    ``[priors]`` before there is one), widened by the belief's parameter
    uncertainty (mean derivatives J: J^T Sigma J) and with the variance rates
-   raised by one of their standard deviations; its mean is shifted by how far
+   raised by one of their standard deviations (and never below the priors'
+   values: an estimate from a few trials often puts K_theta near 0, and a
+   prediction that tight would call clean trials slips); its mean is shifted by how far
    the encoders' end pose lies from the design's ideal encoder end pose (the
    motion's tolerance), so candidates are scored against the encoders too.
 2. **Choice**: :func:`odohil.science.floor_marks.solve_marks` with that
@@ -80,11 +82,14 @@ class ParameterBelief:
         mean: the believed values.
         cov: 4x4 covariance, order (E_R, E_T, K_theta, K_rho).
         source: ``priors`` or ``estimate``, for messages.
+        rate_floor: the least K_theta (rad^2/m) and K_rho (m) a prediction
+            assumes (the priors' values for a belief from an estimate).
     """
 
     mean: ErrorParameters
     cov: FloatArray
     source: str = "priors"
+    rate_floor: tuple[float, float] = (0.0, 0.0)
 
     @classmethod
     def from_priors(cls, priors: ParameterPriors) -> ParameterBelief:
@@ -127,7 +132,8 @@ class ParameterBelief:
         eig = np.linalg.eigvalsh(0.5 * (cov + cov.T))
         if eig.min() <= 0:
             cov = np.diag(sd**2)
-        return cls(ErrorParameters(*mean), cov, "estimate")
+        floor = (priors.mean.k_theta, priors.mean.k_rho)
+        return cls(ErrorParameters(*mean), cov, "estimate", floor)
 
 
 @dataclass(frozen=True, eq=False)
@@ -191,7 +197,7 @@ def predictive_pose(
     """The predictive distribution of one trial's pose change (dx m, dy m,
     dtheta rad) under ``belief``, shifted by the encoders' departure from the
     design's ideal end pose (see the module docstring)."""
-    mean, cov = _moments(design, belief.mean.as_tuple(), _key(belief.cov))
+    mean, cov = _moments(design, belief.mean.as_tuple(), _key(belief.cov), belief.rate_floor)
     mean = mean.copy()
     if encoder_end_pose is not None:
         ideal = np.array(design.path().encoder_end_pose())
@@ -207,13 +213,21 @@ def _key(cov: FloatArray) -> tuple[float, ...]:
 
 @lru_cache(maxsize=256)
 def _moments(
-    design: Design, values: tuple[float, ...], cov_key: tuple[float, ...]
+    design: Design,
+    values: tuple[float, ...],
+    cov_key: tuple[float, ...],
+    floor: tuple[float, float],
 ) -> tuple[FloatArray, FloatArray]:
     params = ErrorParameters(*values)
     cov_params = np.array(cov_key).reshape(4, 4)
     derivatives = moment_derivatives(design.path(), params)
     sd = np.sqrt(np.clip(np.diag(cov_params), 0.0, None))
-    widened = ErrorParameters(params.e_r, params.e_t, params.k_theta + sd[2], params.k_rho + sd[3])
+    widened = ErrorParameters(
+        params.e_r,
+        params.e_t,
+        max(params.k_theta + sd[2], floor[0]),
+        max(params.k_rho + sd[3], floor[1]),
+    )
     # the widened rates give the model's spread; the mean's dependence on
     # the parameters adds their uncertainty
     model_cov = moment_derivatives(design.path(), widened).cov

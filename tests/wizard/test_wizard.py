@@ -1,5 +1,9 @@
 """The real ``odohil wizard`` in a pseudo-terminal against the fake robot process.
 
+A second session: a 10 mm typo that the consistency test cannot see is caught
+by the slip check, which names the distance; re-entering it alone completes
+the trial.
+
 One session of three trials: bad inputs and an inconsistent set are refused
 with their reasons, Ctrl-C during the third motion stops the robot, journals
 and exits 130, and a second wizard on the same session completes it with
@@ -9,6 +13,7 @@ true pose change (its truth side channel).
 
 from __future__ import annotations
 
+import math
 import os
 import re
 import sys
@@ -16,10 +21,17 @@ import time
 from pathlib import Path
 
 import pexpect
+import pytest
 
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
-from odohil.science.floor_marks import distance_labels, marks_from_pose
+from odohil.errors import InconsistentMeasurementError
+from odohil.science.floor_marks import (
+    MarkDistances,
+    distance_labels,
+    marks_from_pose,
+    solve_marks,
+)
 from odohil.science.robot_description import parse_robot_description
 from odohil.session import state as ev
 from odohil.session.journal import read_journal
@@ -30,6 +42,7 @@ from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 DESCRIPTION = parse_robot_description(ROBOT_TOML)
 LABELS = distance_labels(DESCRIPTION)
 TIMEOUT_S = 90
+ORIGIN = (0.0, 0.0, 0.0)
 LOG = Path(os.environ["WIZARD_TEST_LOG"]) if os.environ.get("WIZARD_TEST_LOG") else None
 
 
@@ -174,3 +187,67 @@ def _type_all_from(child: pexpect.spawn, values: list[float], first: int, done: 
     for i in range(first, len(values)):
         then = _prompt(i + 1) if i + 1 < len(values) else done
         _answer(child, repr(values[i]), then)
+
+
+def _absorbed_typo(values: list[float]) -> tuple[int, float]:
+    """The 10 mm typo (distance index, typed value) that the consistency test
+    cannot see and that puts the solved heading the most standard deviations
+    from the truth (``values`` are the exact distances): the dangerous kind."""
+    n = len(DESCRIPTION.screws)
+    exact = solve_marks(DESCRIPTION, MarkDistances(tuple(values[:n]), tuple(values[n:])), ORIGIN)
+    best: tuple[float, int, float] | None = None
+    for index in range(len(values)):
+        for sign in (1.0, -1.0):
+            typed = list(values)
+            typed[index] += sign * 0.010
+            if typed[index] < 0:
+                continue
+            marks = MarkDistances(tuple(typed[:n]), tuple(typed[n:]))
+            try:
+                solved = solve_marks(DESCRIPTION, marks, ORIGIN)
+            except InconsistentMeasurementError:
+                continue
+            shift = abs(math.remainder(solved.pose_change[2] - exact.pose_change[2], math.tau))
+            sigmas = shift / math.sqrt(solved.cov[2, 2])
+            if best is None or sigmas > best[0]:
+                best = (sigmas, index, typed[index])
+    assert best is not None, "every 10 mm typo is inconsistent here"
+    assert best[0] > 4.0, f"no 10 mm typo puts the heading over 4 sd off ({best[0]:.1f})"
+    return best[1], best[2]
+
+
+def test_a_typo_is_caught_and_only_that_distance_is_re_entered(tmp_path: Path) -> None:
+    """Measured: d3 typed 0.0278 instead of 0.0178 was accepted as clean with
+    the heading 8 sigma off. Now the slip check asks to re-measure the typed
+    distance by name, and re-entering it alone completes the trial."""
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT_TOML)
+    folder = tmp_path / "session"
+    args = ["--seed", "5", "--time-scale", "20", "--no-pacing"]
+    with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
+        child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", "k=1,l=3,n=4",
+                        "--session", str(folder)])  # fmt: skip
+        for trial in (1, 2, 3):
+            values = _marks(child, truth)
+            child.expect(_prompt(0))
+            _type_all(child, values, f"Trial {trial} solved")
+        values = _marks(child, truth)
+        child.expect(_prompt(0))
+        index, typed = _absorbed_typo(values)
+        wrong = list(values)
+        wrong[index] = typed
+        _type_all(child, wrong, re.escape(f"Re-measure {LABELS[index]}, metres"))
+        child.sendline(repr(values[index]))
+        child.expect("Trial 4 solved")
+        child.expect(r"Session complete:\S* 4 trials")
+        child.expect(pexpect.EOF)
+        child.close()
+    records = read_journal(folder).records
+    remeasured = [r.data for r in records if r.kind == ev.REMEASURED]
+    assert [(d["trial"], d["index"], d["kept"]) for d in remeasured] == [(4, index, False)]
+    assert sum(1 for r in records if r.kind == ev.MEASUREMENT and r.data["trial"] == 4) == len(
+        values
+    )
+    state = replay(records)
+    assert state.completed[-1].measurements == pytest.approx(values)
+    assert not state.completed[-1].slip
