@@ -293,6 +293,21 @@ class WizardPrompts:
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
 
+    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> str:
+        """The trial is ambiguous: ask for one more cross distance, named by its screws."""
+        self.console.print(f"[yellow]two poses fit these marks:[/] {reason}")
+        while True:
+            text = self._input(
+                f"Measure one more distance, {label}, metres (press Enter if you cannot; "
+                "the trial is then left out): "
+            )
+            if not text.strip():
+                return ""
+            try:
+                return repr(parse_metres(text))
+            except MeasurementError as exc:
+                self.console.print(f"[red]refused:[/] {exc}; type it again")
+
     def show_rejection(self, ctx: TrialContext, reason: str) -> None:
         """The set of distances fits no rigid motion: say why, then re-ask the set."""
         self.console.print(

@@ -226,6 +226,15 @@ def linearised_marks(
     return residuals[0] * geometry.sigma, jacobian[0] * geometry.sigma
 
 
+def pose_covariance(
+    description: RobotDescription, pose_change: Sequence[float] | FloatArray
+) -> FloatArray:
+    """sigma^2 (J^T J)^-1 of the description's distances at a pose (dx m, dy m,
+    dtheta rad); a pseudo-inverse when they do not pin the pose."""
+    cov, _ = _covariance(_pose3(pose_change, "pose_change"), _geometry(description))
+    return cov
+
+
 def solve_marks(
     description: RobotDescription,
     marks: MarkDistances,

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -53,6 +53,8 @@ from odohil.science.floor_marks import (
     PosePrior,
     distance_labels,
     linearised_marks,
+    marks_from_pose,
+    pose_covariance,
     solve_marks,
 )
 from odohil.science.parameters import ErrorParameters
@@ -268,6 +270,70 @@ def select_pose(
     )
 
 
+def unmeasured_pair(description: RobotDescription) -> tuple[str, str]:
+    """A cross distance (start screw, end screw) the description does not list:
+    the one to ask for when a trial is ambiguous (the first pair, in screw
+    order, of screws as far apart as possible)."""
+    listed = set(description.cross_pairs)
+    points = description.positions()
+    names = description.screw_names
+    pairs = [
+        (float(np.hypot(*(points[i] - points[j]))), names[i], names[j])
+        for i in range(len(names))
+        for j in range(len(names))
+        if i != j and (names[i], names[j]) not in listed
+    ]
+    _, start, end = max(pairs, key=lambda p: p[0])
+    return start, end
+
+
+def resolve_with_extra(
+    description: RobotDescription,
+    marks: MarkDistances,
+    selection: PoseSelection,
+    extra: Sequence[tuple[str, str, float]],
+) -> PoseSelection:
+    """Re-score an ambiguous trial's plausible candidates with extra cross
+    distances (start screw, end screw, metres) measured after the fact; the
+    trial stays ambiguous unless one candidate is then at least
+    :data:`CLEAR_CUT_LIKELIHOOD_RATIO` times as likely as every other."""
+    if not extra:
+        return selection
+    pairs = tuple((start, end) for start, end, _ in extra)
+    measured = np.array([value for _, _, value in extra])
+    scored: list[tuple[float, MarkCandidate]] = []
+    for candidate in selection.plausible:
+        log_likelihood = candidate.log_likelihood
+        for (start, end), value in zip(pairs, measured, strict=True):
+            probe = replace(description, cross_pairs=((start, end),))
+            expected = marks_from_pose(probe, candidate.pose).cross_m[0]
+            log_likelihood -= 0.5 * ((value - expected) / description.sigma_m) ** 2
+        scored.append((log_likelihood, candidate))
+    scored.sort(key=lambda item: -item[0])
+    best_ll, best = scored[0]
+    rivals = tuple(c for ll, c in scored[1:] if best_ll - ll < _LOG_AMBIGUOUS)
+    solution = selection.solution
+    if best is not solution.candidates[0]:
+        solution = replace(
+            solution,
+            pose_change=best.pose,
+            cov=pose_covariance(description, best.pose),
+            chi2=best.chi2,
+        )
+    solution = replace(
+        solution,
+        clear_cut=not rivals,
+        reason="" if not rivals else solution.reason,
+    )
+    return replace(
+        selection,
+        solution=solution,
+        ambiguous=bool(rivals),
+        plausible=(best, *rivals),
+        slip=slip_check(description, marks, best.pose, selection.predicted),
+    )
+
+
 def _separation(a: FloatArray, b: FloatArray, sd: FloatArray) -> float:
     delta = np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)
     delta[2] = math.remainder(float(delta[2]), 2.0 * math.pi)
@@ -359,6 +425,8 @@ __all__ = [
     "predictive_pose",
     "redundancy_problems",
     "required_cross_distances",
+    "resolve_with_extra",
     "select_pose",
     "slip_check",
+    "unmeasured_pair",
 ]

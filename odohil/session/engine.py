@@ -59,7 +59,13 @@ from odohil.errors import InconsistentMeasurementError, JournalError, Measuremen
 from odohil.science.estimators import IncrementalEstimator, Observation
 from odohil.science.floor_marks import MarkDistances, distance_labels
 from odohil.science.parameters import PARAMETER_NAMES
-from odohil.science.pose_selection import ParameterBelief, predictive_pose, select_pose
+from odohil.science.pose_selection import (
+    ParameterBelief,
+    predictive_pose,
+    resolve_with_extra,
+    select_pose,
+    unmeasured_pair,
+)
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session import state as ev
 from odohil.session.journal import Journal, Record, TornRecord
@@ -507,6 +513,25 @@ class SessionEngine:
                 self.source.rejected(self._context(opened), str(exc))
                 self._log(ev.MEASUREMENTS_REJECTED, {**ids, "reason": str(exc)})
                 continue
+            selection = resolve_with_extra(self.description, marks, selection, opened.extra)
+            if selection.ambiguous and not opened.extra:
+                start, end = unmeasured_pair(self.description)
+                label = f"{start} start to {end} end"
+                value = self.source.extra_distance(
+                    self._context(opened), (start, end), label, selection.solution.reason
+                )
+                if value is not None:
+                    self._log(
+                        ev.EXTRA_DISTANCE,
+                        {
+                            **ids,
+                            "start": start,
+                            "end": end,
+                            "label": label,
+                            "value_m": check_distance(value, label),
+                        },
+                    )
+                    continue
             slip = selection.slip
             if slip.tripped and not opened.slip and opened.remeasures < self.max_remeasures:
                 reason = slip.message()

@@ -97,6 +97,15 @@ class MeasurementSource(Protocol):
         keep the value taken (the trial is then flagged)."""
         ...
 
+    def extra_distance(
+        self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
+    ) -> float | None:
+        """The trial is ambiguous (``reason``): the cross distance from the start
+        mark of screw ``pair[0]`` to the end mark of ``pair[1]`` (named
+        ``label``), metres, or None when it cannot be had (the trial is then
+        left out of the estimate)."""
+        ...
+
 
 class OperatorPrompts(Protocol):
     """The operator's side of a measurement (implemented by a user interface)."""
@@ -122,6 +131,12 @@ class OperatorPrompts(Protocol):
     def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> str:
         """Ask to measure distance ``ctx.labels[index]`` again (``reason``: the
         slip check's message); return what was typed, empty to keep the value."""
+        ...
+
+    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> str:
+        """Ask for one more cross distance, ``label`` (e.g. ``A start to C end``),
+        because the trial is ambiguous (``reason``); return what was typed,
+        empty when it cannot be measured."""
         ...
 
 
@@ -164,6 +179,19 @@ class OperatorSource:
                 return None
             try:
                 return check_distance(answer, ctx.labels[index])
+            except MeasurementError as exc:
+                reason = str(exc)
+
+    def extra_distance(
+        self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
+    ) -> float | None:
+        """Ask the operator for the named cross distance; None if skipped."""
+        while True:
+            answer = self.prompts.ask_extra_distance(ctx, label, reason).strip()
+            if not answer:
+                return None
+            try:
+                return check_distance(answer, label)
             except MeasurementError as exc:
                 reason = str(exc)
 
@@ -266,6 +294,12 @@ class FakeTruthSource:
         seed = [self.seed, ctx.trial, ctx.attempt, ctx.rejections, 1 + ctx.remeasures]
         return self._draw(ctx, index, seed)
 
+    def extra_distance(
+        self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
+    ) -> None:
+        """An unattended run takes no extra distances: the trial is left out."""
+        return None
+
 
 class RecordedSource:
     """Distances taken beforehand: row k (1-based) serves trial k of the plan
@@ -320,6 +354,12 @@ class RecordedSource:
 
     def remeasure(self, ctx: TrialContext, index: int, reason: str) -> None:
         """Recorded distances cannot be retaken: keep the value (the trial is flagged)."""
+        return None
+
+    def extra_distance(
+        self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
+    ) -> None:
+        """Recorded sessions have no extra distances: the trial is left out."""
         return None
 
     def rejected(self, ctx: TrialContext, reason: str) -> None:

@@ -25,6 +25,9 @@ Event kinds, in the order a session writes them (``data`` members in brackets):
   distance was taken again, or the operator kept it [``trial``, ``attempt``,
   ``index``, ``label``, ``reason``, ``previous_m``, ``value_m`` (null when
   kept), ``kept``]; a kept value flags the trial;
+- ``extra_distance``: an ambiguous trial's extra cross distance, asked for
+  by name [``trial``, ``attempt``, ``start``, ``end`` (screw names),
+  ``label``, ``value_m``];
 - ``solved``: the pose change; the trial is complete [``trial``, ``attempt``,
   ``pose_change``, ``cov``, ``chi2``, ``clear_cut``, ``reason``, and
   optionally ``ambiguous`` (two candidate poses stay plausible: the trial is
@@ -74,6 +77,7 @@ MOTION_DONE = "motion_done"
 MEASUREMENT = "measurement"
 MEASUREMENTS_REJECTED = "measurements_rejected"
 REMEASURED = "remeasured"
+EXTRA_DISTANCE = "extra_distance"
 SOLVED = "solved"
 ESTIMATE = "estimate"
 VOID = "void"
@@ -111,6 +115,8 @@ class OpenTrial:
         remeasures: how many suspect distances were taken again.
         slip: why the slip check doubts the trial, when the operator kept the
             suspect value (empty otherwise).
+        extra: extra cross distances (start screw, end screw, metres) taken
+            to settle an ambiguous choice.
     """
 
     trial: int
@@ -125,6 +131,7 @@ class OpenTrial:
     rejections: int = 0
     remeasures: int = 0
     slip: str = ""
+    extra: tuple[tuple[str, str, float], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -316,7 +323,7 @@ def _apply(state: SessionState, record: Record) -> SessionState:
         _expect(opened, record, Phase.MEASURING)
         return replace(
             state,
-            open_trial=replace(opened, measurements=(), rejections=opened.rejections + 1),
+            open_trial=replace(opened, measurements=(), rejections=opened.rejections + 1, extra=()),
         )
     if kind == REMEASURED:
         _expect(opened, record, Phase.MEASURING)
@@ -333,6 +340,10 @@ def _apply(state: SessionState, record: Record) -> SessionState:
                 opened, measurements=tuple(values), remeasures=opened.remeasures + 1
             ),
         )
+    if kind == EXTRA_DISTANCE:
+        _expect(opened, record, Phase.MEASURING)
+        extra = (str(data["start"]), str(data["end"]), float(data["value_m"]))
+        return replace(state, open_trial=replace(opened, extra=(*opened.extra, extra)))
     if kind == VOID:
         return replace(state, open_trial=None, voided=state.voided + 1)
     if kind == SOLVED:

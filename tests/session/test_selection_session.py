@@ -11,6 +11,7 @@ import os
 import subprocess
 import sys
 from collections.abc import Mapping
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +19,7 @@ import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
 from odohil.driver.robot import NomadRobot
+from odohil.science.floor_marks import marks_from_pose
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
 from odohil.session.engine import (
@@ -29,7 +31,13 @@ from odohil.session.engine import (
 )
 from odohil.session.journal import read_journal
 from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource, MeasurementSource, TrialContext
+from odohil.session.sources import (
+    FakeTruthSource,
+    MeasurementSource,
+    OperatorSource,
+    TrialContext,
+    relative_true_pose,
+)
 from odohil.session.state import (
     SessionState,
     ambiguous_trials,
@@ -158,3 +166,79 @@ def test_a_slip_is_remeasured_and_journaled(tmp_path: Path) -> None:
         sd = t.cov[2][2] ** 0.5
         error = abs(math.remainder(t.pose_change[2] - true[2], 2 * math.pi))
         assert error <= 4 * sd, (t.trial, error / sd)
+
+
+class TapeOperator:
+    """An operator with a perfect tape: reads the fake's true pose at the marks
+    and answers every prompt with the exact distance (the user's side of
+    :class:`OperatorPrompts`)."""
+
+    def __init__(self, port: serial.Serial, description: RobotDescription) -> None:
+        self.truth = PortTruth(port)
+        self.description = description
+        self.start: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        self.change: tuple[float, float, float] = (0.0, 0.0, 0.0)
+        self.extra_labels: list[str] = []
+        self.truths: dict[int, tuple[float, float, float]] = {}
+
+    def confirm_start_marks(self, ctx: TrialContext) -> None:
+        self.start = self.truth.true_pose()
+
+    def confirm_end_marks(self, ctx: TrialContext) -> None:
+        self.change = relative_true_pose(
+            self.start, self.truth.true_pose(), ctx.design.path().winding_rad
+        )
+        self.truths[ctx.trial] = self.change
+
+    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
+        return repr(float(marks_from_pose(self.description, self.change).as_array()[index]))
+
+    def show_rejection(self, ctx: TrialContext, reason: str) -> None:
+        raise AssertionError(f"exact distances rejected: {reason}")
+
+    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> str:
+        return self.ask_distance(ctx, index, "")
+
+    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> str:
+        self.extra_labels.append(label)
+        start, end = label.replace(" start to ", " ").replace(" end", "").split()
+        probe = replace(self.description, cross_pairs=((start, end),))
+        return repr(marks_from_pose(probe, self.change).cross_m[0])
+
+
+def test_the_operator_settles_an_ambiguous_trial_with_one_more_named_distance(
+    tmp_path: Path,
+) -> None:
+    """Without cross distances closed trials are ambiguous; the operator is
+    asked for one more distance named by its screws; a trial it settles is
+    solved to the true pose and used (one that even the extra distance cannot
+    settle, a motion of a few millimetres, stays left out)."""
+    folder = tmp_path / "s"
+    plan = parse_plan("k=1,l=1,n=4")
+    journal, state = start_session(folder, NO_CROSS_TOML, plan, measure="operator", settings={})
+    port = serial.serial_for_url("fakerobot://?seed=4&time_scale=2000", timeout=0.5)
+    with journal, NomadRobot.from_port(port) as robot:
+        operator = TapeOperator(port, description_of(state))
+        engine = SessionEngine(
+            journal,
+            state,
+            robot,
+            OperatorSource(operator),
+            estimator=IncrementalLiveEstimator(),
+            motion=MotionSettings(speeds=(1.0, 3.0), accelerations=(2.0, 6.0), watchdog_s=0.0),
+        )
+        final = engine.run()
+    extra = _records(folder, ev.EXTRA_DISTANCE)
+    assert extra, "no ambiguous trial was met"
+    assert operator.extra_labels == [d["label"] for d in extra]
+    for data in extra:
+        assert data["label"] == f"{data['start']} start to {data['end']} end"
+    asked = {d["trial"] for d in extra}
+    settled = [t for t in final.completed if t.trial in asked and not t.ambiguous]
+    assert settled
+    for trial in settled:
+        truth = operator.truths[trial.trial]
+        for axis in range(3):
+            error = abs(trial.pose_change[axis] - truth[axis])
+            assert error <= 5 * trial.cov[axis][axis] ** 0.5 + 1e-9, (trial.trial, axis)
+    assert {t.trial for t in ambiguous_trials(final)} <= asked
