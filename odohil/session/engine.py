@@ -573,18 +573,20 @@ class SessionEngine:
             data["candidates"] = [[float(v) for v in c.pose] for c in selection.plausible]
         self._log(ev.SOLVED, data)
         if self.state.completed[-1].ambiguous:
+            self._estimated = len(self.state.completed)
             return
         if self.estimator is not None:
-            n_trials = len(self.state.completed)
+            n_completed = len(self.state.completed)
+            n_trials = sum(1 for t in self.state.completed if not t.ambiguous)
             try:
                 result = self.estimator.add(self.state.completed[-1])
             except OdohilError as exc:
                 # the live estimate is a display aid: a fit that fails on few
                 # trials must not stop the session (the trial is journaled)
-                self._estimated = n_trials
+                self._estimated = n_completed
                 self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": None, "error": str(exc)})
                 return
-            self._estimated = n_trials
+            self._estimated = n_completed
             self.latest_estimate = result
             if result is not None:
                 self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": result})
