@@ -9,7 +9,7 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
     C = [-0.10, -0.173]
     [measurement]
     sigma_m = 0.001          # standard deviation of one tape reading, metres
-    cross = [["A", "B"]]     # cross distances: start mark of A to end mark of B
+    cross = [["A", "B"], ["B", "C"]]  # start mark of A to end mark of B, B to C
     [serial]                 # optional, for the driver
     port = "/dev/ttyUSB0"    # or any pyserial URL
     baud = 38400             # 4800, 9600, 19200 or 38400

@@ -8,6 +8,7 @@ import pytest
 
 from odohil.errors import InitError, RobotDescriptionError
 from odohil.science.robot_description import (
+    ParameterPriors,
     RobotDescription,
     Screw,
     SerialSettings,
@@ -22,11 +23,20 @@ B = [-0.10, 0.173]
 C = [-0.10, -0.173]
 [measurement]
 sigma_m = 0.001          # standard deviation of one tape reading, metres
-cross = [["A", "B"]]     # cross distances: start mark of A to end mark of B
+cross = [["A", "B"], ["B", "C"]]  # start mark of A to end mark of B, B to C
 [serial]                 # optional, for the driver
 port = "/dev/ttyUSB0"    # or any pyserial URL
 baud = 38400             # 4800, 9600, 19200 or 38400
 timeout_s = 1.0
+[priors]                 # optional: the parameters before any trial (paper units)
+E_R_deg_per_m = -0.202   # defaults: the paper's Nomad 150 values ...
+E_R_sd_deg_per_m = 0.5   # ... and these spreads (one standard deviation)
+E_T = -0.02
+E_T_sd = 0.05
+K_theta_deg2_per_m = 0.012
+K_theta_sd_deg2_per_m = 0.05
+K_rho_m = 3.6e-5
+K_rho_sd_m = 2e-4
 """
 
 MINIMAL = """
@@ -47,9 +57,10 @@ def test_example_parses_to_the_documented_values() -> None:
         Screw("C", -0.10, -0.173),
     )
     assert description.sigma_m == 0.001
-    assert description.cross_pairs == (("A", "B"),)
+    assert description.cross_pairs == (("A", "B"), ("B", "C"))
     assert description.serial == SerialSettings(port="/dev/ttyUSB0", baud=38400, timeout_s=1.0)
-    assert description.cross_indices() == ((0, 1),)
+    assert description.cross_indices() == ((0, 1), (1, 2))
+    assert description.priors == ParameterPriors()  # the documented defaults
     assert description.positions().shape == (3, 2)
 
 
