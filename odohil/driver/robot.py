@@ -4,6 +4,11 @@ Strict request/reply; a motion command is never resent (CHOICE C11). After
 any failed request the robot is resynchronised with ``gs`` and the error
 names the last encoder pose; any failure during a motion, and Ctrl-C, sends
 ``st`` first.
+
+Stale replies: the robot's timestamp (u32 ms) never goes backwards on one
+connection, so a state packet older than the last one accepted is a late
+reply to an earlier request; it is discarded (counted in
+``link.stats.rejected_replies``) and the wait for the real reply goes on.
 """
 
 from __future__ import annotations
@@ -29,16 +34,26 @@ from odohil.errors import (
     OdohilError,
     OdohilTimeoutError,
     ParameterError,
+    ProtocolError,
 )
 from odohil.protocol import messages as m
-from odohil.protocol.codes import MOTION_CODES
+from odohil.protocol.codes import MOTION_CODES, STATE_REPLY_CODES
+from odohil.protocol.framing import Packet
 from odohil.protocol.replies import decode_reply
-from odohil.protocol.state import N150_MASK, RobotState, StateMask
+from odohil.protocol.state import N150_MASK, RobotState, StateMask, decode_state_payload
 from odohil.units import WIRE_ANGLES_PER_TURN, metres_to_wire, radians_to_wire
 
 WS_MAX_S = 255
 S16_MAX = 0x7FFF
 U16_MAX = 0xFFFF
+_U32_WRAP = 1 << 32
+_STATE_TYPES = frozenset(int(code) for code in STATE_REPLY_CODES)
+
+
+def is_older_ms(candidate_ms: int, last_ms: int) -> bool:
+    """Whether robot timestamp ``candidate_ms`` lies before ``last_ms`` (u32 ms,
+    compared modulo 2**32 so that the wrap after 49.7 days is not "older")."""
+    return (candidate_ms - last_ms) % _U32_WRAP >= _U32_WRAP // 2
 
 
 def _wire_s16(value: int, what: str) -> int:
@@ -64,6 +79,7 @@ class NomadRobot:
         self._link = link
         self._mask = mask
         self._last: EncoderSample | None = None
+        self._last_ms: int | None = None
         self._in_motion = False
 
     @classmethod
@@ -118,13 +134,23 @@ class NomadRobot:
     # -- requests -------------------------------------------------------
 
     def _request(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> RobotState:
-        reply = decode_reply(
-            self._link.exchange(m.encode_request(request), first_byte_s), request, self._mask
-        )
+        packet = self._link.exchange(m.encode_request(request), first_byte_s, self._fresh)
+        reply = decode_reply(packet, request, self._mask)
         if not isinstance(reply, RobotState):  # pragma: no cover - state requests only
             raise TypeError(f"{request} does not answer with a state packet")
+        self._last_ms = reply.timestamp_ms
         self._last = EncoderSample.from_state(reply, time.monotonic())
         return reply
+
+    def _fresh(self, packet: Packet) -> bool:
+        """False for a state packet older than the last one accepted (a stale reply)."""
+        if self._last_ms is None or packet.type not in _STATE_TYPES:
+            return True
+        try:
+            state = decode_state_payload(packet.payload, self._mask)
+        except ProtocolError:
+            return True  # not a state packet after all: decode_reply says why
+        return not is_older_ms(state.timestamp_ms, self._last_ms)
 
     def _call(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> EncoderSample:
         """One request; on failure stop if moving, resync with ``gs``, re-raise."""
