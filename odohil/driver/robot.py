@@ -39,13 +39,12 @@ from odohil.errors import (
 from odohil.protocol import messages as m
 from odohil.protocol.codes import MOTION_CODES, STATE_REPLY_CODES
 from odohil.protocol.framing import Packet
+from odohil.protocol.numbers import S16_MAX, U16_MAX
 from odohil.protocol.replies import decode_reply
 from odohil.protocol.state import N150_MASK, RobotState, StateMask, decode_state_payload
 from odohil.units import WIRE_ANGLES_PER_TURN, metres_to_wire, radians_to_wire
 
 WS_MAX_S = 255
-S16_MAX = 0x7FFF
-U16_MAX = 0xFFFF
 _U32_WRAP = 1 << 32
 _STATE_TYPES = frozenset(int(code) for code in STATE_REPLY_CODES)
 
@@ -255,8 +254,12 @@ class NomadRobot:
         """``pr`` in wire units (0.1 in, 0.1 deg); returns what was sent.
 
         The reply comes at once; wait with :meth:`wait_stopped` or
-        :meth:`poll_until_stopped`. Never resent.
+        :meth:`poll_until_stopped`. Never resent. ParameterError, before
+        anything is sent, for a value beyond the s16 range or ``pr(0, 0, 0)``
+        (a motion that does not move).
         """
+        if trans == steer == turret == 0:
+            raise ParameterError("pr(0, 0, 0) would not move the robot: nothing sent")
         request = m.Pr(
             _wire_s16(trans, "translation"),
             _wire_s16(steer, "steering"),
@@ -268,10 +271,23 @@ class NomadRobot:
 
     def move_relative(self, trans_m: float, steer_rad: float, turret_rad: float = 0.0) -> m.Pr:
         """``pr``: move by trans_m metres and turn by steer_rad / turret_rad,
-        rounded to whole wire units; returns the wire command actually sent."""
-        return self.move_relative_wire(
-            metres_to_wire(trans_m), radians_to_wire(steer_rad), radians_to_wire(turret_rad)
-        )
+        rounded to whole wire units; returns the wire command actually sent.
+
+        ParameterError, before anything is sent, when a non-zero value rounds
+        to zero wire units (below 2.54 mm or 0.1 degree: the robot would not
+        do it) or lies beyond the s16 range."""
+        named = (("translation", trans_m), ("steering", steer_rad), ("turret", turret_rad))
+        for what, value in named:
+            if not math.isfinite(value):
+                raise ParameterError(f"{what} must be finite, got {value!r}")
+        wire = (metres_to_wire(trans_m), radians_to_wire(steer_rad), radians_to_wire(turret_rad))
+        for (what, value), units in zip(named, wire, strict=True):
+            if value != 0 and units == 0:
+                raise ParameterError(
+                    f"{what} {value:g} rounds to 0 wire units (0.1 inch or 0.1 degree): "
+                    "the robot would not move; nothing sent"
+                )
+        return self.move_relative_wire(*wire)
 
     def wait_stopped(self, timeout_s: float) -> EncoderSample:
         """``ws`` on all axes until they stop; OdohilTimeoutError (after ``st``)
