@@ -137,3 +137,23 @@ def test_a_stale_reply_is_never_used(tmp_path: Path) -> None:
             times = [row[0] for row in data["trajectory"]]
             assert times == sorted(times), times
             assert times[0] == 0.0, times
+
+
+def test_legs_below_the_wire_resolution_never_make_valid_trials(tmp_path: Path) -> None:
+    with _emulator(tmp_path, "--no-pacing") as emulator:
+        args = [
+            ODOHIL, "run",
+            "--port", emulator.device,
+            "--truth-socket", emulator.truth_socket,
+            "--robot", str(write_robot(tmp_path)),
+            "--plan", "k=1,l=0.001,n=3;k=0.5,l=0.001,n=3",
+            "--measure", "fake",
+            "--session", str(tmp_path / "session"),
+            "--json",
+        ]  # fmt: skip
+        done = subprocess.run(args, capture_output=True, text=True, timeout=BOUND_S)
+        log = emulator.truth().motion_log
+    assert done.returncode != 0, done.stdout
+    assert "leg length" in done.stderr, done.stderr
+    assert not any(kind == ev.SOLVED for kind, _ in _records(tmp_path))
+    assert not [r for r in log if r.command == "pr"], log
