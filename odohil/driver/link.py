@@ -247,6 +247,7 @@ class Link:
         n_foreign = 0
         nak: Packet | None = None
         nak_until = math.inf
+        rejected = self.stats.rejected_replies
         while True:
             try:
                 data = self._port.read(max(self._decoder.missing, self._port.in_waiting))
@@ -280,7 +281,13 @@ class Link:
             if nak is not None and not begun and now >= nak_until:
                 return nak
             if not begun and now >= begin_by:
-                raise OdohilTimeoutError(self._no_reply(first_byte_s, n_foreign, bytes(foreign)))
+                message = self._no_reply(first_byte_s, n_foreign, bytes(foreign))
+                if self.stats.rejected_replies > rejected:
+                    message += (
+                        f"; {self.stats.rejected_replies - rejected} stale repl(ies) discarded "
+                        "(robot timestamp older than the last reply's)"
+                    )
+                raise OdohilTimeoutError(message)
             if begun and last_byte is not None and now - last_byte >= self._silence_s:
                 pending = self._decoder.reset()
                 raise OdohilTimeoutError(
