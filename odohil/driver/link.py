@@ -43,9 +43,9 @@ _IO_ERRORS = (serial.SerialException, OSError, termios.error)
 """What a vanished line raises: EIO from read/write, or from tcflush on a pty."""
 READ_SLICE_S = 0.05
 """pyserial read timeout: how often the link checks its own deadlines."""
-QUIET_BYTES = 4
+QUIET_BYTES = 3
 """A line is quiet when no byte has come for this many byte times..."""
-QUIET_MIN_S = 0.001
+QUIET_MIN_S = 0.0005
 """...and for at least this long, s (scheduling jitter of a host and a pty)."""
 QUIET_TOTAL_S = NORMAL_TIMEOUT_S
 """Longest wait for a quiet line before a request, s."""
