@@ -89,6 +89,7 @@ def test_noise_that_starts_mid_motion_ends_the_run_in_bounded_time(tmp_path: Pat
     assert solved == list(range(1, voided[0])), records
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fault", ["merge", "merge:pr@2"])
 def test_a_stray_packet_on_a_paced_line_does_not_end_the_session(
     fault: str, tmp_path: Path
