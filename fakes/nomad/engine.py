@@ -70,6 +70,16 @@ WATCHDOG_FAULT_FRACTION = 0.5
 """Fault ``watchdog`` fires after this fraction of the motion's planned duration."""
 VM_WATCHDOG_FAULT_S = 1.0
 """...or this many simulated seconds into an endless ``vm`` motion."""
+NOISE_SENTENCES = (
+    b"$GPGGA,123519,4807.038,N,01131.000,E,1,08,0.9,545.4,M,46.9,M,,*47\r\n",
+    b"$GPRMC,123519,A,4807.038,N,01131.000,E,022.4,084.4,230394,003.1,W*6A\r\n",
+    b"$GPGSA,A,3,04,05,,09,12,,,24,,,,,2.5,1.3,2.1*39\r\n",
+)
+"""What fault ``noise`` writes, in turn: NMEA sentences, as a GPS on the wrong port
+would (ASCII, so no 0x01 start byte among them)."""
+NOISE_PERIOD_S = 0.2
+"""Wall seconds between two noise sentences: never 1 s of silence, and below 480
+bytes/s, so the line keeps up even at 4800 baud."""
 MOTION_LOG_CODES = frozenset({Code.PR, Code.PA, Code.VM, Code.MV, Code.ZR, Code.ST, Code.LP})
 
 
@@ -126,6 +136,8 @@ class NomadEngine:
         self._zr: _PendingZr | None = None
         self.disconnected = False
         self._disconnect_scheduled = False
+        self._noise_next_wall: float | None = None
+        self._noise_count = 0
         self.motion_log: list[MotionRecord] = []
         self.faults_fired: list[str] = []
         self.conf_ser: tuple[int, int] | None = None
@@ -182,6 +194,13 @@ class NomadEngine:
             now = self.clock()
         self.poll(now)
         due: list[Output] = []
+        if self._noise_next_wall is not None:
+            self._out.clear()
+            while self._noise_next_wall <= now and not self.disconnected:
+                due.append(NOISE_SENTENCES[self._noise_count % len(NOISE_SENTENCES)])
+                self._noise_count += 1
+                self._noise_next_wall += NOISE_PERIOD_S
+            return due
         while self._out and self._out[0][0] <= now and not self.disconnected:
             item = heapq.heappop(self._out)[2]
             due.append(item)
@@ -192,6 +211,8 @@ class NomadEngine:
 
     def next_output_wall(self) -> float | None:
         """Wall time of the next scheduled write, if any."""
+        if self._noise_next_wall is not None:
+            return self._noise_next_wall
         return self._out[0][0] if self._out else None
 
     def truth(self, now: float | None = None) -> TruthSnapshot:
@@ -285,6 +306,8 @@ class NomadEngine:
         if "nak" in faults:
             self._schedule(now, NAK_BYTES)
             return
+        if "noise" in faults and self._noise_next_wall is None:
+            self._noise_next_wall = now
         if request.code in MOTION_LOG_CODES:
             args = tuple(int(v) for v in dataclasses.astuple(request))
             self.motion_log.append(MotionRecord(now - self.wall0, request.code.name.lower(), args))

@@ -5,8 +5,8 @@ Syntax of one fault: ``NAME[:CODE][@N]``
 - ``NAME``: one of :data:`FAULT_NAMES`;
 - ``CODE``: the command whose requests are affected, by name (``gs``,
   ``get_rc``, ``pr``...) or number; default: every request for the reply
-  faults, the motion commands (pr, pa, vm, mv) for ``stuck``, ``disconnect``
-  and ``watchdog``;
+  faults and ``noise``, the motion commands (pr, pa, vm, mv) for ``stuck``,
+  ``disconnect`` and ``watchdog``;
 - ``@N``: only the N-th matching request (1-based); default: every one.
 
 What each fault does on the wire is documented in protocols/nomad/README.md
@@ -22,7 +22,9 @@ from odohil.protocol.codes import Code
 
 REPLY_FAULTS = ("corrupt", "drop", "late", "split", "merge", "garbage", "nak", "wrong-type")
 MOTION_FAULTS = ("stuck", "disconnect", "watchdog")
-FAULT_NAMES = REPLY_FAULTS + MOTION_FAULTS
+LINE_FAULTS = ("noise",)
+"""Faults that take the line over: from the request they hit on, no more replies."""
+FAULT_NAMES = REPLY_FAULTS + MOTION_FAULTS + LINE_FAULTS
 DEFAULT_MOTION_CODES = frozenset({Code.PR, Code.PA, Code.VM, Code.MV})
 
 

@@ -15,11 +15,12 @@ from dataclasses import dataclass
 from odohil.driver.robot import NomadRobot
 from odohil.driver.sample import EncoderSample
 from odohil.errors import MotionError, ParameterError
+from odohil.protocol.limits import leg_to_wire
 from odohil.protocol.messages import Pr
+from odohil.protocol.numbers import S16_MAX
 from odohil.science.paths import Design, Leg
 from odohil.units import (
     WIRE_ANGLES_PER_TURN,
-    metres_to_wire,
     radians_to_wire,
     wire_to_radians,
     wrap_angle,
@@ -97,6 +98,24 @@ def _check_step(
         )
 
 
+def _wire_steps(design: Design) -> list[tuple[int, int]]:
+    """Every step of ``design`` as (translation, steering) wire units, all
+    checked before the first is sent."""
+    steps: list[tuple[int, int]] = []
+    for step in design.path().steps:
+        if isinstance(step, Leg):
+            steps.append((leg_to_wire(step.length_m), 0))
+            continue
+        steer = radians_to_wire(step.angle_rad)
+        if steer == 0 or abs(steer) > S16_MAX:
+            raise ParameterError(
+                f"turn of {step.angle_rad:g} rad is {steer} wire units of 0.1 degree; "
+                f"it must be 1..{S16_MAX} in magnitude"
+            )
+        steps.append((0, steer))
+    return steps
+
+
 def forth_and_back(
     robot: NomadRobot,
     design: Design,
@@ -111,11 +130,15 @@ def forth_and_back(
     First sets ``speeds`` (translation m/s, steering rad/s) and
     ``accelerations`` (m/s^2, rad/s^2); a ``pr`` with zero speed would not move.
 
-    Raises MotionError if a step ends off its commanded encoder pose, and
-    whatever the robot raises (after ``st``) on protocol errors or timeouts.
+    Raises ParameterError before anything is sent when a leg is outside the
+    wire's range (:func:`odohil.protocol.limits.check_leg_length_m`: at least
+    25.4 mm, at most 83.2 m) or a turn rounds to no wire units; MotionError if
+    a step ends off its commanded encoder pose, and whatever the robot raises
+    (after ``st``) on protocol errors or timeouts.
     """
     if tolerance_wire < 0:
         raise ParameterError(f"tolerance must be >= 0 wire units, got {tolerance_wire}")
+    wire_steps = _wire_steps(design)
     samples: list[EncoderSample] = []
     commands: list[Pr] = []
     step_ends: list[EncoderSample] = []
@@ -125,11 +148,8 @@ def forth_and_back(
     start = robot.state()
     samples.append(start)
     before = start
-    for step in design.path().steps:
-        if isinstance(step, Leg):
-            cmd = robot.move_relative_wire(metres_to_wire(step.length_m), 0, 0)
-        else:
-            cmd = robot.move_relative_wire(0, radians_to_wire(step.angle_rad), 0)
+    for trans, steer in wire_steps:
+        cmd = robot.move_relative_wire(trans, steer, 0)
         commands.append(cmd)
         after = robot.poll_until_stopped(step_timeout_s, samples.append)
         _check_step(robot, before, after, cmd, tolerance_wire)

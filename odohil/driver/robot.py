@@ -4,6 +4,11 @@ Strict request/reply; a motion command is never resent (CHOICE C11). After
 any failed request the robot is resynchronised with ``gs`` and the error
 names the last encoder pose; any failure during a motion, and Ctrl-C, sends
 ``st`` first.
+
+Stale replies: the robot's timestamp (u32 ms) never goes backwards on one
+connection, so a state packet older than the last one accepted is a late
+reply to an earlier request; it is discarded (counted in
+``link.stats.rejected_replies``) and the wait for the real reply goes on.
 """
 
 from __future__ import annotations
@@ -29,16 +34,25 @@ from odohil.errors import (
     OdohilError,
     OdohilTimeoutError,
     ParameterError,
+    ProtocolError,
 )
 from odohil.protocol import messages as m
-from odohil.protocol.codes import MOTION_CODES
+from odohil.protocol.codes import MOTION_CODES, STATE_REPLY_CODES
+from odohil.protocol.framing import Packet
+from odohil.protocol.numbers import S16_MAX, U16_MAX
 from odohil.protocol.replies import decode_reply
-from odohil.protocol.state import N150_MASK, RobotState, StateMask
+from odohil.protocol.state import N150_MASK, RobotState, StateMask, decode_state_payload
 from odohil.units import WIRE_ANGLES_PER_TURN, metres_to_wire, radians_to_wire
 
 WS_MAX_S = 255
-S16_MAX = 0x7FFF
-U16_MAX = 0xFFFF
+_U32_WRAP = 1 << 32
+_STATE_TYPES = frozenset(int(code) for code in STATE_REPLY_CODES)
+
+
+def is_older_ms(candidate_ms: int, last_ms: int) -> bool:
+    """Whether robot timestamp ``candidate_ms`` lies before ``last_ms`` (u32 ms,
+    compared modulo 2**32 so that the wrap after 49.7 days is not "older")."""
+    return (candidate_ms - last_ms) % _U32_WRAP >= _U32_WRAP // 2
 
 
 def _wire_s16(value: int, what: str) -> int:
@@ -64,6 +78,7 @@ class NomadRobot:
         self._link = link
         self._mask = mask
         self._last: EncoderSample | None = None
+        self._last_ms: int | None = None
         self._in_motion = False
 
     @classmethod
@@ -118,13 +133,23 @@ class NomadRobot:
     # -- requests -------------------------------------------------------
 
     def _request(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> RobotState:
-        reply = decode_reply(
-            self._link.exchange(m.encode_request(request), first_byte_s), request, self._mask
-        )
+        packet = self._link.exchange(m.encode_request(request), first_byte_s, self._fresh)
+        reply = decode_reply(packet, request, self._mask)
         if not isinstance(reply, RobotState):  # pragma: no cover - state requests only
             raise TypeError(f"{request} does not answer with a state packet")
+        self._last_ms = reply.timestamp_ms
         self._last = EncoderSample.from_state(reply, time.monotonic())
         return reply
+
+    def _fresh(self, packet: Packet) -> bool:
+        """False for a state packet older than the last one accepted (a stale reply)."""
+        if self._last_ms is None or packet.type not in _STATE_TYPES:
+            return True
+        try:
+            state = decode_state_payload(packet.payload, self._mask)
+        except ProtocolError:
+            return True  # not a state packet after all: decode_reply says why
+        return not is_older_ms(state.timestamp_ms, self._last_ms)
 
     def _call(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> EncoderSample:
         """One request; on failure stop if moving, resync with ``gs``, re-raise."""
@@ -229,8 +254,12 @@ class NomadRobot:
         """``pr`` in wire units (0.1 in, 0.1 deg); returns what was sent.
 
         The reply comes at once; wait with :meth:`wait_stopped` or
-        :meth:`poll_until_stopped`. Never resent.
+        :meth:`poll_until_stopped`. Never resent. ParameterError, before
+        anything is sent, for a value beyond the s16 range or ``pr(0, 0, 0)``
+        (a motion that does not move).
         """
+        if trans == steer == turret == 0:
+            raise ParameterError("pr(0, 0, 0) would not move the robot: nothing sent")
         request = m.Pr(
             _wire_s16(trans, "translation"),
             _wire_s16(steer, "steering"),
@@ -242,10 +271,23 @@ class NomadRobot:
 
     def move_relative(self, trans_m: float, steer_rad: float, turret_rad: float = 0.0) -> m.Pr:
         """``pr``: move by trans_m metres and turn by steer_rad / turret_rad,
-        rounded to whole wire units; returns the wire command actually sent."""
-        return self.move_relative_wire(
-            metres_to_wire(trans_m), radians_to_wire(steer_rad), radians_to_wire(turret_rad)
-        )
+        rounded to whole wire units; returns the wire command actually sent.
+
+        ParameterError, before anything is sent, when a non-zero value rounds
+        to zero wire units (below 2.54 mm or 0.1 degree: the robot would not
+        do it) or lies beyond the s16 range."""
+        named = (("translation", trans_m), ("steering", steer_rad), ("turret", turret_rad))
+        for what, value in named:
+            if not math.isfinite(value):
+                raise ParameterError(f"{what} must be finite, got {value!r}")
+        wire = (metres_to_wire(trans_m), radians_to_wire(steer_rad), radians_to_wire(turret_rad))
+        for (what, value), units in zip(named, wire, strict=True):
+            if value != 0 and units == 0:
+                raise ParameterError(
+                    f"{what} {value:g} rounds to 0 wire units (0.1 inch or 0.1 degree): "
+                    "the robot would not move; nothing sent"
+                )
+        return self.move_relative_wire(*wire)
 
     def wait_stopped(self, timeout_s: float) -> EncoderSample:
         """``ws`` on all axes until they stop; OdohilTimeoutError (after ``st``)

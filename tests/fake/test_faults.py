@@ -9,7 +9,14 @@ from typing import Any
 import pytest
 import serial
 
-from fakes.nomad.engine import GARBAGE, LATE_EXTRA_S, SPLIT_PAUSE_S, WRONG_TYPE
+from fakes.nomad.engine import (
+    GARBAGE,
+    LATE_EXTRA_S,
+    NOISE_PERIOD_S,
+    NOISE_SENTENCES,
+    SPLIT_PAUSE_S,
+    WRONG_TYPE,
+)
 from fakes.nomad.faults import parse_fault
 from odohil.errors import ChecksumError, ParameterError, UnexpectedReplyError
 from odohil.protocol import messages as m
@@ -182,3 +189,18 @@ def test_disconnect_in_process_raises_serial_exception(fake_port: Any) -> None:
     with pytest.raises(serial.SerialException):
         port.read(1000)
     assert port.truth().disconnected
+
+
+def test_noise_takes_the_line_over_with_nmea_sentences(pty_robot: Any) -> None:
+    robot = pty_robot("--fault", "noise:gs@2")
+    robot.link.request(m.Gs())  # first gs: answered
+    robot.link.send(GS)
+    chunks = _timed_chunks(robot, 1.2)
+    raw = b"".join(data for _, data in chunks)
+    assert 0x01 not in raw  # nothing that could start a packet: no reply ever again
+    assert raw.startswith(NOISE_SENTENCES[0])
+    sentences = raw.count(b"\r\n")
+    assert abs(sentences - 1.2 / NOISE_PERIOD_S) <= 2, sentences
+    gaps = [b[0] - a[0] for a, b in itertools.pairwise(chunks)]
+    assert max(gaps) < 1.0  # never a silence that would end a reply by itself
+    assert "noise on gs" in robot.truth().faults_fired

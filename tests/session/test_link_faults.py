@@ -1,0 +1,160 @@
+"""``odohil run`` against ``odohil emulate`` with link faults, as a user would run
+it: a noise line must not hang it, a stray packet must not end the session, and a
+stale reply must never be used (issue 9, item 3)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from fakes.nomad.process import EmulatorProcess
+from odohil.session import state as ev
+from odohil.session.journal import read_journal
+from tests.session.helpers import write_robot
+
+ODOHIL = shutil.which("odohil") or "odohil"
+EMULATOR = ["--time-scale", "20000", "--seed", "5"]
+PLAN = "k=1,l=0.5,n=3;k=0.5,l=0.5,n=3"
+BOUND_S = 60.0
+"""No run here may take longer (wall s): the subprocess timeout that turns a hang
+into a failure."""
+
+
+def _emulator(tmp_path: Path, *extra: str) -> EmulatorProcess:
+    return EmulatorProcess([*EMULATOR, *extra, "--truth-socket", str(tmp_path / "t.sock")])
+
+
+def _run(emulator: EmulatorProcess, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+    args = [
+        ODOHIL, "run",
+        "--port", emulator.device,
+        "--truth-socket", emulator.truth_socket,
+        "--robot", str(write_robot(tmp_path)),
+        "--plan", PLAN,
+        "--measure", "fake",
+        "--session", str(tmp_path / "session"),
+        "--seed", "2",
+        "--json",
+    ]  # fmt: skip
+    return subprocess.run(args, capture_output=True, text=True, timeout=BOUND_S)
+
+
+def _records(tmp_path: Path) -> list[tuple[str, dict[str, Any]]]:
+    try:
+        contents = read_journal(tmp_path / "session")
+    except Exception:
+        return []
+    return [(r.kind, dict(r.data)) for r in contents.records]
+
+
+@pytest.fixture
+def noise_from_start(tmp_path: Path) -> Iterator[EmulatorProcess]:
+    with _emulator(tmp_path, "--fault", "noise") as process:
+        yield process
+
+
+def test_a_noise_line_at_connect_is_refused_in_bounded_time(
+    noise_from_start: EmulatorProcess, tmp_path: Path
+) -> None:
+    started = time.monotonic()
+    done = _run(noise_from_start, tmp_path)
+    elapsed = time.monotonic() - started
+    assert done.returncode in (1, 2), (done.returncode, done.stderr)
+    assert elapsed < 20.0, elapsed
+    assert "not the robot's protocol" in done.stderr, done.stderr
+    assert noise_from_start.device in done.stderr, done.stderr
+    assert not any(kind == ev.SOLVED for kind, _ in _records(tmp_path))
+
+
+def test_noise_that_starts_mid_motion_ends_the_run_in_bounded_time(tmp_path: Path) -> None:
+    with _emulator(tmp_path, "--fault", "noise:pr@5") as emulator:
+        started = time.monotonic()
+        done = _run(emulator, tmp_path)
+        elapsed = time.monotonic() - started
+    assert done.returncode not in (0, 2), (done.returncode, done.stderr)
+    assert elapsed < 30.0, elapsed
+    assert "not the robot's protocol" in done.stderr, done.stderr
+    records = _records(tmp_path)
+    solved = [data["trial"] for kind, data in records if kind == ev.SOLVED]
+    voided = [data["trial"] for kind, data in records if kind == ev.VOID]
+    # trials before the noise are kept; the one it hit is void, none after it ran
+    assert len(voided) == 1, records
+    assert solved == list(range(1, voided[0])), records
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("fault", ["merge", "merge:pr@2"])
+def test_a_stray_packet_on_a_paced_line_does_not_end_the_session(
+    fault: str, tmp_path: Path
+) -> None:
+    with _emulator(tmp_path, "--fault", fault) as emulator:
+        done = _run(emulator, tmp_path)
+        fired = emulator.truth().faults_fired
+    assert fired, "the fault never fired"
+    assert done.returncode == 0, done.stderr
+    assert json.loads(done.stdout)["n_trials"] == 6
+    solved = [data["trial"] for kind, data in _records(tmp_path) if kind == ev.SOLVED]
+    assert sorted(solved) == [1, 2, 3, 4, 5, 6]
+
+
+@pytest.mark.slow
+def test_a_stale_reply_is_never_used(tmp_path: Path) -> None:
+    # gs 12 is answered late, so the run ends (a failed gs voids the trial); the
+    # resume that follows at once finds gs 16 unanswered while the late reply
+    # to 12 arrives. Whether it lands in gs 16's wait depends on the resume's
+    # start-up time: tests/driver/test_link_safety.py times it exactly.
+    with _emulator(tmp_path, "--fault", "late:gs@12", "--fault", "drop:gs@16") as emulator:
+        first = _run(emulator, tmp_path)
+        assert first.returncode == 1, first.stderr
+        for _ in range(3):
+            done = subprocess.run(
+                [ODOHIL, "resume", str(tmp_path / "session"), "--json"],
+                capture_output=True,
+                text=True,
+                timeout=BOUND_S,
+            )
+            if done.returncode == 0:
+                break
+        fired = emulator.truth().faults_fired
+    assert done.returncode == 0, done.stderr
+    assert "late on gs" in fired, fired
+    assert "drop on gs" in fired, fired
+    records = _records(tmp_path)
+    solved = sorted(data["trial"] for kind, data in records if kind == ev.SOLVED)
+    assert solved == [1, 2, 3, 4, 5, 6]
+    # the robot's clock as the journal saw it: each trial's zeroed sample, then its
+    # trajectory (times relative to its first sample): it never goes backwards
+    zeroed = [d["zeroed"]["robot_time_s"] for k, d in records if k == ev.TRIAL_START]
+    assert zeroed == sorted(zeroed), zeroed
+    for kind, data in records:
+        if kind == ev.MOTION_DONE:
+            times = [row[0] for row in data["trajectory"]]
+            assert times == sorted(times), times
+            assert times[0] == 0.0, times
+
+
+def test_legs_below_the_wire_resolution_never_make_valid_trials(tmp_path: Path) -> None:
+    with _emulator(tmp_path, "--no-pacing") as emulator:
+        args = [
+            ODOHIL, "run",
+            "--port", emulator.device,
+            "--truth-socket", emulator.truth_socket,
+            "--robot", str(write_robot(tmp_path)),
+            "--plan", "k=1,l=0.001,n=3;k=0.5,l=0.001,n=3",
+            "--measure", "fake",
+            "--session", str(tmp_path / "session"),
+            "--json",
+        ]  # fmt: skip
+        done = subprocess.run(args, capture_output=True, text=True, timeout=BOUND_S)
+        log = emulator.truth().motion_log
+    assert done.returncode != 0, done.stdout
+    assert "leg length" in done.stderr, done.stderr
+    assert not any(kind == ev.SOLVED for kind, _ in _records(tmp_path))
+    assert not [r for r in log if r.command == "pr"], log
