@@ -32,9 +32,9 @@ from tests.session.test_safety import ODOHIL, PARAMS, _still_after_exit, _wait_f
 from tests.wizard.test_wizard import _marks, _prompt, _spawn, _type_all
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
-RUN_PLAN = "k=0.5,l=0.3,n=2"
-"""Two one-way 0.3 m trials (about 1.5 s of motion each): the fewest that estimate."""
-WIZARD_PLAN = "k=0.5,l=0.3,n=1"
+RUN_PLAN = "k=0.5,l=0.2,n=2"
+"""Two one-way 0.2 m trials (about 1.3 s of motion each): the fewest that estimate."""
+WIZARD_PLAN = "k=0.5,l=0.2,n=1"
 
 
 @pytest.fixture(scope="module")
@@ -94,7 +94,7 @@ def _motion_case(
     )
     _wait_for(process, folder, ev.MOTION_START, 30)
     if moment == "mid-motion":
-        time.sleep(0.4)
+        time.sleep(0.3)
         assert emulator.truth().moving, case
     process.send_signal(signum)
     _, err = process.communicate(timeout=30)
