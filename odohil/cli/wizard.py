@@ -17,12 +17,14 @@ from __future__ import annotations
 import math
 import os
 import re
+import select
 import signal
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
-from typing import Annotated, Any, NoReturn
+from typing import Annotated, Any, NoReturn, TextIO
 
 import numpy as np
 import typer
@@ -191,6 +193,22 @@ class Interrupts:
             raise KeyboardInterrupt
 
 
+def _wait_readable(stream: TextIO, slice_s: float = 0.1) -> None:
+    """Wait until ``stream`` has a line, waking every ``slice_s`` seconds so that
+    a signal the kernel handed to another thread (numpy's) is acted on at once:
+    a read blocked in the main thread would not see it until the next key.
+    Only on a terminal, which hands over one line per read (a pipe's lines may
+    already sit in the stream's buffer)."""
+    try:
+        if not stream.isatty():
+            return
+        fd = stream.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    while not select.select([fd], [], [], slice_s)[0]:
+        pass
+
+
 class LiveRobot(NomadRobot):
     """A :class:`NomadRobot` that also shows every encoder sample of a motion
     (the engine's motion has no sample hook of its own)."""
@@ -237,7 +255,9 @@ class WizardPrompts:
 
     def _input(self, prompt: str) -> str:
         try:
-            return self.console.input(prompt)
+            self.console.print(prompt, end="")
+            _wait_readable(sys.stdin)
+            return input()
         except EOFError:
             raise MeasurementError("the input ended (no operator at the terminal)") from None
 
