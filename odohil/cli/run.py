@@ -215,7 +215,7 @@ def execute(
     except KeyboardInterrupt as exc:
         observer.progress.stop()
         code = exit_for_signal(signal_of(exc))
-        console.print(f"[yellow]interrupted[/] ({exc or 'Ctrl-C'})", soft_wrap=True)
+        console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
         report_stop(console, engine.stop_outcome, folder)
         return Outcome(code, None)
     except OdohilError as exc:
@@ -317,7 +317,7 @@ def session_exit_codes(console: Console) -> Iterator[None]:
         with signals_raise():
             yield
     except KeyboardInterrupt as exc:
-        console.print(f"[yellow]interrupted[/] ({exc or 'Ctrl-C'})", soft_wrap=True)
+        console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
         raise typer.Exit(exit_for_signal(signal_of(exc))) from None
     except StopUnconfirmedError as exc:
         console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {exc}", soft_wrap=True)

@@ -609,7 +609,7 @@ def _run(
         return EXIT_STOP_UNCONFIRMED
     except KeyboardInterrupt as exc:
         progress.stop()
-        console.print(f"\n[yellow]Interrupted[/] ({exc or 'Ctrl-C'})", soft_wrap=True)
+        console.print(f"\n[yellow]Interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
         report_stop(console, engine.stop_outcome, opened.journal.folder)
         return exit_for_signal(signal_of(exc))
     except OdohilError as exc:
