@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import resource
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -18,7 +19,8 @@ import pytest
 
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthSnapshot
-from odohil.errors import JournalError
+from odohil.driver.robot import NomadRobot
+from odohil.errors import JournalError, StopUnconfirmedError
 from odohil.session import state as ev
 from odohil.session.engine import start_session
 from odohil.session.journal import JOURNAL_NAME, read_journal
@@ -183,3 +185,49 @@ def test_a_busy_session_is_refused_before_anything_is_sent(
     assert snap.faults_fired == ()  # no gs reached the robot
     assert snap.motion_log == ()  # nor st, nor any motion
     assert [r.kind for r in read_journal(folder).records] == [ev.SESSION]
+
+
+# -- the stop itself ------------------------------------------------------------
+
+
+def test_stop_and_confirm_waits_until_the_robot_reports_standing_still(tmp_path: Path) -> None:
+    with _emulator(tmp_path, "confirm") as emulator:
+        robot = NomadRobot.connect(emulator.device)
+        with robot:
+            robot.set_speeds(0.5, 0.5, 0.5)
+            robot.set_accelerations(0.5, 0.5, 0.5)
+            robot.move_relative(0.5, 0.0)
+            time.sleep(0.5)
+            assert emulator.truth().moving
+            asked = time.monotonic()
+            sample = robot.stop_and_confirm(2.0)
+            took = time.monotonic() - asked
+            assert not sample.moving
+            assert not emulator.truth().moving  # the robot's word matches the truth
+            assert took < 2.0
+        with pytest.raises(StopUnconfirmedError, match="closed"):
+            robot.stop_and_confirm(2.0)  # after close: nothing to ask, said at once
+
+
+def test_a_second_signal_during_the_stop_does_not_skip_it(tmp_path: Path) -> None:
+    folder = tmp_path / "session"
+    with _emulator(tmp_path, "twice") as emulator:
+        process = subprocess.Popen(
+            _run_args(emulator, tmp_path, "k=0.5,l=0.5,n=1", folder),
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        _wait_for(process, folder, ev.MOTION_START, 30)
+        time.sleep(0.4)
+        assert emulator.truth().moving
+        process.send_signal(signal.SIGTERM)
+        time.sleep(0.05)  # the robot is decelerating: the stop is under way
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=30)
+        exited_at = time.monotonic()
+        assert process.returncode == 128 + signal.SIGTERM, err  # the first way out's status
+        _still_after_exit(emulator, exited_at)
+    records = read_journal(folder).records
+    assert [r.kind for r in records][-2:] == [ev.VOID, ev.STOPPED]
+    assert records[-1].data["reason"] == "SIGTERM"
