@@ -3,7 +3,8 @@
 Strict request/reply; a motion command is never resent (CHOICE C11). After
 any failed request the robot is resynchronised with ``gs`` and the error
 names the last encoder pose; any failure during a motion, and Ctrl-C, sends
-``st`` first.
+``st`` first. :meth:`NomadRobot.stop_and_confirm` sends ``st`` and waits, within
+a bound, for the robot to report that it stands still.
 """
 
 from __future__ import annotations
@@ -321,6 +322,7 @@ class NomadRobot:
                 break
             except OdohilError as exc:
                 problem = f"{type(request).__name__} failed: {exc}"
+                time.sleep(min(_STOP_POLL_S, max(0.0, deadline - time.monotonic())))
                 continue
             sample = EncoderSample.from_state(state, time.monotonic())
             if not sample.moving:
