@@ -20,6 +20,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
@@ -242,9 +243,9 @@ def report_stop(console: Console, outcome: StopOutcome | None, folder: Path) -> 
     if outcome is None:
         return
     if outcome.robot_stopped:
-        console.print(f"robot stopped (it reports {outcome.detail})", soft_wrap=True)
+        console.print(f"robot stopped (it reports {escape(outcome.detail)})", soft_wrap=True)
     else:
-        console.print(f"[bold red]{MAY_STILL_MOVE}[/]: {outcome.detail}", soft_wrap=True)
+        console.print(f"[bold red]{MAY_STILL_MOVE}[/]: {escape(outcome.detail)}", soft_wrap=True)
     if outcome.journaled:
         console.print(
             f"session journaled in {folder}; continue with `odohil resume {folder}`",
@@ -252,7 +253,7 @@ def report_stop(console: Console, outcome: StopOutcome | None, folder: Path) -> 
         )
     else:
         console.print(
-            f"[bold red]the journal could not be written[/]: {outcome.journal_error}; "
+            f"[bold red]the journal could not be written[/]: {escape(outcome.journal_error)}; "
             f"the records before this failure are kept in {folder}; free the disk, then "
             f"`odohil resume {folder}`",
             soft_wrap=True,
@@ -267,7 +268,7 @@ def report_unconfirmed(
     if exc.__cause__ is not None:
         cause = exc.__cause__
         console.print(
-            f"the run ended on: {cause or type(cause).__name__}", soft_wrap=True, markup=False
+            f"the run ended on: {str(cause) or type(cause).__name__}", soft_wrap=True, markup=False
         )
     if outcome is None:
         console.print(f"st sent but not confirmed: {exc}", soft_wrap=True, markup=False)
@@ -320,7 +321,7 @@ def session_exit_codes(console: Console) -> Iterator[None]:
         console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
         raise typer.Exit(exit_for_signal(signal_of(exc))) from None
     except StopUnconfirmedError as exc:
-        console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {exc}", soft_wrap=True)
+        console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
     except (OdohilError, OSError) as exc:
         console.print(f"[red]error[/]: {exc}", soft_wrap=True)
