@@ -21,6 +21,7 @@ from odohil.cli.run import (
     execute,
     finish,
     session_exit_codes,
+    session_input,
 )
 from odohil.science.parameters import SI_UNITS, ErrorParameters
 from odohil.science.robot_description import parse_robot_description
@@ -85,8 +86,7 @@ def demo(
                     "seed": seed,
                     "truth": truth,
                 }
-                with connect(emulator.device, 38400, emulator.truth_socket) as (robot, reader):
-                    source = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+                with session_input(console):
                     journal, state = start_session(
                         folder,
                         DEMO_ROBOT_TOML,
@@ -94,8 +94,12 @@ def demo(
                         measure="fake",
                         settings=settings,
                     )
-                    with journal:
-                        outcome = execute(journal, state, robot, source, settings, console)
+                with (
+                    journal,
+                    connect(emulator.device, 38400, emulator.truth_socket) as (robot, reader),
+                ):
+                    source = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+                    outcome = execute(journal, state, robot, source, settings, console)
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
     }

@@ -14,6 +14,7 @@ from odohil.cli.run import (
     finish,
     make_source,
     session_exit_codes,
+    session_input,
 )
 from odohil.driver.link import DEFAULT_BAUD
 from odohil.errors import InitError
@@ -39,11 +40,13 @@ def resume(
     """Continue an interrupted session: no trial lost, none counted twice.
 
     A trial cut off before or during its motion is voided and redone; one whose
-    motion finished resumes at its next missing measurement.
+    motion finished resumes at its next missing measurement. The session is
+    locked before the port is opened: one in use is refused (exit 2).
     """
     console = Console(stderr=True)
     with session_exit_codes(console):
-        resumed = resume_session(session)
+        with session_input(console):
+            resumed = resume_session(session)
         with resumed.journal:
             if resumed.torn is not None:
                 console.print(f"[yellow]warning[/]: {resumed.torn.describe()}")

@@ -2,8 +2,10 @@
 
 Also the pieces ``odohil resume`` and ``odohil demo`` share: opening the
 robot and its truth side channel, building the measurement source, running
-the engine with a progress bar, the final summary and the exit codes
-(0 done, 1 error, 130 Ctrl-C).
+the engine with a progress bar, the final summary and the exit statuses of
+:mod:`odohil.cli.exit_codes` (0 done, 1 error, 2 bad input or session in use,
+4 stop unconfirmed, 128 + N signal N). The session is locked before the
+robot's port is opened, so a second run on it sends nothing.
 """
 
 from __future__ import annotations
@@ -18,13 +20,26 @@ from typing import Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from odohil.cli.exit_codes import EXIT_BAD_INPUT
+from odohil.cli.exit_codes import (
+    EXIT_BAD_INPUT,
+    EXIT_ERROR,
+    EXIT_OK,
+    EXIT_STOP_UNCONFIRMED,
+    exit_for_signal,
+)
 from odohil.driver.link import DEFAULT_BAUD, open_port
 from odohil.driver.robot import NomadRobot
-from odohil.errors import InitError, OdohilError, ParameterError
+from odohil.errors import (
+    InitError,
+    JournalError,
+    OdohilError,
+    ParameterError,
+    StopUnconfirmedError,
+)
 from odohil.science.estimators import estimate
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.pose_selection import check_redundancy
@@ -34,17 +49,19 @@ from odohil.session.engine import (
     IncrementalLiveEstimator,
     MotionSettings,
     SessionEngine,
+    StopOutcome,
     description_of,
     start_session,
 )
 from odohil.session.journal import Journal, Record
 from odohil.session.plan import Plan, parse_plan
 from odohil.session.robot_file import load_robot_description
+from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
 from odohil.session.state import SessionState, session_observations
 
-EXIT_ERROR = 1
-EXIT_INTERRUPTED = 130
+MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
+"""What odohil says, prominently, when it could not confirm the robot's stop."""
 
 _PLAN_HELP = (
     'Designs and trial counts, e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30" '
@@ -193,19 +210,20 @@ def execute(
     observer.progress.start()
     try:
         final = engine.run()
-    except KeyboardInterrupt:
+    except StopUnconfirmedError as exc:
         observer.progress.stop()
-        console.print(
-            f"[yellow]interrupted[/]: robot stopped, session journaled; continue with "
-            f"`odohil resume {folder}`"
-        )
-        return Outcome(EXIT_INTERRUPTED, None)
+        report_unconfirmed(console, exc, engine.stop_outcome, folder)
+        return Outcome(EXIT_STOP_UNCONFIRMED, None)
+    except KeyboardInterrupt as exc:
+        observer.progress.stop()
+        code = exit_for_signal(signal_of(exc))
+        console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+        report_stop(console, engine.stop_outcome, folder)
+        return Outcome(code, None)
     except OdohilError as exc:
         observer.progress.stop()
-        console.print(f"[red]error[/]: {exc}")
-        console.print(
-            f"robot stopped, session journaled in {folder}; continue with `odohil resume {folder}`"
-        )
+        console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+        report_stop(console, engine.stop_outcome, folder)
         return Outcome(EXIT_ERROR, None)
     finally:
         observer.progress.stop()
@@ -214,7 +232,49 @@ def execute(
     except OdohilError as exc:
         console.print(f"[red]no estimate[/]: {exc}")
         return Outcome(EXIT_ERROR, None)
-    return Outcome(0, result)
+    return Outcome(EXIT_OK, result)
+
+
+def report_stop(console: Console, outcome: StopOutcome | None, folder: Path) -> None:
+    """Say what was checked on the way out: the robot's stop, then the journal.
+
+    "robot stopped" only when the robot reported it; "journaled" only when the
+    closing record is on disk.
+    """
+    if outcome is None:
+        return
+    if outcome.robot_stopped:
+        console.print(f"robot stopped (it reports {escape(outcome.detail)})", soft_wrap=True)
+    else:
+        console.print(f"[bold red]{MAY_STILL_MOVE}[/]: {escape(outcome.detail)}", soft_wrap=True)
+    if outcome.journaled:
+        console.print(
+            f"session journaled in {folder}; continue with `odohil resume {folder}`",
+            soft_wrap=True,
+        )
+    else:
+        console.print(
+            f"[bold red]the journal could not be written[/]: {escape(outcome.journal_error)}; "
+            f"the records before this failure are kept in {folder}; free the disk, then "
+            f"`odohil resume {folder}`",
+            soft_wrap=True,
+        )
+
+
+def report_unconfirmed(
+    console: Console, exc: StopUnconfirmedError, outcome: StopOutcome | None, folder: Path
+) -> None:
+    """The stop could not be confirmed: say so first and prominently, then why."""
+    console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
+    if exc.__cause__ is not None:
+        cause = exc.__cause__
+        console.print(
+            f"the run ended on: {str(cause) or type(cause).__name__}", soft_wrap=True, markup=False
+        )
+    if outcome is None:
+        console.print(f"st sent but not confirmed: {exc}", soft_wrap=True, markup=False)
+        return
+    report_stop(console, outcome, folder)
 
 
 def print_summary(
@@ -251,16 +311,33 @@ def _num(value: float | None) -> str:
 
 @contextlib.contextmanager
 def session_exit_codes(console: Console) -> Iterator[None]:
-    """Turn Ctrl-C into exit 130 and an odohil or OS error into its message and
-    exit 1 (the robot was already stopped and the journal written below)."""
+    """Make SIGTERM, SIGHUP and SIGQUIT end the command as Ctrl-C does, and turn
+    what escapes into its exit status: a signal 128 + N, an unconfirmed stop 4,
+    a session that cannot be opened or is in use 2, any other odohil or OS
+    error 1 (the robot was already stopped and the journal written below)."""
+    try:
+        with signals_raise():
+            yield
+    except KeyboardInterrupt as exc:
+        console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+        raise typer.Exit(exit_for_signal(signal_of(exc))) from None
+    except StopUnconfirmedError as exc:
+        console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
+    except (OdohilError, OSError) as exc:
+        console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+        raise typer.Exit(EXIT_ERROR) from None
+
+
+@contextlib.contextmanager
+def session_input(console: Console) -> Iterator[None]:
+    """A session that cannot be created or opened (in use, missing, finished,
+    corrupt) is bad input: its message, exit 2; nothing was sent to the robot."""
     try:
         yield
-    except KeyboardInterrupt:
-        console.print("[yellow]interrupted[/]")
-        raise typer.Exit(EXIT_INTERRUPTED) from None
-    except (OdohilError, OSError) as exc:
-        console.print(f"[red]error[/]: {exc}")
-        raise typer.Exit(EXIT_ERROR) from None
+    except JournalError as exc:
+        console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+        raise typer.Exit(EXIT_BAD_INPUT) from None
 
 
 def refuse_unredundant(description: RobotDescription, plan: Plan, console: Console) -> None:
@@ -321,14 +398,16 @@ def run(
             "seed": seed,
             "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
         }
-        with connect(port, baud, truth_socket) as (robot, truth):
-            source = make_source(kind, description, truth, seed, trial_file)
+        if kind == "fake" and not truth_socket and not port.startswith("fakerobot:"):
+            make_source(kind, description, None, seed, trial_file)  # says what is missing
+        with session_input(console):
             journal, state = start_session(
                 folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)
             )
-            console.print(f"session {folder}")
-            with journal:
-                outcome = execute(journal, state, robot, source, settings, console)
+        console.print(f"session {folder}")
+        with journal, connect(port, baud, truth_socket) as (robot, truth):
+            source = make_source(kind, description, truth, seed, trial_file)
+            outcome = execute(journal, state, robot, source, settings, console)
     finish(outcome, json_out, console)
 
 

@@ -2,9 +2,14 @@
 
 Pre-flight checks first (nothing moves until all pass); then per trial: mark
 the floor, watch the motion, type the tape distances (checked, re-asked with
-the reason), see the live estimate. Ctrl-C during a motion stops the robot,
-journals and exits 130; a second Ctrl-C exits at once. Running the wizard
-again on the same ``--session`` continues where the journal stops.
+the reason), see the live estimate. Ctrl-C (or SIGTERM, SIGHUP, SIGQUIT)
+stops the robot, waits for it to report that it stopped, journals and exits
+128 + N; if the stop cannot be confirmed it says the robot may still be
+moving and exits 4. A second Ctrl-C before the engine's stop has begun sends
+one ``st`` and exits at once (4 unless the robot confirmed the stop); during
+the stop itself (at most 2 s) it is held. The session is locked before the
+port is opened; one in use is refused (exit 2). Running the wizard again on
+the same ``--session`` continues where the journal stops.
 """
 
 from __future__ import annotations
@@ -12,24 +17,34 @@ from __future__ import annotations
 import math
 import os
 import re
+import select
 import signal
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
-from typing import Annotated, Any, NoReturn
+from typing import Annotated, Any, NoReturn, TextIO
 
 import numpy as np
 import typer
 from rich.console import Console
 
 from odohil import units
+from odohil.cli.exit_codes import (
+    EXIT_BAD_INPUT,
+    EXIT_ERROR,
+    EXIT_INTERRUPTED,
+    EXIT_OK,
+    EXIT_STOP_UNCONFIRMED,
+    exit_for_signal,
+)
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
-from odohil.cli.run import default_session_folder
+from odohil.cli.run import MAY_STILL_MOVE, default_session_folder, report_stop
 from odohil.driver.link import DEFAULT_BAUD
 from odohil.driver.robot import NomadRobot
 from odohil.driver.sample import EncoderSample
-from odohil.errors import MeasurementError, OdohilError
+from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
 from odohil.science.floor_marks import marks_from_pose
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import NOMAD150, ErrorParameters
@@ -48,12 +63,12 @@ from odohil.session.engine import (
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, parse_plan
 from odohil.session.robot_file import load_robot_description
+from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext
 from odohil.session.state import SessionState
 
-EXIT_ERROR = 1
-EXIT_PREFLIGHT = 2
-EXIT_INTERRUPTED = 130
+SECOND_CTRL_C_STOP_S = 0.5
+"""How long a second Ctrl-C waits for the robot to confirm its one ``st``, s."""
 DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
 MAX_WIRE = 32767
 """Largest relative move one ``pr`` carries, 0.1 in."""
@@ -136,12 +151,15 @@ def expected_ranges(
 class Interrupts:
     """SIGINT policy: during a motion the first Ctrl-C is raised at the next
     encoder sample (the driver then stops the robot); elsewhere at once; a
-    second Ctrl-C exits the process immediately with status 130."""
+    second Ctrl-C sends one ``st`` to :attr:`robot` (waiting at most
+    :data:`SECOND_CTRL_C_STOP_S` for the confirmation) and exits the process
+    at once: 130 if the robot confirmed, 4 if not."""
 
     def __init__(self) -> None:
         self.count = 0
         self.in_motion = False
         self.pending = False
+        self.robot: NomadRobot | None = None
 
     def install(self) -> None:
         """Take over SIGINT."""
@@ -150,8 +168,19 @@ class Interrupts:
     def _handler(self, signum: int, frame: FrameType | None) -> None:
         self.count += 1
         if self.count >= 2:
-            os.write(2, b"\nsecond Ctrl-C: exiting at once\n")
-            os._exit(EXIT_INTERRUPTED)
+            os.write(2, b"\nsecond Ctrl-C: one st, then exiting at once\n")
+            stopped = False
+            if self.robot is not None:
+                try:
+                    self.robot.stop_and_confirm(SECOND_CTRL_C_STOP_S)
+                    stopped = True
+                except BaseException:
+                    stopped = False
+            if stopped:
+                os.write(2, b"robot stopped (it reported standing still)\n")
+                os._exit(EXIT_INTERRUPTED)
+            os.write(2, f"WARNING: {MAY_STILL_MOVE}\n".encode())
+            os._exit(EXIT_STOP_UNCONFIRMED)
         if self.in_motion:
             self.pending = True
             os.write(2, b"\nCtrl-C: stopping the robot...\n")
@@ -163,6 +192,22 @@ class Interrupts:
         if self.pending:
             self.pending = False
             raise KeyboardInterrupt
+
+
+def _wait_readable(stream: TextIO, slice_s: float = 0.1) -> None:
+    """Wait until ``stream`` has a line, waking every ``slice_s`` seconds so that
+    a signal the kernel handed to another thread (numpy's) is acted on at once:
+    a read blocked in the main thread would not see it until the next key.
+    Only on a terminal, which hands over one line per read (a pipe's lines may
+    already sit in the stream's buffer)."""
+    try:
+        if not stream.isatty():
+            return
+        fd = stream.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    while not select.select([fd], [], [], slice_s)[0]:
+        pass
 
 
 class LiveRobot(NomadRobot):
@@ -211,7 +256,9 @@ class WizardPrompts:
 
     def _input(self, prompt: str) -> str:
         try:
-            return self.console.input(prompt)
+            self.console.print(prompt, end="")
+            _wait_readable(sys.stdin)
+            return input()
         except EOFError:
             raise MeasurementError("the input ended (no operator at the terminal)") from None
 
@@ -414,7 +461,7 @@ def plan_checks(plan: Plan, max_leg_m: float) -> list[Check]:
 def _fail(console: Console, check: Check) -> NoReturn:
     console.print(check_line(check))
     console.print("[red]Pre-flight failed: nothing was moved.[/]")
-    raise typer.Exit(EXIT_PREFLIGHT)
+    raise typer.Exit(EXIT_BAD_INPUT)
 
 
 @dataclass
@@ -540,25 +587,41 @@ def wizard(
     interrupts.install()
     folder = session or default_session_folder()
     console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
-    try:
-        if journal_path(folder).exists():
-            opened = _resume(console, folder, max_leg_m, port)
-            robot = _connect(console, port, baud)
-        else:
-            text, plan = _prepare(console, robot_file, plan_text, max_leg_m)
-            robot = _connect(console, port, baud)
-            assert robot_file is not None
-            opened = _start(console, folder, text, plan, robot_file, port, baud)
-    except KeyboardInterrupt:
-        raise typer.Exit(EXIT_INTERRUPTED) from None
-    with opened.journal, robot:
-        code = _run(console, opened, robot, interrupts, port, baud)
-    if code == EXIT_INTERRUPTED:
+    with signals_raise():
+        code = _guided(console, folder, interrupts, port, baud, robot_file, plan_text, max_leg_m)
+    if code != EXIT_OK and code != EXIT_STOP_UNCONFIRMED:
         console.print(
             f"Stopped. The journal is in {folder}; run the wizard again with "
             f"--session {folder} to continue."
         )
     raise typer.Exit(code)
+
+
+def _guided(
+    console: Console,
+    folder: Path,
+    interrupts: Interrupts,
+    port: str,
+    baud: int,
+    robot_file: Path | None,
+    plan_text: str | None,
+    max_leg_m: float,
+) -> int:
+    """Lock the session (resume or start it), then connect, then run."""
+    try:
+        if journal_path(folder).exists():
+            opened = _resume(console, folder, max_leg_m, port)
+        else:
+            text, plan = _prepare(console, robot_file, plan_text, max_leg_m)
+            assert robot_file is not None
+            opened = _start(console, folder, text, plan, robot_file, port, baud)
+        with opened.journal:
+            robot = _connect(console, port, baud)
+            interrupts.robot = robot
+            with robot:
+                return _run(console, opened, robot, interrupts, port, baud)
+    except KeyboardInterrupt as exc:
+        return exit_for_signal(signal_of(exc))
 
 
 def _run(
@@ -581,17 +644,24 @@ def _run(
     )
     try:
         engine.run()
-    except KeyboardInterrupt:
+    except StopUnconfirmedError:
         progress.stop()
-        console.print("\n[yellow]Interrupted:[/] robot stopped, journal written.")
-        return EXIT_INTERRUPTED
+        console.print(f"\n[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
+        report_stop(console, engine.stop_outcome, opened.journal.folder)
+        return EXIT_STOP_UNCONFIRMED
+    except KeyboardInterrupt as exc:
+        progress.stop()
+        console.print(f"\n[yellow]Interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+        report_stop(console, engine.stop_outcome, opened.journal.folder)
+        return exit_for_signal(signal_of(exc))
     except OdohilError as exc:
         progress.stop()
-        console.print(f"[red]error:[/] {exc}")
+        console.print(f"[red]error:[/] {exc}", soft_wrap=True)
+        report_stop(console, engine.stop_outcome, opened.journal.folder)
         return EXIT_ERROR
     finally:
         progress.stop()
-    return 0
+    return EXIT_OK
 
 
 def register(app: typer.Typer) -> None:

@@ -3,7 +3,8 @@
 Strict request/reply; a motion command is never resent (CHOICE C11). After
 any failed request the robot is resynchronised with ``gs`` and the error
 names the last encoder pose; any failure during a motion, and Ctrl-C, sends
-``st`` first.
+``st`` first. :meth:`NomadRobot.stop_and_confirm` sends ``st`` and waits, within
+a bound, for the robot to report that it stands still.
 
 Stale replies: the robot's timestamp (u32 ms) never goes backwards on one
 connection, so a state packet older than the last one accepted is a late
@@ -35,6 +36,7 @@ from odohil.errors import (
     OdohilTimeoutError,
     ParameterError,
     ProtocolError,
+    StopUnconfirmedError,
 )
 from odohil.protocol import messages as m
 from odohil.protocol.codes import MOTION_CODES, STATE_REPLY_CODES
@@ -47,6 +49,9 @@ from odohil.units import WIRE_ANGLES_PER_TURN, metres_to_wire, radians_to_wire
 WS_MAX_S = 255
 _U32_WRAP = 1 << 32
 _STATE_TYPES = frozenset(int(code) for code in STATE_REPLY_CODES)
+STOP_CONFIRM_TIMEOUT_S = 2.0
+"""How long :meth:`NomadRobot.stop_and_confirm` waits for the robot to report it stands still, s."""
+_STOP_POLL_S = 0.02
 
 
 def is_older_ms(candidate_ms: int, last_ms: int) -> bool:
@@ -329,6 +334,49 @@ class NomadRobot:
     def stop(self) -> EncoderSample:
         """``st``: stop and hold position."""
         return self._call(m.St())
+
+    def stop_and_confirm(self, timeout_s: float = STOP_CONFIRM_TIMEOUT_S) -> EncoderSample:
+        """Send ``st``, then poll ``gs`` until the robot reports no axis active.
+
+        A failed ``st`` is sent again while time is left (never after the line
+        is gone). Returns the first sample that shows the robot standing still.
+
+        Args:
+            timeout_s: the whole bound, s (finite, >= 0).
+
+        Raises:
+            StopUnconfirmedError: the robot did not report that it stopped within
+                ``timeout_s`` (line closed or cut, no or bad replies, still moving).
+        """
+        if not math.isfinite(timeout_s) or timeout_s < 0:
+            raise ParameterError(f"timeout must be finite and >= 0 s, got {timeout_s!r}")
+        deadline = time.monotonic() + timeout_s
+        request: m.Request = m.St()
+        problem = "no time to ask"
+        while not self._link.closed:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            try:
+                state = self._request(request, first_byte_s=min(NORMAL_TIMEOUT_S, left))
+            except DisconnectedError as exc:
+                problem = f"the line is cut ({exc})"
+                break
+            except OdohilError as exc:
+                problem = f"{type(request).__name__} failed: {exc}"
+                time.sleep(min(_STOP_POLL_S, max(0.0, deadline - time.monotonic())))
+                continue
+            sample = EncoderSample.from_state(state, time.monotonic())
+            if not sample.moving:
+                return sample
+            request = m.Gs()
+            problem = f"still moving at {sample.pose_text()}"
+            time.sleep(min(_STOP_POLL_S, max(0.0, deadline - time.monotonic())))
+        if self._link.closed and problem == "no time to ask":
+            problem = "the line is closed"
+        raise StopUnconfirmedError(
+            f"the robot did not report that it stopped within {timeout_s:g} s: {problem}"
+        )
 
     def limp(self) -> EncoderSample:
         """``lp``: motors unpowered."""

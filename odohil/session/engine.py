@@ -24,9 +24,14 @@ One trial attempt:
 Every record is on disk (fsync) before the next step starts, so after a crash
 :func:`resume_session` continues exactly where the journal stops: an attempt
 cut off before or during its motion is voided and the trial redone; one whose
-motion finished resumes at its next missing distance. On any failure or
-Ctrl-C the engine asks the robot to stop, journals ``stopped`` (and ``void``
-for an attempt cut off before its motion ended) and re-raises.
+motion finished resumes at its next missing distance. On any failure, Ctrl-C
+or other signal (:mod:`odohil.session.signals`) the engine sends ``st`` and
+waits, within ``MotionSettings.stop_timeout_s``, for the robot to report that
+it stopped; it journals ``void`` for an attempt cut off before its motion
+ended, then ``stopped`` (the robot reported it) or ``stop_unconfirmed`` (it did
+not: :class:`~odohil.errors.StopUnconfirmedError` is raised instead of the
+original exception). :attr:`SessionEngine.stop_outcome` says what was
+confirmed and what reached the disk.
 
 Rendering and estimation are pluggable: a :class:`SessionObserver` sees every
 record with the state it leads to; a :class:`LiveEstimator` turns completed
@@ -37,6 +42,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import signal
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -53,9 +59,15 @@ from odohil.driver.motion import (
     MotionRecord,
     forth_and_back,
 )
-from odohil.driver.robot import NomadRobot
+from odohil.driver.robot import STOP_CONFIRM_TIMEOUT_S, NomadRobot
 from odohil.driver.sample import EncoderSample
-from odohil.errors import InconsistentMeasurementError, JournalError, MeasurementError, OdohilError
+from odohil.errors import (
+    InconsistentMeasurementError,
+    JournalError,
+    MeasurementError,
+    OdohilError,
+    StopUnconfirmedError,
+)
 from odohil.science.estimators import IncrementalEstimator, Observation
 from odohil.science.floor_marks import MarkDistances, distance_labels
 from odohil.science.parameters import PARAMETER_NAMES
@@ -70,6 +82,7 @@ from odohil.science.robot_description import RobotDescription, parse_robot_descr
 from odohil.session import state as ev
 from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
+from odohil.session.signals import SignalReceived, signals_held
 from odohil.session.sources import MeasurementSource, TrialContext, check_distance
 from odohil.session.state import (
     CompletedTrial,
@@ -117,6 +130,8 @@ class MotionSettings:
         watchdog_s: the robot's watchdog (``conf_tm``), s; it stops the robot
             when the host dies mid-motion; 0 leaves it off.
         settle_timeout_s: how long to wait for a robot found moving to stop, s.
+        stop_timeout_s: on the way out, how long to wait for the robot to
+            report that it stopped after ``st``, s.
     """
 
     speeds: tuple[float, float] = DEFAULT_SPEEDS
@@ -125,6 +140,7 @@ class MotionSettings:
     step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S
     watchdog_s: float = 2.0
     settle_timeout_s: float = 60.0
+    stop_timeout_s: float = STOP_CONFIRM_TIMEOUT_S
 
     def to_json(self) -> dict[str, Any]:
         """The settings as a JSON object (SI units)."""
@@ -255,6 +271,24 @@ class IncrementalLiveEstimator:
         return self.inner.result().to_json_dict()
 
 
+@dataclass(frozen=True)
+class StopOutcome:
+    """What the engine could check when a run ended early.
+
+    Attributes:
+        robot_stopped: the robot reported, after ``st``, that it stands still.
+        detail: the encoder pose it stopped at, or why the stop is unconfirmed.
+        journaled: the closing record (``stopped`` or ``stop_unconfirmed``) is
+            on disk (appended and fsync-ed).
+        journal_error: why the journal could not be written ("" when it was).
+    """
+
+    robot_stopped: bool
+    detail: str
+    journaled: bool
+    journal_error: str = ""
+
+
 class SessionEngine:
     """Runs the trials of one session (see the module docstring).
 
@@ -299,6 +333,7 @@ class SessionEngine:
         self.description = description_of(state)
         self.labels = distance_labels(self.description)
         self.latest_estimate: Mapping[str, Any] | None = None
+        self.stop_outcome: StopOutcome | None = None
         self._estimated = 0
 
     # -- journal ---------------------------------------------------------
@@ -315,8 +350,13 @@ class SessionEngine:
     def run(self, max_trials: int | None = None) -> SessionState:
         """Run trials until the plan is done (or ``max_trials`` more completed).
 
-        Returns the final state. On any exception (Ctrl-C included) the robot
-        is asked to stop, ``stopped`` is journaled and the exception re-raised.
+        Returns the final state. On any exception (Ctrl-C and other signals
+        included) the robot is stopped and the stop confirmed, the end
+        journaled (see :meth:`_stopped`), and the exception re-raised.
+
+        Raises:
+            StopUnconfirmedError: the run ended early and the robot did not
+                report that it stopped (the original exception is its cause).
         """
         try:
             self._catch_up_estimate()
@@ -330,27 +370,58 @@ class SessionEngine:
                 completed += 1
             self._log(ev.FINISHED, {"n_trials": len(self.state.completed)})
         except BaseException as exc:
-            self._stopped(exc)
-            raise
+            if self._stopped(exc):
+                raise
+            assert self.stop_outcome is not None
+            raise StopUnconfirmedError(self.stop_outcome.detail) from exc
         return self.state
 
-    def _stopped(self, exc: BaseException) -> None:
-        with contextlib.suppress(OdohilError):
-            self.robot.stop()
-        reason = "interrupted" if isinstance(exc, KeyboardInterrupt) else "error"
+    def _stopped(self, exc: BaseException) -> bool:
+        """Stop the robot, confirm it, journal the end; whether it was confirmed.
+
+        Further signals are held (not lost, not acted on) until this is done:
+        the stop is bounded by ``stop_timeout_s`` and each record by its fsync.
+        """
+        if isinstance(exc, SignalReceived):
+            reason = signal.Signals(exc.signum).name
+        elif isinstance(exc, KeyboardInterrupt):
+            reason = "interrupted"
+        else:
+            reason = "error"
         message = str(exc) or type(exc).__name__
-        with contextlib.suppress(JournalError, OSError, ValueError):
-            opened = self.state.open_trial
-            if opened is not None and opened.phase in (Phase.MARKED, Phase.MOVING):
-                self._log(
-                    ev.VOID,
-                    {
-                        "trial": opened.trial,
-                        "attempt": opened.attempt,
-                        "reason": f"{reason} before the motion ended: {message}",
-                    },
-                )
-            self._log(ev.STOPPED, {"reason": reason, "message": message})
+        with signals_held():
+            try:
+                sample = self.robot.stop_and_confirm(self.motion.stop_timeout_s)
+            except StopUnconfirmedError as unconfirmed:
+                stopped, detail, state = False, str(unconfirmed), None
+            else:
+                stopped, detail, state = True, sample.pose_text(), _sample_json(sample)
+            try:
+                opened = self.state.open_trial
+                if opened is not None and opened.phase in (Phase.MARKED, Phase.MOVING):
+                    self._log(
+                        ev.VOID,
+                        {
+                            "trial": opened.trial,
+                            "attempt": opened.attempt,
+                            "reason": f"{reason} before the motion ended: {message}",
+                        },
+                    )
+                if stopped:
+                    self._log(
+                        ev.STOPPED,
+                        {"reason": reason, "message": message, "robot": "stopped", "state": state},
+                    )
+                else:
+                    self._log(
+                        ev.STOP_UNCONFIRMED,
+                        {"reason": reason, "message": message, "detail": detail},
+                    )
+            except (JournalError, OSError, ValueError) as failed:
+                self.stop_outcome = StopOutcome(stopped, detail, False, str(failed))
+            else:
+                self.stop_outcome = StopOutcome(stopped, detail, True)
+        return stopped
 
     def _catch_up_estimate(self) -> None:
         """Feed the trials completed in earlier processes to the estimator."""

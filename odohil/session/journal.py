@@ -17,7 +17,10 @@ the machine died). Reading tells the two cases apart:
 - a bad line with anything after it: the journal is corrupt,
   :class:`~odohil.errors.JournalError`.
 
-Only one process may append at a time (an exclusive ``flock`` on the journal).
+Only one process may append at a time (an exclusive ``flock`` on the journal,
+taken by :meth:`Journal.create` and :meth:`Journal.open`; the commands take it
+before they open the robot's port, so a second one is refused, "session in
+use", before it sends anything).
 """
 
 from __future__ import annotations
@@ -254,6 +257,7 @@ class Journal:
                 journal_path(path), os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_EXCL, 0o644
             )
         except FileExistsError:
+            cls._check_not_in_use(path)
             raise JournalError(
                 f"{path} already holds a session journal; use `odohil resume {path}` "
                 "to continue it, or choose another folder"
@@ -295,6 +299,18 @@ class Journal:
             raise
         return cls(path, fd, len(contents.records) + 1), contents
 
+    @classmethod
+    def _check_not_in_use(cls, folder: Path) -> None:
+        """Raise the in-use error if another process holds the journal's lock."""
+        try:
+            fd = os.open(journal_path(folder), os.O_RDONLY)
+        except OSError:
+            return
+        try:
+            cls._lock(fd, folder)
+        finally:
+            os.close(fd)
+
     @staticmethod
     def _lock(fd: int, folder: Path) -> None:
         """Take the exclusive lock; the caller closes ``fd`` on failure."""
@@ -302,7 +318,8 @@ class Journal:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except OSError:
             raise JournalError(
-                f"the session in {folder} is in use by another odohil process"
+                f"session in use: {folder} is locked by another odohil process "
+                "(only one run, resume or wizard at a time)"
             ) from None
 
     @staticmethod
@@ -344,7 +361,7 @@ class Journal:
             )
         when = time.time()
         line = encode_record(self._next_seq, kind, data, when)
-        # Ctrl-C (or SIGTERM) is held back until the record is whole and on
+        # Ctrl-C (or SIGTERM, SIGHUP, SIGQUIT) is held back until the record is whole and on
         # disk, so that the record and the sequence count never disagree.
         with _signals_deferred():
             try:
@@ -383,12 +400,12 @@ class Journal:
         self.close()
 
 
-_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
 
 
 @contextlib.contextmanager
 def _signals_deferred() -> Iterator[None]:
-    """Hold SIGINT and SIGTERM back (main thread only); on exit the previous
+    """Hold SIGINT, SIGTERM, SIGHUP and SIGQUIT back (main thread only); on exit the previous
     handlers get what arrived. A thread signal mask would not do: the kernel
     may hand the signal to another thread, and Python still raises it here."""
     if threading.current_thread() is not threading.main_thread():

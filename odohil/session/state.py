@@ -36,7 +36,11 @@ Event kinds, in the order a session writes them (``data`` members in brackets):
 - ``estimate`` [``n_trials``, ``result``: the estimate's JSON object];
 - ``void``: the attempt is discarded and the trial redone [``trial``,
   ``attempt``, ``reason``];
-- ``stopped``: the process stopped early [``reason``, ``message``];
+- ``stopped``: the process stopped early and the robot reported that it
+  stopped [``reason``, ``message``, ``robot``, ``state``: the encoder sample];
+- ``stop_unconfirmed``: the process stopped early and the robot did NOT
+  report that it stopped: it may have driven on [``reason``, ``message``,
+  ``detail``];
 - ``finished`` [``n_trials``].
 
 A trial is identified by its number in the plan (1-based); each try at it is
@@ -82,9 +86,10 @@ SOLVED = "solved"
 ESTIMATE = "estimate"
 VOID = "void"
 STOPPED = "stopped"
+STOP_UNCONFIRMED = "stop_unconfirmed"
 FINISHED = "finished"
 
-_INFO_KINDS = frozenset({ROBOT, RESUMED, TORN_RECORD, STOPPED})
+_INFO_KINDS = frozenset({ROBOT, RESUMED, TORN_RECORD, STOPPED, STOP_UNCONFIRMED})
 
 
 class Phase(Enum):
