@@ -315,7 +315,7 @@ class WizardObserver:
             assert state.plan is not None
             self.robot.polls = 0
             self.interrupts.in_motion = True
-            self.progress.start(state.plan.items[opened.design_index].design)
+            self.progress.start(state.plan.design_of(opened.trial))
         elif kind == ev.SOLVED:
             x, y, theta = data["pose_change"]
             self.console.print(

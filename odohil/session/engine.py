@@ -376,7 +376,7 @@ class SessionEngine:
             trial=opened.trial,
             attempt=opened.attempt,
             n_trials=self.plan.n_trials,
-            design=self.plan.items[opened.design_index].design,
+            design=self.plan.design_of(opened.trial),
             labels=self.labels,
             start=opened.start,
             end=opened.end,
@@ -395,7 +395,7 @@ class SessionEngine:
     def _run_trial(self, trial: int) -> None:
         attempt = self.state.next_attempt(trial)
         design_index = self.plan.design_index(trial)
-        design = self.plan.items[design_index].design
+        design = self.plan.design_of(trial)  # as driven: one-way trials alternate
         self._settle()
         self.robot.define_pose(0.0, 0.0)
         self.robot.define_angles(0.0, 0.0)
@@ -411,7 +411,13 @@ class SessionEngine:
         ids = {"trial": trial, "attempt": attempt}
         self._log(
             ev.TRIAL_START,
-            {**ids, "design": design_index, "zeroed": _sample_json(zeroed), "start": start},
+            {
+                **ids,
+                "design": design_index,
+                "backward": design.backward,
+                "zeroed": _sample_json(zeroed),
+                "start": start,
+            },
         )
         self._log(ev.MOTION_START, ids)
         record = forth_and_back(

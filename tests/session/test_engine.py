@@ -172,7 +172,9 @@ def _trial_file(path: Path, rows: list[tuple[float, float, str, float, float, fl
 
 def test_recorded_distances_from_a_trial_file(tmp_path: Path) -> None:
     poses = [(0.5, 0.01, -0.02), (0.49, -0.005, 0.01)]
-    file = _trial_file(tmp_path / "trials.csv", [(0.5, 0.5, "turn", *p) for p in poses])
+    # the second one-way trial comes back: it is driven backwards
+    rows = [(0.5, 0.5, v, *p) for v, p in zip(("turn", "turn-backward"), poses, strict=True)]
+    file = _trial_file(tmp_path / "trials.csv", rows)
     source = recorded_source_from_file(file, description())
     with fake_robot(QUERY) as (robot, _):
         journal, state = _start(tmp_path / "s", "k=0.5,l=0.5,n=2")

@@ -1,0 +1,65 @@
+"""Floor-aware choreography: one-way trials come back, the floor length is
+respected, and a resumed session starts where its next trial should.
+
+Against the fake robot on a real pseudo-terminal (``python -m fakes.nomad``),
+through the console commands."""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from fakes.nomad.process import EmulatorProcess
+from odohil.session import state as ev
+from odohil.session.journal import read_journal
+from odohil.session.state import load_session_trials
+from tests.session.helpers import write_robot
+
+ODOHIL = shutil.which("odohil") or "odohil"
+EMULATOR = ["--time-scale", "20000", "--E-R", "-1", "--K-theta", "0.3", "--K-rho", "0.0009"]
+
+
+@pytest.fixture
+def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
+    args = [*EMULATOR, "--seed", "5", "--no-pacing", "--truth-socket", str(tmp_path / "t.sock")]
+    with EmulatorProcess(args) as process:
+        yield process
+
+
+def _run(emulator: EmulatorProcess, tmp_path: Path, plan: str, *extra: str) -> list[str]:
+    return [
+        ODOHIL, "run",
+        "--port", emulator.device,
+        "--truth-socket", emulator.truth_socket,
+        "--robot", str(write_robot(tmp_path)),
+        "--plan", plan,
+        "--measure", "fake",
+        "--session", str(tmp_path / "session"),
+        "--json",
+        *extra,
+    ]  # fmt: skip
+
+
+def test_one_way_trials_come_back_over_the_same_floor(
+    emulator: EmulatorProcess, tmp_path: Path
+) -> None:
+    # before: four one-way trials of 1 m ended 4 m from where the first started
+    start = emulator.truth()
+    done = subprocess.run(
+        _run(emulator, tmp_path, "k=0.5,l=1,n=4"), capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr
+    end = emulator.truth()
+    away = math.hypot(end.true_x_m - start.true_x_m, end.true_y_m - start.true_y_m)
+    assert away < 0.1, away  # only the odometry error of four 1 m runs
+    records = read_journal(tmp_path / "session").records
+    driven = [r.data["backward"] for r in records if r.kind == ev.TRIAL_START]
+    assert driven == [False, True, False, True]
+    # offline re-estimation sees the designs as driven
+    trials = load_session_trials(tmp_path / "session")
+    assert [t.design.backward for t in trials.trials] == driven
