@@ -32,16 +32,20 @@ from odohil.session.engine import (
     IncrementalLiveEstimator,
     MotionSettings,
     SessionEngine,
+    StartCheck,
     description_of,
     start_session,
 )
+from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
 from odohil.session.plan import parse_plan
 from odohil.session.robot_file import load_robot_description
 from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
+from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState, session_observations
 
 EXIT_ERROR = 1
+EXIT_BAD_INPUT = 2
 EXIT_INTERRUPTED = 130
 
 _PLAN_HELP = (
@@ -171,6 +175,7 @@ def execute(
     connection: Mapping[str, Any],
     console: Console,
     motion: MotionSettings | None = None,
+    start_check: StartCheck | None = None,
 ) -> Outcome:
     """Run the engine with a progress bar; map failures to exit codes.
 
@@ -187,6 +192,7 @@ def execute(
         observer=observer,
         motion=motion,
         connection=connection,
+        start_check=start_check or show_start(console),
     )
     observer.progress.start()
     try:
@@ -213,6 +219,15 @@ def execute(
         console.print(f"[red]no estimate[/]: {exc}")
         return Outcome(EXIT_ERROR, None)
     return Outcome(0, result)
+
+
+def show_start(console: Console) -> StartCheck:
+    """A start check that prints where the encoders read (with the heading)."""
+
+    def check(start: StartPose) -> None:
+        console.print(f"robot: {start.describe()}")
+
+    return check
 
 
 def print_summary(
@@ -299,6 +314,11 @@ def run(
     with session_exit_codes(console):
         plan = parse_plan(plan_text)
         description = load_robot_description(robot_file)
+        try:
+            check_floor(plan, description)
+        except ParameterError as exc:
+            console.print(f"[red]error[/]: {exc}; nothing moved")
+            raise typer.Exit(EXIT_BAD_INPUT) from None
         toml = robot_file.read_text(encoding="utf-8")
         kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
         settings = {

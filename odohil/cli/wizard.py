@@ -345,7 +345,7 @@ class WizardObserver:
 def _can_estimate(state: SessionState) -> bool:
     counts: dict[Design, int] = {}
     for trial in state.completed:
-        counts[trial.design] = counts.get(trial.design, 0) + 1
+        counts[trial.design.forward] = counts.get(trial.design.forward, 0) + 1
     return any(n >= 2 and d.path().signed_distance_m != 0 for d, n in counts.items())
 
 

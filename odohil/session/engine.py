@@ -56,6 +56,7 @@ from odohil.session import state as ev
 from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
 from odohil.session.sources import MeasurementSource, TrialContext, check_distance
+from odohil.session.start_pose import StartPose, check_start
 from odohil.session.state import (
     CompletedTrial,
     OpenTrial,
@@ -65,6 +66,10 @@ from odohil.session.state import (
     description_of_header,
     replay,
 )
+
+StartCheck = Callable[[StartPose], None]
+"""Judges where the robot stands before the session goes on: returns to go on
+(after putting the robot back, say), raises to refuse."""
 
 MAX_REJECTIONS = 3
 """How many times one attempt's distances may be rejected before giving up."""
@@ -263,6 +268,7 @@ class SessionEngine:
         motion: MotionSettings | None = None,
         connection: Mapping[str, Any] | None = None,
         max_rejections: int = MAX_REJECTIONS,
+        start_check: StartCheck | None = None,
     ) -> None:
         if state.plan is None:
             raise JournalError("the session has no plan")
@@ -276,6 +282,7 @@ class SessionEngine:
         self.motion = motion or MotionSettings()
         self.connection = dict(connection or {})
         self.max_rejections = max_rejections
+        self.start_check = start_check
         self.description = description_of(state)
         self.labels = distance_labels(self.description)
         self.latest_estimate: Mapping[str, Any] | None = None
@@ -301,6 +308,7 @@ class SessionEngine:
         try:
             self._catch_up_estimate()
             self._connect()
+            self._check_start()
             self._finish_open_trial()
             completed = 0
             while (trial := self.state.next_trial()) is not None:
@@ -353,6 +361,23 @@ class SessionEngine:
                 "state": _sample_json(sample),
             },
         )
+
+    def _check_start(self) -> None:
+        """Where the robot stands against where the next trial starts: journaled
+        (``start_pose``), then judged by ``start_check`` (which may put the robot
+        back, or raise)."""
+        start = check_start(self.state, self._settle())
+        self._log(
+            ev.START_POSE,
+            {
+                "trial": start.trial,
+                "expected": list(start.expected) if start.expected is not None else None,
+                "actual": list(start.actual),
+                "ok": start.ok,
+            },
+        )
+        if self.start_check is not None:
+            self.start_check(start)
 
     def _finish_open_trial(self) -> None:
         opened = self.state.open_trial

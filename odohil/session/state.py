@@ -72,8 +72,9 @@ ESTIMATE = "estimate"
 VOID = "void"
 STOPPED = "stopped"
 FINISHED = "finished"
+START_POSE = "start_pose"
 
-_INFO_KINDS = frozenset({ROBOT, RESUMED, TORN_RECORD, STOPPED})
+_INFO_KINDS = frozenset({ROBOT, RESUMED, TORN_RECORD, STOPPED, START_POSE})
 
 
 class Phase(Enum):

@@ -250,7 +250,9 @@ def test_records_go_to_the_observer_in_order(tmp_path: Path) -> None:
                 observer=CallbackObserver(callback),
             ).run()
     kinds = [kind for _, kind, _ in seen]
-    assert kinds[:4] == [ev.ROBOT, ev.TRIAL_START, ev.MOTION_START, ev.MOTION_DONE]
+    assert kinds[:5] == [
+        ev.ROBOT, ev.START_POSE, ev.TRIAL_START, ev.MOTION_START, ev.MOTION_DONE,
+    ]  # fmt: skip
     assert kinds[-2:] == [ev.SOLVED, ev.FINISHED]
     assert [seq for seq, _, _ in seen] == list(range(2, 2 + len(seen)))
     assert seen[-1][2] == 1

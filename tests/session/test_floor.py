@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import math
 import shutil
+import signal
 import subprocess
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from fakes.nomad.process import EmulatorProcess
+from odohil.errors import JournalError
 from odohil.session import state as ev
 from odohil.session.journal import read_journal
 from odohil.session.state import load_session_trials
@@ -63,3 +66,64 @@ def test_one_way_trials_come_back_over_the_same_floor(
     # offline re-estimation sees the designs as driven
     trials = load_session_trials(tmp_path / "session")
     assert [t.design.backward for t in trials.trials] == driven
+
+
+@pytest.fixture
+def slow_emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
+    """The fake at a time scale where a 2 m leg lasts about a quarter second."""
+    args = [*EMULATOR, "--seed", "5", "--no-pacing", "--truth-socket", str(tmp_path / "t.sock")]
+    args[args.index("--time-scale") + 1] = "20"
+    with EmulatorProcess(args) as process:
+        yield process
+
+
+def _kinds(tmp_path: Path) -> list[str]:
+    try:
+        return [r.kind for r in read_journal(tmp_path / "session").records]
+    except (OSError, JournalError):
+        return []
+
+
+def test_resume_after_ctrl_c_mid_motion_refuses_unless_from_here(
+    slow_emulator: EmulatorProcess, tmp_path: Path
+) -> None:
+    emulator = slow_emulator
+    process = subprocess.Popen(
+        _run(emulator, tmp_path, "k=0.5,l=2,n=2"),
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while ev.MOTION_START not in _kinds(tmp_path):
+        assert process.poll() is None, process.communicate()[1]
+        assert time.monotonic() < deadline
+        time.sleep(0.002)
+    while emulator.truth().moving is False and time.monotonic() < deadline:
+        time.sleep(0.002)
+    time.sleep(0.1)  # well into the 2 m leg
+    process.send_signal(signal.SIGINT)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 130, err
+    while emulator.truth().moving:
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    stood = emulator.truth()
+
+    # before: resume started the trial again from where the robot stood
+    resume = [ODOHIL, "resume", str(tmp_path / "session"), "--json"]
+    refused = subprocess.run(resume, capture_output=True, text=True, timeout=60)
+    assert refused.returncode == 2, refused.stderr
+    assert "not where trial 1 starts" in refused.stderr
+    assert "heading=" in refused.stderr
+    assert "--from-here" in refused.stderr
+    after = emulator.truth()
+    assert (after.true_x_m, after.true_y_m) == (stood.true_x_m, stood.true_y_m)  # nothing moved
+    assert ev.TRIAL_START not in _kinds(tmp_path)[-3:]
+
+    # told to, it goes on from there and completes every trial once
+    done = subprocess.run([*resume, "--from-here"], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "--from-here" in done.stderr
+    records = read_journal(tmp_path / "session").records
+    assert sorted(r.data["trial"] for r in records if r.kind == ev.SOLVED) == [1, 2]
