@@ -127,3 +127,45 @@ def test_resume_after_ctrl_c_mid_motion_refuses_unless_from_here(
     assert "--from-here" in done.stderr
     records = read_journal(tmp_path / "session").records
     assert sorted(r.data["trial"] for r in records if r.kind == ev.SOLVED) == [1, 2]
+
+
+def test_run_refuses_a_plan_over_the_floor_before_anything_moves(
+    emulator: EmulatorProcess, tmp_path: Path
+) -> None:
+    robot = tmp_path / "floor.toml"
+    robot.write_text(
+        write_robot(tmp_path).read_text(encoding="utf-8") + "[floor]\nlength_m = 8.0\n"
+    )
+    before = emulator.truth()
+    args = _run(emulator, tmp_path, "k=1,l=2,n=2;k=0.5,l=12,n=3")
+    args[args.index("--robot") + 1] = str(robot)
+    done = subprocess.run(args, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert "plan design 2 (k=0.5 l=12 m turn)" in done.stderr
+    assert "length_m is 8 m" in done.stderr
+    assert not (tmp_path / "session").exists()
+    after = emulator.truth()
+    assert (after.true_x_m, after.true_y_m) == (before.true_x_m, before.true_y_m)
+
+
+def test_floor_length_is_read_checked_and_bounds_the_planner() -> None:
+    from odohil.errors import RobotDescriptionError
+    from odohil.science.parameters import NOMAD150
+    from odohil.science.planner import DEFAULT_FLOOR_M, plan_experiment
+    from odohil.science.robot_description import parse_robot_description
+    from tests.session.helpers import ROBOT_TOML
+
+    description = parse_robot_description(ROBOT_TOML + "[floor]\nlength_m = 3\n")
+    assert description.floor_length_m == 3.0
+    assert parse_robot_description(ROBOT_TOML).floor_length_m is None
+    for bad in ("0", "-1", "1e9", '"8"', "nan"):
+        with pytest.raises(RobotDescriptionError, match=r"floor\.length_m"):
+            parse_robot_description(ROBOT_TOML + f"[floor]\nlength_m = {bad}\n")
+    with pytest.raises(RobotDescriptionError, match=r"floor\.width_m"):
+        parse_robot_description(ROBOT_TOML + "[floor]\nwidth_m = 3\n")
+    # before: a 600 m budget gave k=0.5 l=30 n=13, 390 m in one direction
+    default = plan_experiment(NOMAD150, 600.0, max_designs=1)
+    assert max(item.design.l_m for item in default.items) <= DEFAULT_FLOOR_M
+    assert default.excursion_m <= DEFAULT_FLOOR_M
+    short = plan_experiment(NOMAD150, 600.0, floor_m=3.0)
+    assert short.excursion_m <= 3.0
