@@ -169,3 +169,19 @@ def test_floor_length_is_read_checked_and_bounds_the_planner() -> None:
     assert default.excursion_m <= DEFAULT_FLOOR_M
     short = plan_experiment(NOMAD150, 600.0, floor_m=3.0)
     assert short.excursion_m <= 3.0
+
+
+def test_choreography_cost_does_not_grow_with_the_trial_count() -> None:
+    from odohil.session.plan import Plan, parse_plan
+
+    plan = parse_plan("k=0.5,l=2,n=1000000000;k=1,l=3,n=1000000000")
+    started = time.monotonic()
+    # out and back over 2 m, then the 3 m trials from the first start, forwards
+    assert plan.excursion_m == 3.0
+    assert [plan.design_of(t).backward for t in (1, 2, 3, 10**9)] == [False, True, False, True]
+    assert plan.choreography.trial(10**9 + 1) == (plan.items[1].design, 0.0)
+    assert time.monotonic() - started < 1.0
+    # sessions journaled before the alternation were all forwards: 40 m for 40 trials
+    legacy = Plan(parse_plan("k=0.5,l=1,n=40").items, alternate=False)
+    assert legacy.excursion_m == 40.0
+    assert Plan.from_json({"designs": legacy.to_json()["designs"]}).excursion_m == 40.0
