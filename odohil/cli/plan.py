@@ -21,8 +21,14 @@ from odohil.science.parameters import (
     SI_UNITS,
     ErrorParameters,
 )
-from odohil.science.planner import DEFAULT_MAX_LEG_M, MAX_DESIGNS, Plan, plan_experiment
-from odohil.science.robot_description import RobotDescription
+from odohil.science.planner import (
+    DEFAULT_FLOOR_M,
+    DEFAULT_MAX_LEG_M,
+    MAX_DESIGNS,
+    Plan,
+    plan_experiment,
+)
+from odohil.science.robot_description import MAX_FLOOR_M, RobotDescription
 from odohil.session.robot_file import load_robot_description
 
 DEFAULT_SIGMA_M = 0.001
@@ -87,6 +93,7 @@ def _document(plan: Plan, prior: ErrorParameters, measurement: str) -> dict[str,
             for item in plan.items
         ],
         "distance_m": plan.distance_m,
+        "floor_needed_m": plan.excursion_m,
         "n_trials": plan.n_trials,
         "expected_stderr": errors,
         "criterion": plan.criterion,
@@ -112,6 +119,9 @@ def _print(plan: Plan, prior: ErrorParameters, measurement: str, budget_m: float
             f"{item.distance_m:g}",
         )
     console.print(designs)
+    console.print(
+        f"free floor needed: {plan.excursion_m:g} m (one-way trials alternate and come back)"
+    )
     errors = Table(title="Expected standard errors (Cramer-Rao)", caption=measurement)
     for column in ("parameter", "prior (paper)", "stderr (paper)", "stderr (SI)", "target"):
         errors.add_column(column, justify="right")
@@ -165,6 +175,12 @@ def plan(
     max_leg_m: float = typer.Option(
         DEFAULT_MAX_LEG_M, "--max-leg-m", help="Longest leg the floor allows, m."
     ),
+    floor_m: float | None = typer.Option(
+        None,
+        "--floor-m",
+        help=f"Free floor along the line of travel, m, (0, {MAX_FLOOR_M:g}] (default: the "
+        f"robot description's [floor] length_m, else {DEFAULT_FLOOR_M:g}).",
+    ),
     as_json: bool = typer.Option(False, "--json", help="Print the plan as JSON."),
 ) -> None:
     """Recommend designs for a budget; print each parameter's expected stderr.
@@ -188,6 +204,11 @@ def plan(
         prior = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
         if not math.isfinite(max_leg_m) or max_leg_m <= 0:
             raise typer.BadParameter(f"--max-leg-m must be a positive length, got {max_leg_m}")
+        if floor_m is not None and (not math.isfinite(floor_m) or not 0 < floor_m <= MAX_FLOOR_M):
+            raise typer.BadParameter(
+                f"--floor-m must be a length in (0, {MAX_FLOOR_M:g}] m, got {floor_m}"
+            )
+        floor = floor_m if floor_m is not None else description.floor_length_m
         result = plan_experiment(
             prior,
             budget_m,
@@ -196,6 +217,7 @@ def plan(
             targets=targets,
             max_designs=max_designs,
             max_leg_m=max_leg_m,
+            floor_m=floor,
         )
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc

@@ -8,7 +8,9 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from odohil.cli.exit_codes import EXIT_BAD_INPUT
 from odohil.cli.run import (
+    Outcome,
     connect,
     execute,
     finish,
@@ -19,6 +21,13 @@ from odohil.cli.run import (
 from odohil.driver.link import DEFAULT_BAUD
 from odohil.errors import InitError
 from odohil.session.engine import description_of, resume_session
+from odohil.session.floor_space import check_floor
+from odohil.session.start_pose import (
+    HEADING_TOLERANCE_DEG,
+    POSITION_TOLERANCE_M,
+    StartPose,
+    refuse_off_start,
+)
 
 
 def resume(
@@ -36,12 +45,22 @@ def resume(
     json_out: Annotated[
         bool, typer.Option("--json", help="Print the final estimate as JSON.")
     ] = False,
+    from_here: Annotated[
+        bool,
+        typer.Option(
+            "--from-here",
+            help="Go on although the robot is not where the next trial starts "
+            f"(beyond {POSITION_TOLERANCE_M:g} m or {HEADING_TOLERANCE_DEG:g} deg); "
+            "the trial then starts where the robot stands.",
+        ),
+    ] = False,
 ) -> None:
     """Continue an interrupted session: no trial lost, none counted twice.
 
     A trial cut off before or during its motion is voided and redone; one whose
     motion finished resumes at its next missing measurement. The session is
-    locked before the port is opened: one in use is refused (exit 2).
+    locked before the port is opened: one in use is refused (exit 2). A robot
+    that is not where the next trial starts is refused (exit 2) unless --from-here.
     """
     console = Console(stderr=True)
     with session_exit_codes(console):
@@ -64,6 +83,7 @@ def resume(
             socket_path = truth_socket or settings.get("truth_socket")
             done = len(state.completed)
             assert state.plan is not None
+            check_floor(state.plan, description_of(state))
             console.print(
                 f"resuming {session}: {done} of {state.plan.n_trials} trials done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
@@ -78,7 +98,22 @@ def resume(
                 )
                 connection = {**settings, "port": port_url, "baud": line_baud}
                 connection["truth_socket"] = socket_path
-                outcome = execute(resumed.journal, state, robot, source, connection, console)
+                refused: list[StartPose] = []
+
+                def start_check(start: StartPose) -> None:
+                    console.print(f"robot: {start.describe()}")
+                    if not start.ok and from_here:
+                        console.print("[yellow]--from-here[/]: the trial starts where it stands")
+                    elif not start.ok:
+                        refused.append(start)
+                        refuse_off_start(start)
+
+                outcome = execute(
+                    resumed.journal, state, robot, source, connection, console,
+                    start_check=start_check,
+                )  # fmt: skip
+                if refused:
+                    outcome = Outcome(EXIT_BAD_INPUT, None)
     finish(outcome, json_out, console)
 
 

@@ -49,15 +49,18 @@ from odohil.session.engine import (
     IncrementalLiveEstimator,
     MotionSettings,
     SessionEngine,
+    StartCheck,
     StopOutcome,
     description_of,
     start_session,
 )
+from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
 from odohil.session.plan import Plan, parse_plan
 from odohil.session.robot_file import load_robot_description
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
+from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState, session_observations
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
@@ -190,6 +193,7 @@ def execute(
     connection: Mapping[str, Any],
     console: Console,
     motion: MotionSettings | None = None,
+    start_check: StartCheck | None = None,
 ) -> Outcome:
     """Run the engine with a progress bar; map failures to exit codes.
 
@@ -206,6 +210,7 @@ def execute(
         observer=observer,
         motion=motion,
         connection=connection,
+        start_check=start_check or show_start(console),
     )
     observer.progress.start()
     try:
@@ -275,6 +280,15 @@ def report_unconfirmed(
         console.print(f"st sent but not confirmed: {exc}", soft_wrap=True, markup=False)
         return
     report_stop(console, outcome, folder)
+
+
+def show_start(console: Console) -> StartCheck:
+    """A start check that prints where the encoders read (with the heading)."""
+
+    def check(start: StartPose) -> None:
+        console.print(f"robot: {start.describe()}")
+
+    return check
 
 
 def print_summary(
@@ -389,6 +403,11 @@ def run(
         plan = parse_plan(plan_text)
         description = load_robot_description(robot_file)
         refuse_unredundant(description, plan, console)
+        try:
+            check_floor(plan, description)
+        except ParameterError as exc:
+            console.print(f"[red]error[/]: {exc}; nothing moved")
+            raise typer.Exit(EXIT_BAD_INPUT) from None
         toml = robot_file.read_text(encoding="utf-8")
         kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
         settings = {

@@ -56,15 +56,18 @@ from odohil.session import state as ev
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     SessionEngine,
+    StartCheck,
     description_of,
     resume_session,
     start_session,
 )
+from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, parse_plan
 from odohil.session.robot_file import load_robot_description
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext
+from odohil.session.start_pose import StartPose, pose_text, sample_pose
 from odohil.session.state import SessionState
 
 SECOND_CTRL_C_STOP_S = 0.5
@@ -355,6 +358,30 @@ class WizardPrompts:
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
 
+    def start_check(self, robot: NomadRobot) -> StartCheck:
+        """Before the session goes on: show where the robot stands; if it is not
+        at the next trial's start, ask the operator to put it back there, then
+        set the encoders to that start pose."""
+
+        def check(start: StartPose) -> None:
+            self.console.print(f"Robot: {start.describe()}")
+            if start.ok or start.expected is None:
+                return
+            answer = self._input(
+                f"[bold]Put the robot back where trial {start.trial} starts[/] (the end marks "
+                "of the last trial, or this trial's start marks), then press Enter; or type "
+                "'here' to start the trial where it stands: "
+            )
+            if answer.strip().lower() == "here":
+                self.console.print("The trial starts where the robot stands.")
+                return
+            x, y, heading = start.expected
+            robot.define_pose(x, y)
+            robot.define_angles(heading, 0.0)
+            self.console.print("Encoders set to the trial's start.")
+
+        return check
+
     def show_rejection(self, ctx: TrialContext, reason: str) -> None:
         """The set of distances fits no rigid motion: say why, then re-ask the set."""
         self.console.print(
@@ -394,7 +421,7 @@ class WizardObserver:
             assert state.plan is not None
             self.robot.polls = 0
             self.interrupts.in_motion = True
-            self.progress.start(state.plan.items[opened.design_index].design)
+            self.progress.start(state.plan.design_of(opened.trial))
         elif kind == ev.SOLVED:
             x, y, theta = data["pose_change"]
             self.console.print(
@@ -424,7 +451,7 @@ class WizardObserver:
 def _can_estimate(state: SessionState) -> bool:
     counts: dict[Design, int] = {}
     for trial in state.completed:
-        counts[trial.design] = counts.get(trial.design, 0) + 1
+        counts[trial.design.forward] = counts.get(trial.design.forward, 0) + 1
     return any(n >= 2 and d.path().signed_distance_m != 0 for d, n in counts.items())
 
 
@@ -458,6 +485,17 @@ def plan_checks(plan: Plan, max_leg_m: float) -> list[Check]:
     return [Check("plan feasible", not problems, detail)]
 
 
+def floor_check(plan: Plan, description: RobotDescription) -> Check:
+    """Does the plan fit the robot description's free floor ([floor] length_m)?"""
+    try:
+        check_floor(plan, description)
+    except OdohilError as exc:
+        return Check("floor space", False, str(exc))
+    given = description.floor_length_m
+    limit = f"of {given:g} m" if given is not None else "(no [floor] length_m given)"
+    return Check("floor space", True, f"the plan needs {plan.excursion_m:g} m of floor {limit}")
+
+
 def _fail(console: Console, check: Check) -> NoReturn:
     console.print(check_line(check))
     console.print("[red]Pre-flight failed: nothing was moved.[/]")
@@ -484,6 +522,10 @@ def _resume(console: Console, folder: Path, max_leg_m: float, port: str) -> Open
     assert state.plan is not None
     for check in plan_checks(state.plan, max_leg_m):
         console.print(check_line(check))
+    floor = floor_check(state.plan, description_of(state))
+    if not floor.ok:
+        _fail(console, floor)
+    console.print(check_line(floor))
     done = len(state.completed)
     detail = f"resuming {folder}: {done} of {state.plan.n_trials} trials done"
     console.print(check_line(Check("session", True, detail)))
@@ -496,7 +538,7 @@ def _prepare(
     if robot_file is None:
         _fail(console, Check("robot description", False, "a new session needs --robot FILE"))
     try:
-        load_robot_description(robot_file)
+        description = load_robot_description(robot_file)
         text = robot_file.read_text(encoding="utf-8")
     except (OdohilError, OSError) as exc:
         _fail(console, Check("robot description", False, str(exc)))
@@ -505,7 +547,7 @@ def _prepare(
         plan = parse_plan(plan_text or DEFAULT_PLAN)
     except OdohilError as exc:
         _fail(console, Check("plan feasible", False, str(exc)))
-    for check in plan_checks(plan, max_leg_m):
+    for check in [*plan_checks(plan, max_leg_m), floor_check(plan, description)]:
         if not check.ok:
             _fail(console, check)
         console.print(check_line(check))
@@ -552,7 +594,7 @@ def _connect(console: Console, port: str, baud: int) -> LiveRobot:
             Check(
                 "robot answers",
                 True,
-                f"{port} at {baud} baud; encoders x={sample.x_m:+.3f} m y={sample.y_m:+.3f} m, "
+                f"{port} at {baud} baud; encoders {pose_text(sample_pose(sample))}, "
                 + ("MOVING (it will be stopped first)" if sample.moving else "standing still"),
             )
         )
@@ -641,6 +683,7 @@ def _run(
         estimator=IncrementalLiveEstimator(),
         observer=observer,
         connection={"port": port, "baud": baud},
+        start_check=prompts.start_check(robot),
     )
     try:
         engine.run()

@@ -127,7 +127,21 @@ def forth_and_back_means(design: Design, params: ErrorParameters) -> ObservableM
 
     where W_even, W_odd are the parts of W(e^{-kappa}, M) with even and odd
     leg distance d. phi1 is E_R times the signed distance (0 for even M).
+
+    A backward design is the mirror image (see :mod:`odohil.science.paths`):
+    phi1 and <x> change sign, the rest is unchanged.
     """
+    if design.backward:
+        ahead = forth_and_back_means(design.forward, params)
+        return ObservableMeans(
+            phi1=-ahead.phi1 + 0.0,
+            phi2=ahead.phi2,
+            phi3=-ahead.phi3,
+            phi4=ahead.phi4,
+            phi5=ahead.phi5,
+            x=-ahead.x,
+            y=ahead.y,
+        )
     m = design.n_legs
     length = design.l_m
     gain = 1.0 + params.e_t

@@ -11,11 +11,19 @@ variances (eqs. 10-14) grow with the distance driven, |delta-rho-bar|. For the
 ``turn`` variant of the forth-and-back motion this is the paper's motion; for
 ``reverse`` it means the systematic heading drift of the way out is undone on
 the way back.
+
+Driving a whole path backwards (every leg's encoder distance negated, the turns
+unchanged, see :attr:`Design.backward`) mirrors it: the turns are multiples of
+pi, so each heading theta becomes 2 h - theta with 2 h a multiple of 2 pi, and
+the pose change (x, y, theta) of the model is distributed as (-x, y, -theta) of
+the forward path. One-way designs alternate between the two so that the robot
+comes back over the same floor (see :func:`floor_choreography`).
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
@@ -170,11 +178,15 @@ class Design:
         l_m: leg length in metres.
         variant: ``turn`` (180 degree turn in place at each end) or
             ``reverse`` (drive back without turning).
+        backward: drive every leg with the opposite sign (the mirror image
+            of the forward trial: it starts by reversing); one-way designs
+            alternate so the robot comes back.
     """
 
     k: float
     l_m: float
     variant: Variant = "turn"
+    backward: bool = False
 
     def __post_init__(self) -> None:
         _leg_count(self.k)
@@ -182,6 +194,29 @@ class Design:
             raise ParameterError(f"l must be a positive length in metres, got {self.l_m!r}")
         if self.variant not in VARIANTS:
             raise ParameterError(f"variant must be one of {VARIANTS}, got {self.variant!r}")
+        if not isinstance(self.backward, bool):
+            raise ParameterError(f"backward must be true or false, got {self.backward!r}")
+
+    @property
+    def one_way(self) -> bool:
+        """True for half-integer k: the trial ends a leg away from its start."""
+        return self.n_legs % 2 == 1
+
+    @property
+    def forward(self) -> Design:
+        """The same design driven forwards."""
+        return Design(self.k, self.l_m, self.variant) if self.backward else self
+
+    @property
+    def mirrored(self) -> Design:
+        """The same design driven the other way."""
+        return Design(self.k, self.l_m, self.variant, not self.backward)
+
+    @property
+    def variant_text(self) -> str:
+        """The variant with ``-backward`` appended for a backward design
+        (the ``variant`` column of trial files)."""
+        return f"{self.variant}-backward" if self.backward else self.variant
 
     @property
     def n_legs(self) -> int:
@@ -195,32 +230,161 @@ class Design:
 
     def path(self) -> EncoderPath:
         """The encoder path of one trial."""
-        return forth_and_back(self.k, self.l_m, self.variant)
+        return forth_and_back(self.k, self.l_m, self.variant, backward=self.backward)
 
     def label(self) -> str:
-        """A short human-readable name, e.g. ``k=20 l=0.5 m turn``."""
-        return f"k={self.k:g} l={self.l_m:g} m {self.variant}"
+        """A short human-readable name, e.g. ``k=20 l=0.5 m turn``
+        (``turn backward`` when driven backwards)."""
+        direction = " backward" if self.backward else ""
+        return f"k={self.k:g} l={self.l_m:g} m {self.variant}{direction}"
 
 
-def forth_and_back(k: float, l_m: float, variant: Variant = "turn") -> EncoderPath:
+def forth_and_back(
+    k: float, l_m: float, variant: Variant = "turn", *, backward: bool = False
+) -> EncoderPath:
     """Straight forth and back k times over length l (section 4).
 
     ``turn``: leg, 180 degree turn, leg, 180 degree turn, ...; with an even
     number of legs the path ends with a turn, so the encoders report the start
     pose. ``reverse``: +l, -l, +l, ... without turning. Half-integer k ends at
-    the far end (k = 1/2 is one straight run).
+    the far end (k = 1/2 is one straight run). ``backward`` negates every leg
+    (the turns stay): the mirror image, ending a leg behind the start.
     """
-    design = Design(k, l_m, variant)
+    design = Design(k, l_m, variant, backward)
     n_legs = design.n_legs
+    out = -l_m if backward else l_m
     steps: list[Step] = []
     for index in range(n_legs):
         if variant == "turn":
-            steps.append(Leg(l_m))
+            steps.append(Leg(out))
             if index < n_legs - 1 or n_legs % 2 == 0:
                 steps.append(Turn(math.pi))
         else:
-            steps.append(Leg(l_m if index % 2 == 0 else -l_m))
+            steps.append(Leg(out if index % 2 == 0 else -out))
     return EncoderPath(tuple(steps), name=f"forth-and-back {design.label()}")
+
+
+@dataclass(frozen=True)
+class _Run:
+    """The trials of one design: a prefix, then a cycle repeated to the end."""
+
+    n: int
+    designs: tuple[Design, ...]
+    starts_m: tuple[float, ...]
+    cycle_from: int
+    step_m: float = 0.0  # forwards only: every trial starts this much further
+
+    def at(self, index: int) -> tuple[Design, float]:
+        if self.step_m:
+            return self.designs[0], self.starts_m[0] + index * self.step_m
+        if index >= len(self.designs):
+            period = len(self.designs) - self.cycle_from
+            index = self.cycle_from + (index - self.cycle_from) % period
+        return self.designs[index], self.starts_m[index]
+
+
+@dataclass(frozen=True)
+class FloorChoreography:
+    """Where a sequence of trials takes the robot along its line of travel.
+
+    Every trial starts facing the same way (forth-and-back trials end facing
+    their start heading), so positions are metres along that line from the
+    first trial's start, forwards positive. Repeated trials of one design fall
+    into a cycle, so the cost does not grow with the number of trials.
+
+    Attributes:
+        low_m, high_m: the rearmost and foremost points reached, metres.
+    """
+
+    runs: tuple[_Run, ...]
+    low_m: float
+    high_m: float
+
+    @property
+    def excursion_m(self) -> float:
+        """Length of floor the trials cover, metres (the free floor they need)."""
+        return self.high_m - self.low_m
+
+    @property
+    def n_trials(self) -> int:
+        """Number of trials."""
+        return sum(run.n for run in self.runs)
+
+    def trial(self, number: int) -> tuple[Design, float]:
+        """Trial ``number`` (1-based): its design as driven and its start, metres."""
+        if not 1 <= number <= self.n_trials:
+            raise ParameterError(f"trial {number} is outside 1..{self.n_trials}")
+        index = number - 1
+        for run in self.runs:
+            if index < run.n:
+                return run.at(index)
+            index -= run.n
+        raise AssertionError("unreachable")
+
+
+def trial_extent(design: Design, start_m: float) -> tuple[float, float, float]:
+    """(rearmost, foremost, end) positions of one trial started at ``start_m``, metres."""
+    if design.backward:
+        low, high = start_m - design.l_m, start_m
+        end = low if design.one_way else start_m
+    else:
+        low, high = start_m, start_m + design.l_m
+        end = high if design.one_way else start_m
+    return low, high, end
+
+
+def _choose(design: Design, position: float, low: float, high: float) -> Design:
+    options = []
+    for choice in (design.forward, design.forward.mirrored):
+        lo, hi, end = trial_extent(choice, position)
+        options.append((max(high, hi) - min(low, lo), abs(end), choice.backward, choice))
+    return min(options, key=lambda o: o[:3])[3]
+
+
+def floor_choreography(
+    items: Sequence[tuple[Design, int]], *, alternate: bool = True
+) -> FloorChoreography:
+    """Choose each trial's direction so the robot stays on as little floor as possible.
+
+    ``items`` are (design, number of trials) in driving order. Greedy, trial
+    by trial: the direction (forwards or :attr:`Design.backward`) that keeps
+    the covered length smallest; on a tie the one that ends nearer the first
+    start, then forwards. Consecutive trials of one one-way design therefore
+    go out and back over the same floor (covering l), and a two-way trial
+    started at the far end runs backwards. ``alternate=False``: every trial
+    forwards (how sessions were driven before).
+    """
+    runs: list[_Run] = []
+    position, low, high = 0.0, 0.0, 0.0
+    for design, n in items:
+        if not alternate:
+            step = design.l_m if design.one_way else 0.0
+            runs.append(_Run(n, (design.forward,), (position,), 0, step))
+            high = max(high, position + step * (n - 1) + design.l_m)
+            position += step * n
+            continue
+        designs: list[Design] = []
+        starts: list[float] = []
+        seen: dict[tuple[float, float, float], int] = {}
+        cycle_from = 0
+        while len(designs) < n:
+            key = (round(position, 9), round(low, 9), round(high, 9))
+            if key in seen:
+                cycle_from = seen[key]
+                break
+            seen[key] = len(designs)
+            choice = _choose(design, position, low, high)
+            lo, hi, end = trial_extent(choice, position)
+            designs.append(choice)
+            starts.append(position)
+            low, high, position = min(low, lo), max(high, hi), end
+        if len(designs) < n:
+            # the rest repeats the cycle; the position at the end follows it
+            period = len(designs) - cycle_from
+            last = cycle_from + (n - 1 - cycle_from) % period
+            _, _, position = trial_extent(designs[last], starts[last])
+        runs.append(_Run(n, tuple(designs), tuple(starts), cycle_from))
+    return FloorChoreography(tuple(runs), low, high)
 
 
 def square(side_m: float, counter_clockwise: bool = True) -> EncoderPath:

@@ -6,7 +6,8 @@ layout), and a budget: metres driven in all and optionally the most trials
 that will be marked.
 
 Search: every design of a grid (k from 1/2 to 20 including half-integers,
-leg lengths 0.5 m to ``max_leg_m``, both variants) gets its per-trial Fisher
+leg lengths 0.5 m to ``max_leg_m`` and to the free floor, both variants;
+without a floor length :data:`DEFAULT_FLOOR_M`) gets its per-trial Fisher
 information (:mod:`odohil.science.fisher`); then single designs, pairs and
 triples are allocated integer trial counts within the budget, and the plan
 with the smallest criterion wins. Pairs and triples are drawn from a pool of
@@ -42,7 +43,7 @@ from odohil.science.fisher import (
     trial_information,
 )
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
-from odohil.science.paths import VARIANTS, Design, FloatArray
+from odohil.science.paths import VARIANTS, Design, FloatArray, floor_choreography
 from odohil.science.robot_description import RobotDescription
 
 DEFAULT_K_VALUES: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0)
@@ -50,6 +51,10 @@ DEFAULT_LEG_LENGTHS_M: tuple[float, ...] = (
     0.5, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 10.0, 12.0, 15.0, 20.0, 25.0, 30.0,
 )  # fmt: skip
 DEFAULT_MAX_LEG_M = 30.0
+DEFAULT_FLOOR_M = 10.0
+"""Free floor the default design grid assumes when none is given, metres: no
+leg longer, and no plan whose trials (one-way ones alternating, see
+:func:`odohil.science.paths.floor_choreography`) cover more."""
 MAX_DESIGNS = 3
 _POOL_SIZE = 24
 _GRID_STEPS = 24
@@ -106,6 +111,12 @@ class Plan:
     def designs(self) -> list[tuple[Design, int]]:
         """(design, n_trials) pairs, as :func:`fisher.fisher_information` takes them."""
         return [(item.design, item.n_trials) for item in self.items]
+
+    @property
+    def excursion_m(self) -> float:
+        """Free floor the plan needs, metres, driven in item order with
+        alternating directions (:func:`odohil.science.paths.floor_choreography`)."""
+        return floor_choreography(self.designs()).excursion_m
 
 
 @dataclass(frozen=True)
@@ -181,6 +192,7 @@ def plan_experiment(
     max_designs: int = 2,
     designs: Sequence[Design] | None = None,
     max_leg_m: float = DEFAULT_MAX_LEG_M,
+    floor_m: float | None = None,
 ) -> Plan:
     """Recommend designs and trial counts within a budget.
 
@@ -193,10 +205,16 @@ def plan_experiment(
         max_designs: mixtures of at most this many designs (1 to 3).
         designs: the candidate designs (default: :func:`design_grid`).
         max_leg_m: longest leg allowed, metres (for the default grid).
+        floor_m: free floor, metres: no plan covers more (see
+            :attr:`Plan.excursion_m`). None: :data:`DEFAULT_FLOOR_M` for the
+            default grid, no limit for given ``designs``.
 
     Raises:
         ParameterError: bad budget, no design fits it, or bad targets.
     """
+    if floor_m is not None and (not math.isfinite(floor_m) or floor_m <= 0):
+        raise ParameterError(f"the floor must be a positive number of metres, got {floor_m!r}")
+    floor = floor_m if floor_m is not None else (DEFAULT_FLOOR_M if designs is None else math.inf)
     if not math.isfinite(budget_m) or budget_m <= 0:
         raise ParameterError(f"the budget must be a positive number of metres, got {budget_m!r}")
     if max_trials is not None and max_trials < 1:
@@ -205,9 +223,11 @@ def plan_experiment(
         raise ParameterError(f"max_designs must be 1 to {MAX_DESIGNS}, got {max_designs}")
     checked = check_targets(targets)
     pool = list(designs) if designs is not None else design_grid(max_leg_m=max_leg_m)
-    pool = [d for d in pool if d.distance_m <= budget_m]
+    pool = [d for d in pool if d.distance_m <= budget_m and d.l_m <= floor]
     if not pool:
-        raise ParameterError(f"no candidate design fits in a budget of {budget_m:g} m")
+        raise ParameterError(
+            f"no candidate design fits in a budget of {budget_m:g} m and {floor:g} m of floor"
+        )
     trial_cap = max_trials if max_trials is not None else 10**6
     model = measurement_model(description, prior)
     candidates = [_candidate(design, prior, model) for design in pool]
@@ -217,8 +237,11 @@ def plan_experiment(
     for size in range(1, max_designs + 1):
         for group in _groups(candidates, size, budget_m, trial_cap, divisor, use_max):
             result = _allocate(group, budget_m, trial_cap, divisor, use_max)
-            if result is not None and (best is None or result[0] < best[0]):
-                best = result
+            if result is None or (best is not None and result[0] >= best[0]):
+                continue
+            if floor_choreography([(i.design, i.n_trials) for i in result[1]]).excursion_m > floor:
+                continue
+            best = result
     if best is None:
         raise ParameterError("no plan within the budget identifies all four parameters")
     value, items, errors = best
@@ -234,6 +257,7 @@ def minimum_budget(
     max_designs: int = 2,
     designs: Sequence[Design] | None = None,
     max_leg_m: float = DEFAULT_MAX_LEG_M,
+    floor_m: float | None = None,
     upper_m: float = 20000.0,
     tolerance: float = 0.02,
 ) -> Plan:
@@ -256,6 +280,7 @@ def minimum_budget(
             max_designs=max_designs,
             designs=designs,
             max_leg_m=max_leg_m,
+            floor_m=floor_m,
         )
 
     high = plan(upper_m)

@@ -51,12 +51,15 @@ DEFAULT_TIMEOUT_S = 1.0
 MAX_CROSS_PAIRS = 2
 MIN_SCREW_SEPARATION_M = 0.01
 """Two screws closer than this (metres) count as coincident."""
+MAX_FLOOR_M = 1000.0
+"""Longest free floor a robot description may give, metres."""
 MIN_SPREAD_RATIO = 0.1
 """Screws count as (near-)collinear when their spread across their best-fit line
 is less than this fraction of their spread along it (ratio of the singular
 values of the centred positions); the pose from such marks is ill-conditioned."""
 
-_TOP_KEYS = ("screws", "measurement", "serial", "priors")
+_TOP_KEYS = ("screws", "measurement", "serial", "priors", "floor")
+_FLOOR_KEYS = ("length_m",)
 _PRIOR_KEYS = (
     "E_R_deg_per_m",
     "E_R_sd_deg_per_m",
@@ -149,6 +152,8 @@ class RobotDescription:
             mark of screw i to the end mark of screw j is measured.
         serial: serial-line settings for the driver.
         priors: belief in the parameters before any trial (``[priors]``).
+        floor_length_m: free floor along the robot's line of travel, metres
+            (``[floor] length_m``); None when not given. No plan may need more.
     """
 
     screws: tuple[Screw, ...]
@@ -156,6 +161,7 @@ class RobotDescription:
     cross_pairs: tuple[tuple[str, str], ...] = ()
     serial: SerialSettings = field(default_factory=SerialSettings)
     priors: ParameterPriors = field(default_factory=ParameterPriors)
+    floor_length_m: float | None = None
 
     def __post_init__(self) -> None:
         _check_screws(self.screws)
@@ -165,6 +171,11 @@ class RobotDescription:
             )
         _check_cross_pairs(self.cross_pairs, tuple(s.name for s in self.screws))
         _check_serial(self.serial)
+        floor = self.floor_length_m
+        if floor is not None and (not math.isfinite(floor) or not 0 < floor <= MAX_FLOOR_M):
+            raise RobotDescriptionError(
+                f"floor.length_m must be a length in metres in (0, {MAX_FLOOR_M:g}], got {floor!r}"
+            )
 
     @property
     def screw_names(self) -> tuple[str, ...]:
@@ -212,9 +223,17 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
     serial_table = _table(data, "serial", required=False)
     _reject_unknown(serial_table, _SERIAL_KEYS, "serial.")
     serial = _serial(serial_table)
-    priors = _priors(_table(data, "priors", required=False))
+    floor_table = _table(data, "floor", required=False)
+    _reject_unknown(floor_table, _FLOOR_KEYS, "floor.")
+    floor = floor_table.get("length_m")
+    floor_m = None if floor is None else _number(floor, "floor.length_m")
     return RobotDescription(
-        screws=screws, sigma_m=sigma_m, cross_pairs=cross_pairs, serial=serial, priors=priors
+        screws=screws,
+        sigma_m=sigma_m,
+        cross_pairs=cross_pairs,
+        serial=serial,
+        priors=_priors(_table(data, "priors", required=False)),
+        floor_length_m=floor_m,
     )
 
 

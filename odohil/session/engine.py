@@ -84,6 +84,7 @@ from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
 from odohil.session.signals import SignalReceived, signals_held
 from odohil.session.sources import MeasurementSource, TrialContext, check_distance
+from odohil.session.start_pose import StartPose, check_start
 from odohil.session.state import (
     CompletedTrial,
     OpenTrial,
@@ -93,6 +94,10 @@ from odohil.session.state import (
     description_of_header,
     replay,
 )
+
+StartCheck = Callable[[StartPose], None]
+"""Judges where the robot stands before the session goes on: returns to go on
+(after putting the robot back, say), raises to refuse."""
 
 MAX_REJECTIONS = 3
 """How many times one attempt's distances may be rejected before giving up."""
@@ -316,6 +321,7 @@ class SessionEngine:
         connection: Mapping[str, Any] | None = None,
         max_rejections: int = MAX_REJECTIONS,
         max_remeasures: int = MAX_REMEASURES,
+        start_check: StartCheck | None = None,
     ) -> None:
         if state.plan is None:
             raise JournalError("the session has no plan")
@@ -330,6 +336,7 @@ class SessionEngine:
         self.connection = dict(connection or {})
         self.max_rejections = max_rejections
         self.max_remeasures = max_remeasures
+        self.start_check = start_check
         self.description = description_of(state)
         self.labels = distance_labels(self.description)
         self.latest_estimate: Mapping[str, Any] | None = None
@@ -361,6 +368,7 @@ class SessionEngine:
         try:
             self._catch_up_estimate()
             self._connect()
+            self._check_start()
             self._finish_open_trial()
             completed = 0
             while (trial := self.state.next_trial()) is not None:
@@ -447,6 +455,23 @@ class SessionEngine:
             },
         )
 
+    def _check_start(self) -> None:
+        """Where the robot stands against where the next trial starts: journaled
+        (``start_pose``), then judged by ``start_check`` (which may put the robot
+        back, or raise)."""
+        start = check_start(self.state, self._settle())
+        self._log(
+            ev.START_POSE,
+            {
+                "trial": start.trial,
+                "expected": list(start.expected) if start.expected is not None else None,
+                "actual": list(start.actual),
+                "ok": start.ok,
+            },
+        )
+        if self.start_check is not None:
+            self.start_check(start)
+
     def _finish_open_trial(self) -> None:
         opened = self.state.open_trial
         if opened is None:
@@ -469,7 +494,7 @@ class SessionEngine:
             trial=opened.trial,
             attempt=opened.attempt,
             n_trials=self.plan.n_trials,
-            design=self.plan.items[opened.design_index].design,
+            design=self.plan.design_of(opened.trial),
             labels=self.labels,
             start=opened.start,
             end=opened.end,
@@ -489,7 +514,7 @@ class SessionEngine:
     def _run_trial(self, trial: int) -> None:
         attempt = self.state.next_attempt(trial)
         design_index = self.plan.design_index(trial)
-        design = self.plan.items[design_index].design
+        design = self.plan.design_of(trial)  # as driven: one-way trials alternate
         self._settle()
         self.robot.define_pose(0.0, 0.0)
         self.robot.define_angles(0.0, 0.0)
@@ -505,7 +530,13 @@ class SessionEngine:
         ids = {"trial": trial, "attempt": attempt}
         self._log(
             ev.TRIAL_START,
-            {**ids, "design": design_index, "zeroed": _sample_json(zeroed), "start": start},
+            {
+                **ids,
+                "design": design_index,
+                "backward": design.backward,
+                "zeroed": _sample_json(zeroed),
+                "start": start,
+            },
         )
         self._log(ev.MOTION_START, ids)
         record = forth_and_back(

@@ -12,7 +12,10 @@ list of ``key=value``::
   ``reverse`` (drive back without turning).
 
 Trials are numbered 1, 2, ... in plan order: the n trials of the first design,
-then those of the second, and so on.
+then those of the second, and so on. Each trial's direction (forwards, or every
+leg reversed) follows :func:`odohil.science.paths.floor_choreography`, so that
+one-way trials come back over the same floor; journals written before this
+(plans without ``"alternate"``) were driven forwards and are read so.
 """
 
 from __future__ import annotations
@@ -20,10 +23,11 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 from odohil.errors import ParameterError
-from odohil.science.paths import VARIANTS, Design
+from odohil.science.paths import VARIANTS, Design, FloorChoreography, floor_choreography
 
 _KEYS = ("k", "l", "n", "variant")
 
@@ -52,9 +56,16 @@ class PlanItem:
 
 @dataclass(frozen=True)
 class Plan:
-    """The designs of a session, in order."""
+    """The designs of a session, in order.
+
+    Attributes:
+        items: the designs and their trial counts.
+        alternate: trials' directions follow :attr:`choreography` (False only
+            for sessions journaled before directions alternated: all forwards).
+    """
 
     items: tuple[PlanItem, ...]
+    alternate: bool = True
 
     def __post_init__(self) -> None:
         if not self.items:
@@ -82,8 +93,21 @@ class Plan:
         raise AssertionError("unreachable")
 
     def design_of(self, trial: int) -> Design:
-        """The design that trial number ``trial`` (1-based) runs."""
-        return self.items[self.design_index(trial)].design
+        """The design that trial number ``trial`` (1-based) runs, as driven
+        (``backward`` set by the choreography)."""
+        self.design_index(trial)  # range check
+        return self.choreography.trial(trial)[0]
+
+    @cached_property
+    def choreography(self) -> FloorChoreography:
+        """Each trial's direction and where it takes the robot on the floor."""
+        pairs = [(item.design, item.n_trials) for item in self.items]
+        return floor_choreography(pairs, alternate=self.alternate)
+
+    @property
+    def excursion_m(self) -> float:
+        """Length of free floor the plan needs along the line of travel, metres."""
+        return self.choreography.excursion_m
 
     def to_text(self) -> str:
         """The plan in the ``--plan`` syntax."""
@@ -100,12 +124,14 @@ class Plan:
                     "n": item.n_trials,
                 }
                 for item in self.items
-            ]
+            ],
+            "alternate": self.alternate,
         }
 
     @classmethod
     def from_json(cls, raw: Mapping[str, Any]) -> Plan:
-        """Inverse of :meth:`to_json`; ParameterError if malformed."""
+        """Inverse of :meth:`to_json`; ParameterError if malformed. Without
+        ``"alternate"`` (older journals) every trial was driven forwards."""
         designs = raw.get("designs")
         if not isinstance(designs, list):
             raise ParameterError("a plan object needs a list of designs")
@@ -120,7 +146,10 @@ class Plan:
                 if isinstance(exc, ParameterError):
                     raise
                 raise ParameterError(f"malformed plan design {entry!r}: {exc}") from None
-        return cls(tuple(items))
+        alternate = raw.get("alternate", False)
+        if not isinstance(alternate, bool):
+            raise ParameterError(f"a plan's alternate must be true or false, got {alternate!r}")
+        return cls(tuple(items), alternate=alternate)
 
     @classmethod
     def of(cls, designs: Sequence[tuple[Design, int]]) -> Plan:

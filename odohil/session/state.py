@@ -12,7 +12,8 @@ Event kinds, in the order a session writes them (``data`` members in brackets):
 - ``torn_record``: the torn last record found on resume was kept aside
   [``file``, ``bytes``, ``reason``];
 - ``trial_start``: the robot was re-zeroed and the start marks made
-  [``trial``, ``attempt``, ``design``, ``start``: the source's start data];
+  [``trial``, ``attempt``, ``design``, ``backward``: driven with every leg
+  reversed (one-way trials alternate), ``start``: the source's start data];
 - ``motion_start`` [``trial``, ``attempt``];
 - ``motion_done``: the motion finished [``trial``, ``attempt``,
   ``encoder_end_pose`` (x m, y m, theta rad), ``trajectory`` (rows t s, x m,
@@ -88,8 +89,9 @@ VOID = "void"
 STOPPED = "stopped"
 STOP_UNCONFIRMED = "stop_unconfirmed"
 FINISHED = "finished"
+START_POSE = "start_pose"
 
-_INFO_KINDS = frozenset({ROBOT, RESUMED, TORN_RECORD, STOPPED, STOP_UNCONFIRMED})
+_INFO_KINDS = frozenset({ROBOT, RESUMED, TORN_RECORD, STOPPED, STOP_UNCONFIRMED, START_POSE})
 
 
 class Phase(Enum):
@@ -362,7 +364,7 @@ def _apply(state: SessionState, record: Record) -> SessionState:
         done = CompletedTrial(
             trial=opened.trial,
             attempt=opened.attempt,
-            design=state.plan.items[opened.design_index].design,
+            design=state.plan.design_of(opened.trial),
             design_index=opened.design_index,
             encoder_end_pose=opened.encoder_end_pose,
             measurements=opened.measurements,
@@ -395,6 +397,12 @@ def _trial_start(state: SessionState, record: Record, plan: Plan) -> SessionStat
         raise JournalError(
             f"record {record.seq}: trial {trial} runs design {design_index}, the plan says "
             f"{plan.design_index(trial)}"
+        )
+    if "backward" in data and bool(data["backward"]) != plan.design_of(trial).backward:
+        raise JournalError(
+            f"record {record.seq}: trial {trial} was driven "
+            f"{'backward' if data.get('backward') else 'forward'}, the plan says "
+            f"{plan.design_of(trial).label()}"
         )
     if attempt != state.next_attempt(trial):
         raise JournalError(

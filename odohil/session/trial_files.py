@@ -37,6 +37,8 @@ PriorForDesign = Callable[[Design], PoseDistribution]
 """The model's predicted pose-change distribution of one trial of a design."""
 
 DESIGN_COLUMNS = ("k", "l_m", "variant")
+BACKWARD_SUFFIX = "-backward"
+"""Appended to the variant of a trial driven backwards (e.g. ``turn-backward``)."""
 POSE_COLUMNS = ("dx_m", "dy_m", "dtheta_rad")
 ODOMETRY_COLUMNS = ("odo_x_m", "odo_y_m", "odo_theta_rad")
 
@@ -186,7 +188,7 @@ def write_pose_trials(path: str | Path, rows: Iterable[Trial]) -> None:
             )
         design = trial.design
         body.append(
-            ",".join([f"{design.k:g}", repr(design.l_m), design.variant, *map(repr, values)])
+            ",".join([f"{design.k:g}", repr(design.l_m), design.variant_text, *map(repr, values)])
         )
     target = Path(path)
     handle, temporary = tempfile.mkstemp(
@@ -353,13 +355,15 @@ class _RowParser:
         k = self._number(row, "k", problems)
         l_m = self._number(row, "l_m", problems)
         variant = row["variant"]
+        backward = variant.endswith(BACKWARD_SUFFIX)
+        variant = variant.removesuffix(BACKWARD_SUFFIX) if backward else variant
         if variant not in VARIANTS:
             problems.append(f"variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
         if k is None or l_m is None:
             return None
         chosen: Variant = "reverse" if variant == "reverse" else "turn"
         try:
-            design = Design(k, l_m, chosen)
+            design = Design(k, l_m, chosen, backward)
         except ParameterError as exc:
             problems.append(str(exc))
             return None

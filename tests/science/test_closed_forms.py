@@ -70,10 +70,11 @@ DESIGNS = [
     for k, l_m in ((0.5, 1.0), (1, 6.0), (1.5, 1.0), (2, 0.5), (20, 0.5))
     for v in ("turn", "reverse")
 ]
+BACKWARD = [Design(k, 1.0, v, backward=True) for k in (0.5, 1.5, 2) for v in ("turn", "reverse")]
 
 
 @pytest.mark.parametrize("params", [NOMAD150, EXAGGERATED, ErrorParameters(0.3, 0.1, 0.0, 0.0)])
-@pytest.mark.parametrize("design", DESIGNS, ids=Design.label)
+@pytest.mark.parametrize("design", DESIGNS + BACKWARD, ids=Design.label)
 def test_closed_forms_equal_the_path_integrals(design: Design, params: ErrorParameters) -> None:
     closed = forth_and_back_means(design, params)
     general = observable_means(design.path(), params)
@@ -180,6 +181,8 @@ SIMULATED = [
     ],
     (Design(2, 0.5, "reverse"), EXAGGERATED, 4000, 0.0005),
     (Design(20, 0.5, "reverse"), EXAGGERATED, 400, 0.0005),
+    # one-way trials driven backwards come back: the mirror image, predicted exactly
+    *[(d, EXAGGERATED, 4000, 0.001) for d in BACKWARD if d.n_legs < 4],
 ]
 
 
@@ -225,3 +228,20 @@ def test_printed_decay_misses_the_simulator() -> None:
     right = forth_and_back_means(design, params)
     assert np.max(np.abs(sample - [wrong.x, wrong.y, wrong.phi5]) / se) > 10
     assert np.max(np.abs(sample - [right.x, right.y, right.phi5]) / se) < 4
+
+
+@pytest.mark.parametrize("variant", ["turn", "reverse"])
+def test_a_backward_one_way_trial_ends_where_the_forward_one_started(variant: str) -> None:
+    ahead = Design(1.5, 2.0, variant)  # type: ignore[arg-type]
+    back = ahead.mirrored
+    assert back.backward
+    assert back.path().distance_m == ahead.path().distance_m
+    x_out, y_out, _ = ahead.path().encoder_end_pose()
+    x_back, y_back, _ = back.path().encoder_end_pose()
+    assert (x_out, y_out) == pytest.approx((2.0, 0.0), abs=1e-12)
+    assert (x_back, y_back) == pytest.approx((-2.0, 0.0), abs=1e-12)
+    # the model's mean pose change is the forward one mirrored (x, theta negated)
+    forward_means, backward_means = (observable_means(d.path(), EXAGGERATED) for d in (ahead, back))
+    assert backward_means.x == pytest.approx(-forward_means.x, rel=1e-12)
+    assert backward_means.y == pytest.approx(forward_means.y, rel=1e-12)
+    assert backward_means.phi1 == pytest.approx(-forward_means.phi1, rel=1e-12)

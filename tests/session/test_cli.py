@@ -52,7 +52,10 @@ def _run_args(emulator: EmulatorProcess, tmp_path: Path, plan: str) -> list[str]
 
 
 def _resume_args(tmp_path: Path) -> list[str]:
-    return [ODOHIL, "resume", str(tmp_path / "session"), "--json"]
+    # a kill or Ctrl-C mid-motion leaves the robot off the trial's start; these
+    # tests are about the journal, so they go on from where it stands
+    # (tests/session/test_floor.py checks the refusal without the flag)
+    return [ODOHIL, "resume", str(tmp_path / "session"), "--json", "--from-here"]
 
 
 def _records(tmp_path: Path) -> int:
@@ -219,7 +222,7 @@ def test_ctrl_c_stops_journals_and_exits_130(emulator: EmulatorProcess, tmp_path
     with journal.open("ab") as handle:
         handle.write(b'{"seq":999,"kind":"meas')
     resumed = subprocess.run(
-        [ODOHIL, "resume", str(tmp_path / "session"), "--json"],
+        _resume_args(tmp_path),
         capture_output=True,
         text=True,
         timeout=120,

@@ -172,7 +172,9 @@ def _trial_file(path: Path, rows: list[tuple[float, float, str, float, float, fl
 
 def test_recorded_distances_from_a_trial_file(tmp_path: Path) -> None:
     poses = [(0.5, 0.01, -0.02), (0.49, -0.005, 0.01)]
-    file = _trial_file(tmp_path / "trials.csv", [(0.5, 0.5, "turn", *p) for p in poses])
+    # the second one-way trial comes back: it is driven backwards
+    rows = [(0.5, 0.5, v, *p) for v, p in zip(("turn", "turn-backward"), poses, strict=True)]
+    file = _trial_file(tmp_path / "trials.csv", rows)
     source = recorded_source_from_file(file, description())
     with fake_robot(QUERY) as (robot, _):
         journal, state = _start(tmp_path / "s", "k=0.5,l=0.5,n=2")
@@ -248,7 +250,9 @@ def test_records_go_to_the_observer_in_order(tmp_path: Path) -> None:
                 observer=CallbackObserver(callback),
             ).run()
     kinds = [kind for _, kind, _ in seen]
-    assert kinds[:4] == [ev.ROBOT, ev.TRIAL_START, ev.MOTION_START, ev.MOTION_DONE]
+    assert kinds[:5] == [
+        ev.ROBOT, ev.START_POSE, ev.TRIAL_START, ev.MOTION_START, ev.MOTION_DONE,
+    ]  # fmt: skip
     assert kinds[-2:] == [ev.SOLVED, ev.FINISHED]
     assert [seq for seq, _, _ in seen] == list(range(2, 2 + len(seen)))
     assert seen[-1][2] == 1

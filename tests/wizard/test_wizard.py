@@ -80,9 +80,11 @@ def _answer(child: pexpect.spawn, text: str, then: str) -> None:
         child.sendline(text)
 
 
-def _marks(child: pexpect.spawn, truth: TruthClient) -> list[float]:
-    """Start marks, motion, end marks; the exact distances of the true pose change."""
-    child.expect("Mark the floor at the 3 screws")
+def _marks(child: pexpect.spawn, truth: TruthClient, asked: bool = False) -> list[float]:
+    """Start marks, motion, end marks; the exact distances of the true pose change
+    (``asked``: the start-marks prompt was already seen)."""
+    if not asked:
+        child.expect("Mark the floor at the 3 screws")
     start = _pose(truth)
     child.sendline("")
     child.expect(r"end marks\), then press Enter")
@@ -170,7 +172,13 @@ def test_three_trial_session_with_bad_inputs_interrupt_and_resume(tmp_path: Path
         # Resume: the wizard again on the same session redoes trial 3.
         child = _spawn(["--port", emu.device, "--session", str(folder)])
         child.expect(re.escape("resuming"))
-        values = _marks(child, truth)
+        child.expect("heading=")
+        # Ctrl-C right after the motion began: the robot may already be off the start
+        asked = child.expect(["Put the robot back", "Mark the floor at the 3 screws"]) == 1
+        if not asked:
+            child.sendline("")
+            child.expect("Encoders set to the trial's start")
+        values = _marks(child, truth, asked)
         child.expect(_prompt(0))
         _type_all(child, values, "Trial 3 solved")
         child.expect(r"Session complete:\S* 3 trials")
@@ -253,3 +261,43 @@ def test_a_typo_is_caught_and_only_that_distance_is_re_entered(tmp_path: Path) -
     state = replay(records)
     assert state.completed[-1].measurements == pytest.approx(values)
     assert not state.completed[-1].slip
+
+
+def test_resume_after_ctrl_c_mid_motion_asks_to_put_the_robot_back(tmp_path: Path) -> None:
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT_TOML)
+    folder = tmp_path / "session"
+    args = ["--seed", "3", "--time-scale", "8", "--no-pacing"]
+    with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
+        child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", "k=0.5,l=2,n=1",
+                        "--session", str(folder)])  # fmt: skip
+        child.expect("Mark the floor at the 3 screws")
+        start = _pose(truth)
+        child.sendline("")
+        child.expect("driving k=0.5")
+        deadline = time.monotonic() + TIMEOUT_S
+        while math.hypot(_pose(truth)[0] - start[0], _pose(truth)[1] - start[1]) < 0.3:
+            assert time.monotonic() < deadline
+            time.sleep(0.01)
+        child.sendintr()
+        child.expect(r"Interrupted\S* \(Ctrl-C\)")
+        child.expect(pexpect.EOF)
+        child.close()
+        assert child.exitstatus == 130
+
+        # before: the wizard started trial 1 again from where the robot stood
+        child = _spawn(["--port", emu.device, "--session", str(folder)])
+        child.expect(r"heading=[-+]\d")
+        child.expect("the robot is [0-9.]+ m away")
+        child.expect("Put the robot back where trial 1 starts")
+        child.sendline("")
+        child.expect("Encoders set to the trial's start")
+        values = _marks(child, truth)
+        child.expect(_prompt(0))
+        _type_all(child, values, "Trial 1 solved")
+        child.expect(r"Session complete:\S* 1 trials")
+        child.expect(pexpect.EOF)
+        child.close()
+        assert child.exitstatus == 0
+    kinds = [r.kind for r in read_journal(folder).records]
+    assert kinds.count(ev.START_POSE) == 2

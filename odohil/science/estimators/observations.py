@@ -158,7 +158,10 @@ def group_trials(
     """Sufficient statistics of the trials, one group per design and measurement key.
 
     Every design's reference heading is the circular mean of its trials' Delta.
+    A trial driven backwards is folded into its forward design as its mirror
+    image (:func:`mirrored`), which the model distributes exactly alike.
     """
+    observations = [mirrored(o) if o.design.backward else o for o in observations]
     references: dict[Design, float] = {}
     for design in _designs(observations):
         angles = np.array([o.pose_change[2] for o in observations if o.design == design])
@@ -170,6 +173,22 @@ def group_trials(
             groups[key] = TrialGroup(obs.design, references[obs.design])
         groups[key].add(obs)
     return list(groups.values())
+
+
+_MIRROR = np.diag([-1.0, 1.0, -1.0])
+
+
+def mirrored(observation: Observation) -> Observation:
+    """The trial as its design driven the other way would show it: x and
+    Delta negated, the measurement covariance transformed alike (see
+    :mod:`odohil.science.paths`: a backward path's pose change is
+    distributed as (-x, y, -Delta) of the forward one)."""
+    return Observation(
+        design=observation.design.mirrored,
+        pose_change=_MIRROR @ np.asarray(observation.pose_change, dtype=np.float64),
+        measurement_cov=_MIRROR @ np.asarray(observation.measurement_cov) @ _MIRROR,
+        line=observation.line,
+    )
 
 
 def _designs(observations: Iterable[Observation]) -> list[Design]:
