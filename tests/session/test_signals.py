@@ -109,7 +109,10 @@ def _motion_case(
     ], case
     assert state.open_trial is None, case
     resumed = subprocess.run(
-        [ODOHIL, "resume", str(folder), "--json"], capture_output=True, text=True, timeout=60
+        [ODOHIL, "resume", str(folder), "--json", "--from-here"],
+        capture_output=True,
+        text=True,
+        timeout=60,
     )
     assert resumed.returncode == 0, (case, resumed.stderr)
     assert json.loads(resumed.stdout)["n_trials"] == 2
