@@ -231,6 +231,7 @@ class IncrementalLiveEstimator:
             pose_change=np.array(trial.pose_change, dtype=np.float64),
             measurement_cov=np.array(trial.cov, dtype=np.float64),
             line=trial.seq,
+            trial=trial.trial,
         )
         if self.inner.add(observation) is None:
             return None
