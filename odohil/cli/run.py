@@ -21,6 +21,9 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
+from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_OK, EXIT_UNTRUSTED
+from odohil.cli.verdict import verdict_line
 from odohil.driver.link import DEFAULT_BAUD, open_port
 from odohil.driver.robot import NomadRobot
 from odohil.errors import InitError, OdohilError, ParameterError
@@ -171,8 +174,11 @@ def execute(
     connection: Mapping[str, Any],
     console: Console,
     motion: MotionSettings | None = None,
+    exclude: frozenset[int] = frozenset(),
 ) -> Outcome:
-    """Run the engine with a progress bar; map failures to exit codes.
+    """Run the engine with a progress bar; map failures to exit codes (3 when
+    the final estimate's verdict is not trusted). ``exclude``: trial numbers
+    left out of the live and final estimate (the journal keeps them).
 
     The engine journals ``stopped`` and stops the robot before an error gets here.
     """
@@ -183,7 +189,7 @@ def execute(
         state,
         robot,
         source,
-        estimator=IncrementalLiveEstimator(),
+        estimator=IncrementalLiveEstimator(exclude),
         observer=observer,
         motion=motion,
         connection=connection,
@@ -208,11 +214,15 @@ def execute(
     finally:
         observer.progress.stop()
     try:
-        result = estimate(session_observations(final)).to_json_dict()
+        observations = session_observations(final)
+        done = {o.trial for o in observations}
+        fitted = estimate(observations, exclude=[t for t in exclude if t in done])
     except OdohilError as exc:
         console.print(f"[red]no estimate[/]: {exc}")
         return Outcome(EXIT_ERROR, None)
-    return Outcome(0, result)
+    if not fitted.verdict.trusted:
+        console.print(verdict_line(fitted.verdict), highlight=False)
+    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted.to_json_dict())
 
 
 def print_summary(
@@ -261,6 +271,17 @@ def session_exit_codes(console: Console) -> Iterator[None]:
         raise typer.Exit(EXIT_ERROR) from None
 
 
+def checked_exclude(text: str | None, n_trials: int, console: Console) -> frozenset[int]:
+    """``--exclude``'s trial numbers, each within the plan's 1..n_trials (else exit 2)."""
+    try:
+        exclude = parse_exclude(text)
+        check_exclude(exclude, range(1, n_trials + 1))
+    except OdohilError as exc:
+        console.print(f"[red]error[/]: {exc}")
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+    return exclude
+
+
 def default_session_folder() -> Path:
     """``odohil-session-YYYYmmdd-HHMMSS`` in the current directory."""
     return Path(f"odohil-session-{time.strftime('%Y%m%d-%H%M%S')}")
@@ -292,12 +313,17 @@ def run(
         bool,
         typer.Option("--json", help="Print the final estimate as JSON (as estimate --json)."),
     ] = False,
+    exclude_text: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
 ) -> None:
-    """Run a calibration session unattended: n trials, no prompts, journaled."""
+    """Run a calibration session unattended: n trials, no prompts, journaled.
+
+    Exit 0 when the final estimate is trusted, 3 when it is printed but not.
+    """
     console = Console(stderr=True)
     folder = session or default_session_folder()
     with session_exit_codes(console):
         plan = parse_plan(plan_text)
+        exclude = checked_exclude(exclude_text, plan.n_trials, console)
         description = load_robot_description(robot_file)
         toml = robot_file.read_text(encoding="utf-8")
         kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
@@ -315,7 +341,7 @@ def run(
             )
             console.print(f"session {folder}")
             with journal:
-                outcome = execute(journal, state, robot, source, settings, console)
+                outcome = execute(journal, state, robot, source, settings, console, exclude=exclude)
     finish(outcome, json_out, console)
 
 
