@@ -28,7 +28,7 @@ def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
 
 def _run(
     emulator: EmulatorProcess, tmp_path: Path, exclude: str
-) -> subprocess.CompletedProcess[str]:  # noqa: E501
+) -> subprocess.CompletedProcess[str]:
     command = [
         ODOHIL, "run",
         "--port", emulator.device,

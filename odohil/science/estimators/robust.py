@@ -35,6 +35,8 @@ from odohil.science.estimators.checks import mahalanobis2
 from odohil.science.estimators.joint import JointFit, covariance_si, designs_of, refine
 from odohil.science.estimators.likelihood import evaluate, model_point, phi_jacobian
 from odohil.science.estimators.observations import Observation, TrialGroup, align_heading
+from odohil.science.moments import pose_moments
+from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design, FloatArray
 
 EPSILON = 0.01
@@ -43,6 +45,9 @@ INFLATION = 100.0
 """Variance factor of the outlier component (standard deviations 10 times the model's)."""
 OUTLIER_WEIGHT = 0.5
 """A trial whose clean-component probability falls below this is named an outlier."""
+_RESTART_D2 = 7.8
+"""Restart without the farthest trial when its squared distance exceeds this
+(chi^2(3) 95 % point)."""
 _MAX_EM = 40
 _EM_TOLERANCE = 1e-4
 """EM stops when no parameter moves more than this many standard errors."""
@@ -100,10 +105,62 @@ def _references(groups: Sequence[TrialGroup]) -> dict[Design, float]:
     return out
 
 
+def mixture_nll(observations: Sequence[Observation], params: ErrorParameters) -> float:
+    """Negative log-likelihood of the mixture at ``params`` (constants dropped)."""
+    total = 0.0
+    log_det: dict[tuple[Design, bytes], float] = {}
+    d2 = mahalanobis2(observations, params)
+    moments = {}
+    for obs in observations:
+        if obs.design not in moments:
+            moments[obs.design] = pose_moments(obs.design.path(), params)
+        key = (obs.design, obs.measurement_cov.tobytes())
+        if key not in log_det:
+            cov = moments[obs.design].cov + obs.measurement_cov
+            sign, value = np.linalg.slogdet(0.5 * (cov + cov.T))
+            log_det[key] = value if sign > 0 else math.inf
+    for obs, q in zip(observations, d2, strict=True):
+        clean = math.log1p(-EPSILON) - 0.5 * float(q)
+        broad = math.log(EPSILON) - 1.5 * math.log(INFLATION) - 0.5 * float(q) / INFLATION
+        total += 0.5 * log_det[(obs.design, obs.measurement_cov.tobytes())] - float(
+            np.logaddexp(clean, broad)
+        )
+    return total
+
+
 def robust_fit(
     observations: Sequence[Observation], groups: Sequence[TrialGroup], start: JointFit
 ) -> RobustFit:
-    """EM from ``start`` (the Gaussian fit of ``groups``, the unweighted trials)."""
+    """EM from ``start`` (the Gaussian fit of ``groups``, the unweighted trials),
+    and from the Gaussian fit without the trial farthest from it (a gross error
+    can drag the Gaussian fit so far that it no longer stands out, above all
+    at small n); the start whose EM ends at the lower mixture NLL wins."""
+    best = _em(observations, groups, start)
+    d2 = mahalanobis2(observations, start.params)
+    if len(observations) > 8 and float(d2.max()) > _RESTART_D2:
+        worst = int(np.argmax(d2))
+        weights = np.ones(len(observations))
+        weights[worst] = 1.0 / INFLATION
+        try:
+            other = refine(
+                weighted_groups(observations, weights, _references(groups)),
+                start.point,
+                cox_reid=True,
+            )
+            second = _em(observations, groups, other)
+        except (FloatingPointError, np.linalg.LinAlgError):
+            return best
+        if mixture_nll(observations, second.fit.params) < mixture_nll(
+            observations, best.fit.params
+        ):
+            return second
+    return best
+
+
+def _em(
+    observations: Sequence[Observation], groups: Sequence[TrialGroup], start: JointFit
+) -> RobustFit:
+    """EM from ``start``."""
     references = _references(groups)
     fit = start
     r = np.ones(len(observations))
