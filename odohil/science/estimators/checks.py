@@ -76,18 +76,25 @@ class Criteria:
 
 def mahalanobis2(observations: Sequence[Observation], params: ErrorParameters) -> FloatArray:
     """Each trial's squared Mahalanobis distance from the model (Delta residual
-    taken modulo 2 pi)."""
-    moments = {}
+    taken modulo 2 pi); vectorised per design."""
     out = np.empty(len(observations))
+    by_design: dict[Design, list[int]] = {}
     for i, obs in enumerate(observations):
-        if obs.design not in moments:
-            moments[obs.design] = pose_moments(obs.design.path(), params)
-        m = moments[obs.design]
-        resid = obs.pose_change - m.mean
-        resid[2] = float(wrap(resid[2]))
-        total = m.cov + obs.measurement_cov
-        total = 0.5 * (total + total.T)
-        out[i] = float(resid @ np.linalg.lstsq(total, resid, rcond=1e-15)[0])
+        by_design.setdefault(obs.design, []).append(i)
+    for design, index in by_design.items():
+        m = pose_moments(design.path(), params)
+        poses = np.array([observations[i].pose_change for i in index])
+        resid = poses - m.mean
+        resid[:, 2] = wrap(resid[:, 2])
+        total = m.cov + np.array([observations[i].measurement_cov for i in index])
+        total = 0.5 * (total + np.swapaxes(total, 1, 2))
+        try:
+            solved = np.linalg.solve(total, resid[:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:
+            solved = np.array(
+                [np.linalg.lstsq(c, r, rcond=1e-15)[0] for c, r in zip(total, resid, strict=True)]
+            )
+        out[index] = np.einsum("ni,ni->n", resid, solved)
     return out
 
 

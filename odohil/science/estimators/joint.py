@@ -154,7 +154,7 @@ def refine(
 
     ``cox_reid``: solve the Cox-Reid adjusted score equation instead (see
     :mod:`odohil.science.estimators.likelihood`); a step is kept when it
-    shrinks the Newton decrement, and ``reuse_within`` is ignored.
+    shrinks the Newton decrement.
     """
     designs = designs_of(groups)
     point = start
@@ -176,7 +176,10 @@ def refine(
         if cox_reid:
             # an estimating equation (score + adjustment = 0): steps are kept
             # when they shrink the Newton decrement
-            moved = model_point(trial_phi, designs, derivatives=True)
+            if reuse_within > 0 and _distance(value, trial_phi - point.anchor) < reuse_within:
+                moved = with_moments(point, model_point(trial_phi, designs, derivatives=False))
+            else:
+                moved = model_point(trial_phi, designs, derivatives=True)
             trial = evaluate(groups, moved, cox_reid=True)
             if trial.gradient is not None and decrement(trial) < decrement(value):
                 point, value = moved, trial
