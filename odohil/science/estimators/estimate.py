@@ -54,7 +54,8 @@ def joint_start(paper: PaperEstimate) -> FloatArray:
 
 def interval_quantile(n_trials: int) -> float:
     """The 97.5 % Student-t quantile with 3 n - 4 degrees of freedom (at
-    least 1): the intervals' multiplier in place of 1.96 at small n."""
+    least 1): the intervals' multiplier in place of 1.96 at small n (K_theta
+    and K_rho may get a larger one, see :func:`_quantile`)."""
     return float(stats.t.ppf(0.975, max(1, 3 * n_trials - 4)))
 
 
@@ -64,10 +65,23 @@ def _estimates(
     diag = np.diag(cov)
     stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
     estimates = tuple(
-        ParameterEstimate.build(name, value, float(se), quantile)
+        ParameterEstimate.build(name, value, float(se), _quantile(name, value, float(se), quantile))
         for name, value, se in zip(PARAMETER_NAMES, params.as_tuple(), stderr, strict=True)
     )
     return estimates, stderr
+
+
+def _quantile(name: str, value: float, stderr: float, base: float) -> float:
+    """The interval multiplier: ``base`` for E_R and E_T; for a variance rate
+    the Student-t quantile with the Satterthwaite degrees of freedom of its own
+    precision, 2 (K / stderr)^2 (a variance estimated from nu squares has
+    relative standard error sqrt(2 / nu)), when that is the larger."""
+    if name not in ("K_theta", "K_rho") or not (value > 0 and math.isfinite(stderr)):
+        return base
+    if stderr <= 0:
+        return base
+    dof = 2.0 * (value / stderr) ** 2
+    return max(base, float(stats.t.ppf(0.975, max(dof, 1.0))))
 
 
 def build_result(
