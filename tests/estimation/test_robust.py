@@ -138,3 +138,15 @@ def test_cox_reid_removes_most_of_the_small_sample_bias_of_k_theta() -> None:
     # median log ratio: robust to the skew of a variance estimate at n = 5
     assert np.median(plain) < -0.05
     assert abs(np.median(adjusted)) < abs(np.median(plain)) / 2
+
+
+def test_the_live_estimate_carries_a_verdict() -> None:
+    from odohil.science.estimators import IncrementalEstimator
+
+    obs = slipped(3)
+    live = IncrementalEstimator()
+    for o in obs:
+        live.add(o)
+    data = live.result().to_json_dict()
+    assert data["verdict"]["status"] == "doubtful"
+    assert "trial 45" in data["verdict"]["reasons"][0]
