@@ -150,3 +150,18 @@ def test_the_live_estimate_carries_a_verdict() -> None:
     data = live.result().to_json_dict()
     assert data["verdict"]["status"] == "doubtful"
     assert "trial 45" in data["verdict"]["reasons"][0]
+
+
+@pytest.mark.slow
+def test_coverage_smoke_at_n_10_per_design() -> None:
+    """150 data sets of 10 + 10 exact trials: every 95 % interval covers the
+    truth in at least 95 % - 3 binomial SE of them (bench/coverage.py measures
+    the floor-marks path at full size)."""
+    rng = np.random.default_rng(13)
+    reps = 150
+    hits = np.zeros(4)
+    for _ in range(reps):
+        result = estimate(exact(10, rng))
+        for i, (p, true) in enumerate(zip(result.parameters, TRUTH, strict=True)):
+            hits[i] += p.ci95[0] <= true <= p.ci95[1]
+    assert np.all(hits / reps >= 0.95 - 3 * math.sqrt(0.95 * 0.05 / reps)), hits / reps
