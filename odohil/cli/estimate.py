@@ -14,6 +14,9 @@ from rich.console import Console
 from rich.table import Table
 
 from odohil import units
+from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
+from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_OK, EXIT_UNTRUSTED
+from odohil.cli.verdict import gaussian_line, verdict_line
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult, Observation, estimate
 from odohil.science.parameters import PAPER_UNITS
@@ -25,14 +28,17 @@ from odohil.session.trial_files import Trial, TrialSet, read_trials
 class MethodChoice(StrEnum):
     """The estimator."""
 
+    robust = "robust"
     joint = "joint"
     paper = "paper"
 
 
-def observation_of(trial: Trial) -> Observation:
-    """A trial-file row as the estimators see it."""
+def observation_of(trial: Trial, position: int = 0) -> Observation:
+    """A trial-file row as the estimators see it; numbered by the trial's own
+    number (sessions) or its 1-based ``position`` among the rows."""
     cov = trial.pose_cov if trial.pose_cov is not None else np.zeros((3, 3))
-    return Observation(trial.design, trial.pose_change, cov, line=trial.line)
+    number = trial.number if trial.number is not None else position + 1
+    return Observation(trial.design, trial.pose_change, cov, line=trial.line, trial=number)
 
 
 def _load(source: Path, robot: Path | None, err: Console) -> TrialSet:
@@ -91,31 +97,52 @@ def register(app: typer.Typer) -> None:
             typer.Option("--robot", help="Robot description (TOML); needed for raw marks."),
         ] = None,
         method: Annotated[
-            MethodChoice, typer.Option("--method", help="joint (maximum likelihood) or paper.")
-        ] = MethodChoice.joint,
+            MethodChoice,
+            typer.Option(
+                "--method",
+                help="robust (maximum likelihood with a per-trial outlier probability), "
+                "joint (Gaussian maximum likelihood) or paper.",
+            ),
+        ] = MethodChoice.robust,
+        exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
         as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
     ) -> None:
         """Estimate E_R, E_T, K_theta, K_rho from a trial file or a session folder.
 
-        Exit status 2 on a bad file (every bad row listed by line) or too few trials.
+        Exit status 0 when the verdict is trusted, 3 when the estimate is
+        printed but doubtful or failed, 2 on a bad file (every bad row listed
+        by line), a bad --exclude, or too few trials.
         """
         err = Console(stderr=True)
         try:
+            left_out = parse_exclude(exclude)
             trials = _load(file, robot, err)
             if len(trials) == 0:
                 raise OdohilError(f"{file}: no trials")
-            result = estimate([observation_of(t) for t in trials.trials], method.value)
+            # a file's rows are numbered by position, ambiguous rows included
+            rows = sorted((*trials.trials, *trials.ambiguous), key=lambda t: t.line)
+            position = {t.line: i for i, t in enumerate(rows)}
+            observations = [observation_of(t, position[t.line]) for t in trials.trials]
+            ambiguous = [
+                t.number if t.number is not None else position[t.line] + 1 for t in trials.ambiguous
+            ]
+            check_exclude(left_out, [o.trial for o in observations if o.trial is not None])
+            result = estimate(observations, method.value, exclude=left_out, ambiguous=ambiguous)
         except OdohilError as exc:
             err.print(f"[red]error:[/red] {exc}", highlight=False)
-            raise typer.Exit(2) from exc
+            raise typer.Exit(EXIT_BAD_INPUT) from exc
         flagged = trials.flagged()
+        status = EXIT_OK if result.verdict.trusted else EXIT_UNTRUSTED
         if as_json:
             data = result.to_json_dict()
-            data["flagged_lines"] = [t.line for t in flagged]
-            data["ambiguous_lines"] = [t.line for t in trials.ambiguous]
+            data["flagged_trials"] = [
+                o.trial for o, t in zip(observations, trials.trials, strict=True) if t.flagged
+            ]
+            data["ambiguous_trials"] = ambiguous
             typer.echo(json.dumps(data, indent=2))
-            return
+            raise typer.Exit(status)
         out = Console(width=max(120, Console().width))
+        out.print(verdict_line(result.verdict), highlight=False)
         out.print(_table(result))
         out.print(f"model check: {result.model_check.verdict}", highlight=False)
         out.print(f"sufficiency: {result.sufficiency.verdict}", highlight=False)
@@ -123,13 +150,21 @@ def register(app: typer.Typer) -> None:
             out.print(f"  - {reason}", highlight=False)
         for note in result.notes:
             out.print(f"note: {note}", highlight=False)
-        if trials.ambiguous:
-            left_out = ", ".join(str(t.line) for t in trials.ambiguous)
+        if result.gaussian:
+            out.print(gaussian_line(result), highlight=False)
+        if result.excluded:
+            out.print(f"left out (--exclude): trials {', '.join(map(str, result.excluded))}")
+        if ambiguous:
             out.print(
-                f"ambiguous trials left out (two candidate poses stay plausible), lines: "
-                f"{left_out}",
+                "ambiguous trials left out (two candidate poses stay plausible): "
+                + ", ".join(map(str, ambiguous)),
                 highlight=False,
             )
         if flagged:
-            lines = ", ".join(f"{t.line} ({t.note})" for t in flagged)
-            out.print(f"flagged trials (pose from the marks in doubt), lines: {lines}")
+            named = ", ".join(
+                f"{o.trial} ({t.note})"
+                for o, t in zip(observations, trials.trials, strict=True)
+                if t.flagged
+            )
+            out.print(f"flagged trials (pose from the marks in doubt): {named}")
+        raise typer.Exit(status)

@@ -130,7 +130,17 @@ def estimate_panel(
         parameters_table(result),
         more_trials_text(result, remaining),
         verdict,
+        verdict_text(result),
     )
+
+
+def verdict_text(result: Mapping[str, Any]) -> Text:
+    """``Verdict: trusted`` (green) or ``Verdict: doubtful: reasons`` (red)."""
+    verdict = result.get("verdict", {})
+    status = str(verdict.get("status", "n/a"))
+    reasons = "; ".join(str(r) for r in verdict.get("reasons", []))
+    style = "green" if status == "trusted" else "bold red"
+    return Text(f"Verdict: {status}" + (f": {reasons}" if reasons else ""), style=style)
 
 
 class MotionProgress:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import contextlib
 import json
 import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Collection, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
@@ -24,13 +24,16 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
     EXIT_ERROR,
     EXIT_OK,
     EXIT_STOP_UNCONFIRMED,
+    EXIT_UNTRUSTED,
     exit_for_signal,
 )
+from odohil.cli.verdict import verdict_line
 from odohil.driver.link import DEFAULT_BAUD, open_port
 from odohil.driver.robot import NomadRobot
 from odohil.errors import (
@@ -40,7 +43,7 @@ from odohil.errors import (
     ParameterError,
     StopUnconfirmedError,
 )
-from odohil.science.estimators import estimate
+from odohil.science.estimators import EstimateResult, estimate
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
@@ -61,7 +64,7 @@ from odohil.session.robot_file import load_robot_description
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
 from odohil.session.start_pose import StartPose
-from odohil.session.state import SessionState, session_observations
+from odohil.session.state import SessionState, ambiguous_trials, session_observations
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
@@ -194,8 +197,11 @@ def execute(
     console: Console,
     motion: MotionSettings | None = None,
     start_check: StartCheck | None = None,
+    exclude: frozenset[int] = frozenset(),
 ) -> Outcome:
-    """Run the engine with a progress bar; map failures to exit codes.
+    """Run the engine with a progress bar; map failures to exit codes (3 when
+    the final estimate's verdict is not trusted). ``exclude``: trial numbers
+    left out of the live and final estimate (the journal keeps them).
 
     The engine journals ``stopped`` and stops the robot before an error gets here.
     """
@@ -206,7 +212,7 @@ def execute(
         state,
         robot,
         source,
-        estimator=IncrementalLiveEstimator(),
+        estimator=IncrementalLiveEstimator(exclude),
         observer=observer,
         motion=motion,
         connection=connection,
@@ -233,11 +239,29 @@ def execute(
     finally:
         observer.progress.stop()
     try:
-        result = estimate(session_observations(final)).to_json_dict()
+        fitted = final_estimate(final, exclude)
     except OdohilError as exc:
         console.print(f"[red]no estimate[/]: {exc}")
         return Outcome(EXIT_ERROR, None)
-    return Outcome(EXIT_OK, result)
+    if not fitted.verdict.trusted:
+        console.print(verdict_line(fitted.verdict), highlight=False)
+    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted.to_json_dict())
+
+
+def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateResult:
+    """A finished session's estimate: every solved trial but the ambiguous ones
+    and those in ``exclude``; the verdict lists the ambiguous ones left out.
+
+    Raises:
+        MeasurementError: too few trials for an estimate.
+    """
+    observations = session_observations(state)
+    done = {o.trial for o in observations}
+    return estimate(
+        observations,
+        exclude=[t for t in exclude if t in done],
+        ambiguous=[t.trial for t in ambiguous_trials(state)],
+    )
 
 
 def report_stop(console: Console, outcome: StopOutcome | None, folder: Path) -> None:
@@ -364,6 +388,17 @@ def refuse_unredundant(description: RobotDescription, plan: Plan, console: Conso
         raise typer.Exit(EXIT_BAD_INPUT) from None
 
 
+def checked_exclude(text: str | None, n_trials: int, console: Console) -> frozenset[int]:
+    """``--exclude``'s trial numbers, each within the plan's 1..n_trials (else exit 2)."""
+    try:
+        exclude = parse_exclude(text)
+        check_exclude(exclude, range(1, n_trials + 1))
+    except OdohilError as exc:
+        console.print(f"[red]error[/]: {exc}")
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+    return exclude
+
+
 def default_session_folder() -> Path:
     """``odohil-session-YYYYmmdd-HHMMSS`` in the current directory."""
     return Path(f"odohil-session-{time.strftime('%Y%m%d-%H%M%S')}")
@@ -395,12 +430,17 @@ def run(
         bool,
         typer.Option("--json", help="Print the final estimate as JSON (as estimate --json)."),
     ] = False,
+    exclude_text: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
 ) -> None:
-    """Run a calibration session unattended: n trials, no prompts, journaled."""
+    """Run a calibration session unattended: n trials, no prompts, journaled.
+
+    Exit 0 when the final estimate is trusted, 3 when it is printed but not.
+    """
     console = Console(stderr=True)
     folder = session or default_session_folder()
     with session_exit_codes(console):
         plan = parse_plan(plan_text)
+        exclude = checked_exclude(exclude_text, plan.n_trials, console)
         description = load_robot_description(robot_file)
         refuse_unredundant(description, plan, console)
         try:
@@ -426,7 +466,7 @@ def run(
         console.print(f"session {folder}")
         with journal, connect(port, baud, truth_socket) as (robot, truth):
             source = make_source(kind, description, truth, seed, trial_file)
-            outcome = execute(journal, state, robot, source, settings, console)
+            outcome = execute(journal, state, robot, source, settings, console, exclude=exclude)
     finish(outcome, json_out, console)
 
 

@@ -37,10 +37,12 @@ from odohil.cli.exit_codes import (
     EXIT_INTERRUPTED,
     EXIT_OK,
     EXIT_STOP_UNCONFIRMED,
+    EXIT_UNTRUSTED,
     exit_for_signal,
 )
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
-from odohil.cli.run import MAY_STILL_MOVE, default_session_folder, report_stop
+from odohil.cli.run import MAY_STILL_MOVE, default_session_folder, final_estimate, report_stop
+from odohil.cli.verdict import verdict_line
 from odohil.driver.link import DEFAULT_BAUD
 from odohil.driver.robot import NomadRobot
 from odohil.driver.sample import EncoderSample
@@ -631,7 +633,7 @@ def wizard(
     console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
     with signals_raise():
         code = _guided(console, folder, interrupts, port, baud, robot_file, plan_text, max_leg_m)
-    if code != EXIT_OK and code != EXIT_STOP_UNCONFIRMED:
+    if code not in (EXIT_OK, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
         console.print(
             f"Stopped. The journal is in {folder}; run the wizard again with "
             f"--session {folder} to continue."
@@ -704,7 +706,13 @@ def _run(
         return EXIT_ERROR
     finally:
         progress.stop()
-    return EXIT_OK
+    try:
+        result = final_estimate(engine.state)
+    except OdohilError as exc:
+        console.print(f"[yellow]no estimate[/]: {exc}", soft_wrap=True)
+        return EXIT_UNTRUSTED
+    console.print(verdict_line(result.verdict), soft_wrap=True)
+    return EXIT_OK if result.verdict.trusted else EXIT_UNTRUSTED
 
 
 def register(app: typer.Typer) -> None:

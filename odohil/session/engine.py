@@ -43,7 +43,7 @@ from __future__ import annotations
 import contextlib
 import math
 import signal
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Protocol
@@ -260,16 +260,21 @@ class IncrementalLiveEstimator:
     """A :class:`LiveEstimator` on the joint maximum-likelihood
     :class:`~odohil.science.estimators.IncrementalEstimator`."""
 
-    def __init__(self) -> None:
+    def __init__(self, exclude: Collection[int] = frozenset()) -> None:
         self.inner = IncrementalEstimator()
+        self.exclude = frozenset(exclude)
 
     def add(self, trial: CompletedTrial) -> Mapping[str, Any] | None:
-        """Fold the trial in; the current result's JSON object, or None."""
+        """Fold the trial in (unless its number is in ``exclude``); the current
+        result's JSON object, or None."""
+        if trial.trial in self.exclude:
+            return None if self.inner.fit is None else self.inner.result().to_json_dict()
         observation = Observation(
             design=trial.design,
             pose_change=np.array(trial.pose_change, dtype=np.float64),
             measurement_cov=np.array(trial.cov, dtype=np.float64),
             line=trial.seq,
+            trial=trial.trial,
         )
         if self.inner.add(observation) is None:
             return None

@@ -15,7 +15,7 @@ from __future__ import annotations
 import html
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -31,6 +31,7 @@ from odohil.science.estimators import (
     ParameterEstimate,
     estimate,
 )
+from odohil.science.estimators.estimate import leave_out
 from odohil.science.moments import pose_moments
 from odohil.science.observables import Observables, observables
 from odohil.science.parameters import PAPER_UNITS, PARAMETER_NAMES, ErrorParameters
@@ -107,25 +108,29 @@ class SessionReport:
     convergence: tuple[ConvergencePoint, ...]
 
 
-def load_report(folder: str | Path) -> SessionReport:
-    """Replay the session in ``folder`` and recompute the estimates.
+def load_report(folder: str | Path, exclude: Collection[int] = frozenset()) -> SessionReport:
+    """Replay the session in ``folder`` and recompute the estimates (the
+    default robust method), leaving out the trial numbers in ``exclude``.
 
     Raises:
         JournalError: no readable, consistent journal there.
+        MeasurementError: an excluded number that is no completed trial's.
     """
     path = Path(folder)
     state = replay(read_journal(path).records)
     trials = state.completed
     observations = session_observations(state)
+    leave_out(observations, exclude)  # every excluded number must be a trial's
     result: EstimateResult | None = None
     problem = ""
     try:
-        result = estimate(observations, "joint")
+        result = estimate(observations, exclude=exclude)
     except MeasurementError as exc:
         problem = str(exc)
     convergence: list[ConvergencePoint] = []
     incremental = IncrementalEstimator()
-    for n, obs in enumerate(observations, start=1):
+    kept = [o for o in observations if o.trial not in exclude]
+    for n, obs in enumerate(kept, start=1):
         fit = incremental.add(obs)
         if fit is None:
             continue
@@ -183,9 +188,20 @@ def covariance_yaml(report: SessionReport) -> str:
         return f"# odohil: no estimate from this session ({report.problem})\n"
     p = result.params
     se = {e.name: e.stderr for e in result.parameters}
+    verdict = result.verdict
+    warning = (
+        []
+        if verdict.trusted
+        else [f"# WARNING: this estimate is {verdict.status.upper()}; exported with --force."]
+    )
     lines = [
+        *warning,
         "# Odometry error model estimated by odohil (Martinelli's four parameters).",
         f"# Session: {report.folder.name}, {result.n_trials} trials, method {result.method}.",
+        "odohil_verdict:",
+        f"  status: {verdict.status}",
+        "  reasons: [" + ", ".join(json.dumps(r) for r in verdict.reasons) + "]",
+        "  excluded_trials: [" + ", ".join(str(t) for t in result.excluded) + "]",
         "# Variances grow linearly with the distance driven s (metres):",
         "#   var(heading) = heading_variance_per_m * s,",
         "#   var(position along the path) = translation_variance_per_m * s.",
@@ -500,7 +516,12 @@ def model_check_svg(report: SessionReport) -> str:
     assert result is not None
     d2 = list(result.model_check.mahalanobis2)
     n = len(d2)
-    trials = [float(t.trial) for t in report.state.completed if not t.ambiguous]
+    excluded = set(result.excluded)
+    trials = [
+        float(t.trial)
+        for t in report.state.completed
+        if not t.ambiguous and t.trial not in excluded
+    ]
     limit = float(stats.chi2.isf(0.01 / max(n, 1), 3))
     plot = SvgPlot(
         "Model check: squared Mahalanobis distance per trial",
@@ -594,6 +615,12 @@ def _html(report: SessionReport, end_plots: list[str], extra: list[str], conv: l
     if result is None:
         parts.append(f'<p class="bad">No estimate: {e(report.problem)}</p>')
     else:
+        status = result.verdict.status
+        reasons = "; ".join(result.verdict.reasons)
+        parts.append(
+            f'<p class="{"good" if result.verdict.trusted else "bad"}">Verdict: '
+            f"<strong>{e(status)}</strong>{e(': ' + reasons if reasons else '')}</p>"
+        )
         parts.append(_estimates_table(result))
         parts.append(f"<p>Method: {e(result.method)}. {e(' '.join(result.notes))}</p>")
         suff = result.sufficiency

@@ -465,6 +465,7 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
             flagged=not t.clear_cut or bool(t.slip),
             note="; ".join(part for part in (t.note, t.slip) if part),
             line=t.seq,
+            number=t.trial,
         )
         for t in state.completed
     ]
@@ -493,8 +494,9 @@ def trials_to_observations(trials: TrialSet) -> list[Observation]:
             pose_change=t.pose_change,
             measurement_cov=t.pose_cov if t.pose_cov is not None else np.zeros((3, 3)),
             line=t.line,
+            trial=t.number if t.number is not None else i + 1,
         )
-        for t in trials.trials
+        for i, t in enumerate(trials.trials)
     ]
 
 

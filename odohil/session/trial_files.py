@@ -57,6 +57,8 @@ class Trial:
         flagged: True when the pose from the marks is in doubt.
         note: why the trial is flagged (empty otherwise).
         line: line number in the file (1-based).
+        number: the trial's number (a session's plan trial number), or None
+            (a trial file's rows are numbered by position, from 1).
     """
 
     design: Design
@@ -67,6 +69,7 @@ class Trial:
     flagged: bool = False
     note: str = ""
     line: int = 0
+    number: int | None = None
 
 
 @dataclass(frozen=True)

@@ -45,11 +45,12 @@ def trial_file(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return combined
 
 
-@pytest.mark.parametrize("method", ["joint", "paper"])
+@pytest.mark.parametrize("method", ["robust", "joint", "paper"])
 def test_json_output_recovers_the_simulated_parameters(trial_file: Path, method: str) -> None:
     done = run("estimate", trial_file, "--method", method, "--json")
     assert done.returncode == 0, done.stderr
     data = json.loads(done.stdout)
+    assert data["verdict"] == {"status": "trusted", "reasons": []}
     assert data["method"] == method
     assert data["n_trials"] == 60
     truth = NOMAD150.to_si_dict()
@@ -67,14 +68,75 @@ def test_table_output_shows_paper_units_and_verdicts(trial_file: Path) -> None:
         assert text in done.stdout
 
 
-def test_outlier_line_is_reported(trial_file: Path, tmp_path: Path) -> None:
+def _shifted(trial_file: Path, folder: Path, row: int, dx: float, dy: float) -> Path:
+    """The trial file with trial ``row`` (1-based) moved by (dx, dy) metres."""
     lines = trial_file.read_text().splitlines()
-    k, l_m, variant, dx, dy, dtheta = lines[4].split(",")
-    lines[4] = ",".join([k, l_m, variant, str(float(dx) + 0.2), dy, dtheta])
-    bad = tmp_path / "outlier.csv"
+    k, l_m, variant, x, y, dtheta = lines[row].split(",")
+    lines[row] = ",".join([k, l_m, variant, str(float(x) + dx), str(float(y) + dy), dtheta])
+    bad = folder / "outlier.csv"
     bad.write_text("\n".join(lines) + "\n")
-    data = json.loads(run("estimate", bad, "--json").stdout)
-    assert [o["line"] for o in data["model_check"]["outliers"]] == [5]
+    return bad
+
+
+def test_outlier_is_named_by_trial_number_and_design(trial_file: Path, tmp_path: Path) -> None:
+    bad = _shifted(trial_file, tmp_path, 4, 0.2, 0.0)
+    done = run("estimate", bad, "--json")
+    assert done.returncode == 3, done.stderr
+    data = json.loads(done.stdout)
+    assert [(o["trial"], o["design"]) for o in data["model_check"]["outliers"]] == [
+        (4, "k=1 l=6 m turn")
+    ]
+    assert data["verdict"]["status"] == "doubtful"
+    assert "trial 4 (k=1 l=6 m turn)" in data["verdict"]["reasons"][0]
+
+
+def test_a_5_cm_slip_in_one_design_b_trial_is_named_and_the_estimate_holds(
+    trial_file: Path, tmp_path: Path
+) -> None:
+    """Issue 8: 5 cm on one design-B trial's y moved the Gaussian fit's K_theta
+    by many standard errors while the goodness-of-fit test stayed quiet."""
+    bad = _shifted(trial_file, tmp_path, 45, 0.0, 0.05)  # trial 45: the 15th of design B
+    truth = NOMAD150.to_si_dict()
+    gaussian = json.loads(run("estimate", bad, "--method", "joint", "--json").stdout)
+    entry = gaussian["parameters"]["K_theta"]
+    assert abs(entry["value"] - truth["K_theta"]) > 4 * entry["stderr"]
+    done = run("estimate", bad, "--json")
+    assert done.returncode == 3, done.stderr
+    data = json.loads(done.stdout)
+    for name, entry in data["parameters"].items():
+        assert entry["ci95"][0] <= truth[name] <= entry["ci95"][1], name
+    assert [o["trial"] for o in data["model_check"]["outliers"]] == [45]
+    assert "gaussian_ml" in data
+    influence = {t["trial"]: abs(t["influence"]["K_theta"]) for t in data["trials"]}
+    assert max(influence, key=lambda t: influence[t]) == 45
+    excluded = run("estimate", bad, "--exclude", "45", "--json")
+    assert excluded.returncode == 0, excluded.stdout
+    kept = json.loads(excluded.stdout)
+    assert kept["excluded"] == [45]
+    assert kept["n_trials"] == 59
+    assert kept["verdict"]["status"] == "trusted"
+
+
+@pytest.mark.parametrize("value", ["99", "0", "3,x"])
+def test_bad_exclude_exits_2_naming_the_option(trial_file: Path, value: str) -> None:
+    done = run("estimate", trial_file, "--exclude", value)
+    assert done.returncode == 2
+    assert "--exclude" in done.stderr
+
+
+def test_degenerate_data_fail_with_exit_3(tmp_path: Path) -> None:
+    rows = ["k,l_m,variant,dx_m,dy_m,dtheta_rad"]
+    rows += ["1,6,turn,0.01,0.1,-0.04"] * 30 + ["20,0.5,turn,0.002,0.01,-0.07"] * 30
+    same = tmp_path / "same.csv"
+    same.write_text("\n".join(rows) + "\n")
+    done = run("estimate", same, "--json")
+    assert done.returncode == 3, done.stderr
+    data = json.loads(done.stdout)
+    assert data["verdict"]["status"] == "failed"
+    assert any("degenerate" in r for r in data["verdict"]["reasons"])
+    table = run("estimate", same)
+    assert table.returncode == 3
+    assert "verdict: FAILED" in table.stdout
 
 
 def test_bad_file_exits_2_with_line_numbers(tmp_path: Path) -> None:

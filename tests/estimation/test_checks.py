@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -39,17 +40,17 @@ def test_clean_data_fit_the_model() -> None:
         assert check.dof == 3 * 60 - 4
 
 
-def test_an_injected_outlier_is_named_by_line() -> None:
-    obs = trials([(A, 30), (B, 30)], 32)
+def test_an_injected_outlier_is_named_by_trial_number_and_design() -> None:
+    obs = [replace(o, trial=i + 101) for i, o in enumerate(trials([(A, 30), (B, 30)], 32))]
     bad = obs[15]
     moved = bad.pose_change + np.array([0.15, 0.0, 0.0])  # 15 cm off: 7 sd of x in design A
-    obs[15] = Observation(bad.design, moved, bad.measurement_cov, line=bad.line)
-    for method in ("paper", "joint"):
+    obs[15] = replace(bad, pose_change=moved)
+    for method in ("paper", "joint", "robust"):
         check = estimate(obs, method).model_check
         assert not check.fits
-        assert [o.line for o in check.outliers] == [17]
-        assert "line 17" in check.verdict
-        assert "outlier" in check.verdict
+        assert [o.number for o in check.outliers] == [116]
+        assert "trial 116 (k=1 l=6 m turn) is an outlier" in check.verdict
+        assert "line" not in check.verdict
 
 
 def test_two_outliers_without_lines_are_numbered() -> None:
@@ -58,7 +59,7 @@ def test_two_outliers_without_lines_are_numbered() -> None:
         obs[i] = Observation(obs[i].design, obs[i].pose_change + np.array([0, 0, 0.05]), MEAS)
     check = estimate(obs).model_check
     assert [o.index for o in check.outliers] == [3, 20]
-    assert "trials at trial #4 and trial #21 are outliers" in check.verdict
+    assert "trial 4 (k=1 l=6 m turn) and trial 21 (k=1 l=6 m turn) are outliers" in check.verdict
 
 
 def test_sufficiency_flags_k_rho_with_a_few_short_trials() -> None:

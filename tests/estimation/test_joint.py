@@ -42,7 +42,7 @@ def assert_within(result, truth: ErrorParameters) -> None:
 
 def test_recovers_truth_without_measurement_noise() -> None:
     result = estimate(trials([(A, 150), (B, 150)], np.random.default_rng(21)))
-    assert result.method == "joint"
+    assert result.method == "robust"
     assert_within(result, NOMAD150)
 
 
@@ -67,7 +67,7 @@ def test_intervals_cover_the_truth_about_95_percent() -> None:
     hits = np.zeros(4)
     for _ in range(reps):
         result = estimate(trials([(A, 30), (B, 30)], rng, meas=MEAS))
-        assert "converged" in result.notes[0]
+        assert result.converged, result.notes
         for i, (p, true) in enumerate(zip(result.parameters, NOMAD150.as_tuple(), strict=True)):
             hits[i] += p.ci95[0] <= true <= p.ci95[1]
     coverage = hits / reps
@@ -108,7 +108,7 @@ def test_incremental_matches_batch() -> None:
     fits = [incremental.add(o) for o in obs]
     assert fits[0] is None
     assert fits[-1] is not None
-    batch = estimate(obs)
+    batch = estimate(obs, "joint")
     final = incremental.result()
     assert final.n_trials == batch.n_trials == 80
     for b, i in zip(batch.parameters, final.parameters, strict=True):

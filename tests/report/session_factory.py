@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import serial
 
@@ -16,7 +17,7 @@ from odohil.session.engine import (
     start_session,
 )
 from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource
+from odohil.session.sources import FakeTruthSource, TrialContext
 from odohil.session.state import SessionState
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 
@@ -32,8 +33,27 @@ class PortTruth:
         return (snap.true_x_m, snap.true_y_m, snap.true_theta_rad)
 
 
-def build_session(folder: Path, plan_text: str, seed: int = 3) -> SessionState:
-    """Run a whole session of ``plan_text`` against fakerobot:// (fast clock)."""
+class BumpedSource(FakeTruthSource):
+    """The fake's distances, but trial ``trial``'s end marks were made ``dy_m``
+    metres across the path from where the robot stood (a bumped robot): the
+    distances agree with one another and with a wrong pose."""
+
+    def __init__(self, *args: Any, bump: tuple[int, float], **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.bump = bump
+
+    def true_pose_change(self, ctx: TrialContext) -> tuple[float, float, float]:
+        """The true pose change, bumped on the chosen trial."""
+        x, y, theta = super().true_pose_change(ctx)
+        trial, dy_m = self.bump
+        return (x, y + dy_m, theta) if ctx.trial == trial else (x, y, theta)
+
+
+def build_session(
+    folder: Path, plan_text: str, seed: int = 3, bump: tuple[int, float] | None = None
+) -> SessionState:
+    """Run a whole session of ``plan_text`` against fakerobot:// (fast clock);
+    ``bump``: (trial, metres) that trial's end marks are moved across the path."""
     plan = parse_plan(plan_text)
     journal, state = start_session(folder, ROBOT_TOML, plan, measure="fake", settings={})
     port = serial.serial_for_url(f"fakerobot://?seed={seed}&time_scale=2000", timeout=0.5)
@@ -42,7 +62,11 @@ def build_session(folder: Path, plan_text: str, seed: int = 3) -> SessionState:
             journal,
             state,
             robot,
-            FakeTruthSource(PortTruth(port), description_of(state), seed=seed),
+            (
+                FakeTruthSource(PortTruth(port), description_of(state), seed=seed)
+                if bump is None
+                else BumpedSource(PortTruth(port), description_of(state), seed=seed, bump=bump)
+            ),
             estimator=IncrementalLiveEstimator(),
             motion=MotionSettings(speeds=(1.0, 3.0), accelerations=(2.0, 6.0), watchdog_s=0.0),
         )

@@ -27,9 +27,9 @@ def session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, SessionStat
     return folder, build_session(folder, PLAN, seed=5)
 
 
-def _report(session: Path, out: Path) -> subprocess.CompletedProcess[str]:
+def _report(session: Path, out: Path, *more: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "odohil", "report", str(session), "--out", str(out)],
+        [sys.executable, "-m", "odohil", "report", str(session), "--out", str(out), *more],
         capture_output=True,
         text=True,
         timeout=120,
@@ -77,7 +77,8 @@ def test_report_is_self_contained_and_matches_the_estimate(
     dots = ET.parse(out / "end_points_1.svg").getroot().iter(f"{SVG}circle")
     assert len(list(dots)) == 6
 
-    expected = estimate(session_observations(state), "joint").to_json_dict()
+    expected = estimate(session_observations(state)).to_json_dict()
+    assert expected["verdict"]["status"] == "trusted"
     written = json.loads((out / "parameters.json").read_text())
     assert written == json.loads(json.dumps(expected))
 
@@ -120,3 +121,52 @@ def test_report_of_a_missing_session_fails_cleanly(tmp_path: Path) -> None:
     run = _report(tmp_path / "nothing", tmp_path / "out")
     assert run.returncode == 2
     assert "journal" in run.stderr
+
+
+@pytest.fixture(scope="module")
+def bumped(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A session whose trial 3 was marked 5 cm across the path from the robot."""
+    folder = tmp_path_factory.mktemp("bumped") / "session"
+    build_session(folder, PLAN, seed=5, bump=(3, 0.05))
+    return folder
+
+
+def test_an_untrusted_estimate_is_refused_without_force(bumped: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    run = _report(bumped, out)
+    assert run.returncode == 3, run.stderr
+    assert "--force" in run.stderr
+    assert "trial 3 (k=1 l=2 m turn)" in run.stderr
+    assert not out.exists()
+
+
+def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    run = _report(bumped, out, "--force")
+    assert run.returncode == 0, run.stderr
+    written = json.loads((out / "parameters.json").read_text())
+    assert written["verdict"]["status"] == "doubtful"
+    assert "trial 3" in written["verdict"]["reasons"][0]
+    yaml = (out / "odometry_covariance.yaml").read_text()
+    assert yaml.startswith("# WARNING: this estimate is DOUBTFUL")
+    assert re.search(r"^  status: doubtful$", yaml, flags=re.MULTILINE)
+    assert "Verdict: <strong>doubtful</strong>" in (out / "index.html").read_text()
+
+
+def test_report_exclude_leaves_the_trial_out(bumped: Path, tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    run = _report(bumped, out, "--exclude", "3")
+    assert run.returncode == 0, run.stderr
+    written = json.loads((out / "parameters.json").read_text())
+    assert written["verdict"]["status"] == "trusted"
+    assert written["excluded"] == [3]
+    assert written["n_trials"] == 11
+    assert re.search(
+        r"^  excluded_trials: \[3\]$",
+        (out / "odometry_covariance.yaml").read_text(),
+        flags=re.MULTILINE,
+    )
+    bad = _report(bumped, tmp_path / "other", "--exclude", "13")
+    assert bad.returncode == 2
+    assert "--exclude" in bad.stderr
+    assert "1..12" in bad.stderr

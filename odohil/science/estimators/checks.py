@@ -76,18 +76,25 @@ class Criteria:
 
 def mahalanobis2(observations: Sequence[Observation], params: ErrorParameters) -> FloatArray:
     """Each trial's squared Mahalanobis distance from the model (Delta residual
-    taken modulo 2 pi)."""
-    moments = {}
+    taken modulo 2 pi); vectorised per design."""
     out = np.empty(len(observations))
+    by_design: dict[Design, list[int]] = {}
     for i, obs in enumerate(observations):
-        if obs.design not in moments:
-            moments[obs.design] = pose_moments(obs.design.path(), params)
-        m = moments[obs.design]
-        resid = obs.pose_change - m.mean
-        resid[2] = float(wrap(resid[2]))
-        total = m.cov + obs.measurement_cov
-        total = 0.5 * (total + total.T)
-        out[i] = float(resid @ np.linalg.lstsq(total, resid, rcond=1e-15)[0])
+        by_design.setdefault(obs.design, []).append(i)
+    for design, index in by_design.items():
+        m = pose_moments(design.path(), params)
+        poses = np.array([observations[i].pose_change for i in index])
+        resid = poses - m.mean
+        resid[:, 2] = wrap(resid[:, 2])
+        total = m.cov + np.array([observations[i].measurement_cov for i in index])
+        total = 0.5 * (total + np.swapaxes(total, 1, 2))
+        try:
+            solved = np.linalg.solve(total, resid[:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:
+            solved = np.array(
+                [np.linalg.lstsq(c, r, rcond=1e-15)[0] for c, r in zip(total, resid, strict=True)]
+            )
+        out[index] = np.einsum("ni,ni->n", resid, solved)
     return out
 
 
@@ -97,24 +104,41 @@ def _join(labels: Sequence[str]) -> str:
     return ", ".join(labels[:-1]) + " and " + labels[-1]
 
 
-def model_check(observations: Sequence[Observation], params: ErrorParameters) -> ModelCheck:
-    """The model check of ``params`` against the trials (see the module docstring)."""
+def model_check(
+    observations: Sequence[Observation],
+    params: ErrorParameters,
+    named: Sequence[int] = (),
+) -> ModelCheck:
+    """The model check of ``params`` against the trials (see the module docstring).
+
+    ``named``: input positions the robust fit already named outliers; they
+    are outliers whatever their distance, and left out of the overall test.
+    """
     d2 = mahalanobis2(observations, params)
     n = len(observations)
     p_each = stats.chi2.sf(d2, 3)
+    flagged = sorted(set(int(j) for j in np.flatnonzero(p_each < OUTLIER_LEVEL / n)) | set(named))
     outliers = tuple(
-        Outlier(i, observations[i].line, float(d2[i]), float(p_each[i]))
-        for i in (int(j) for j in np.flatnonzero(p_each < OUTLIER_LEVEL / n))
+        Outlier(
+            i,
+            observations[i].line,
+            float(d2[i]),
+            float(p_each[i]),
+            observations[i].trial,
+            observations[i].design.label(),
+        )
+        for i in flagged
     )
-    dof = max(1, 3 * n - 4)
-    chi2 = float(d2.sum())
+    kept = np.ones(n, dtype=bool)
+    kept[list(named)] = False
+    dof = max(1, 3 * int(kept.sum()) - 4)
+    chi2 = float(d2[kept].sum())
     p_value = float(stats.chi2.sf(chi2, dof))
     if outliers:
         labels = [o.label() for o in outliers]
-        noun = "trials at" if len(labels) > 1 else "the trial at"
         verb = "are outliers" if len(labels) > 1 else "is an outlier"
         verdict = (
-            f"{noun} {_join(labels)} {verb}: the model puts them beyond its "
+            f"{_join(labels)} {verb}: the model puts them beyond its "
             f"{100 * (1 - OUTLIER_LEVEL):g} % range (check the marks, or the run)"
         )
     elif p_value < FIT_LEVEL:

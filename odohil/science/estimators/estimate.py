@@ -1,12 +1,14 @@
-"""One call from trials to an :class:`EstimateResult`, by either method."""
+"""One call from trials to an :class:`EstimateResult`, by any method, with its verdict."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
+from dataclasses import replace
 from typing import Literal
 
 import numpy as np
+from scipy import stats
 
 from odohil.errors import MeasurementError
 from odohil.science.estimators.checks import Criteria, model_check, sufficiency
@@ -19,12 +21,14 @@ from odohil.science.estimators.observations import (
     summarise,
 )
 from odohil.science.estimators.paper import PaperEstimate, paper_estimate
-from odohil.science.estimators.result import EstimateResult, ParameterEstimate
+from odohil.science.estimators.result import EstimateResult, ParameterEstimate, TrialDiagnostic
+from odohil.science.estimators.robust import EPSILON, OUTLIER_WEIGHT, robust_fit
+from odohil.science.estimators.verdict import judge
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import FloatArray
 
-Method = Literal["joint", "paper"]
-METHODS: tuple[Method, ...] = ("joint", "paper")
+Method = Literal["robust", "joint", "paper"]
+METHODS: tuple[Method, ...] = ("robust", "joint", "paper")
 
 
 def paper_notes(paper: PaperEstimate) -> tuple[str, ...]:
@@ -48,6 +52,38 @@ def joint_start(paper: PaperEstimate) -> FloatArray:
     return start_phi(paper.params, floor)
 
 
+def interval_quantile(n_trials: int) -> float:
+    """The 97.5 % Student-t quantile with 3 n - 4 degrees of freedom (at
+    least 1): the intervals' multiplier in place of 1.96 at small n (K_theta
+    and K_rho may get a larger one, see :func:`_quantile`)."""
+    return float(stats.t.ppf(0.975, max(1, 3 * n_trials - 4)))
+
+
+def _estimates(
+    params: ErrorParameters, cov: FloatArray, quantile: float
+) -> tuple[tuple[ParameterEstimate, ...], FloatArray]:
+    diag = np.diag(cov)
+    stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
+    estimates = tuple(
+        ParameterEstimate.build(name, value, float(se), _quantile(name, value, float(se), quantile))
+        for name, value, se in zip(PARAMETER_NAMES, params.as_tuple(), stderr, strict=True)
+    )
+    return estimates, stderr
+
+
+def _quantile(name: str, value: float, stderr: float, base: float) -> float:
+    """The interval multiplier: ``base`` for E_R and E_T; for a variance rate
+    the Student-t quantile with the Satterthwaite degrees of freedom of its own
+    precision, 2 (K / stderr)^2 (a variance estimated from nu squares has
+    relative standard error sqrt(2 / nu)), when that is the larger."""
+    if name not in ("K_theta", "K_rho") or not (value > 0 and math.isfinite(stderr)):
+        return base
+    if stderr <= 0:
+        return base
+    dof = 2.0 * (value / stderr) ** 2
+    return max(base, float(stats.t.ppf(0.975, max(dof, 1.0))))
+
+
 def build_result(
     method: str,
     observations: Sequence[Observation],
@@ -56,18 +92,38 @@ def build_result(
     covariance: FloatArray,
     notes: tuple[str, ...],
     criteria: Criteria | None = None,
+    *,
+    check_params: ErrorParameters | None = None,
+    named_outliers: Sequence[int] = (),
+    converged: bool = True,
+    gaussian: tuple[ParameterEstimate, ...] = (),
+    trials: tuple[TrialDiagnostic, ...] = (),
+    excluded: tuple[int, ...] = (),
+    ambiguous: Sequence[int] = (),
 ) -> EstimateResult:
-    """Assemble the result and run both checks."""
+    """Assemble the result, run both checks and give the verdict.
+
+    ``check_params``: where the model check is evaluated (the maximum-likelihood
+    fit; ``params`` when None). ``named_outliers``: input positions the robust
+    fit named outliers.
+    """
     cov = np.array(covariance, dtype=np.float64)
-    stderr = np.sqrt(np.where(np.isfinite(np.diag(cov)), np.clip(np.diag(cov), 0.0, None), np.inf))
-    estimates = tuple(
-        ParameterEstimate.build(name, value, float(se))
-        for name, value, se in zip(PARAMETER_NAMES, params.as_tuple(), stderr, strict=True)
-    )
+    estimates, stderr = _estimates(params, cov, interval_quantile(len(observations)))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(stderr, stderr)
     corr[~np.isfinite(corr)] = math.nan
     np.fill_diagonal(corr, 1.0)
+    check = model_check(observations, check_params or params, named_outliers)
+    verdict = judge(
+        observations,
+        converged,
+        [float(v) for v in stderr],
+        PARAMETER_NAMES,
+        check.fits,
+        [o.label() for o in check.outliers],
+        check.verdict,
+        ambiguous,
+    )
     return EstimateResult(
         method=method,
         n_trials=len(observations),
@@ -75,40 +131,92 @@ def build_result(
         parameters=estimates,
         covariance=tuple(tuple(float(v) for v in row) for row in cov),
         correlation=tuple(tuple(float(v) for v in row) for row in corr),
-        model_check=model_check(observations, params),
+        model_check=check,
         sufficiency=sufficiency(estimates, params, summaries, criteria),
         notes=notes,
+        verdict=verdict,
+        converged=converged,
+        gaussian=gaussian,
+        trials=trials,
+        excluded=excluded,
     )
 
 
-def fit_joint(groups: Sequence[TrialGroup], paper: PaperEstimate) -> JointFit:
-    """The maximum-likelihood fit from the paper-method start."""
-    return joint_estimate(groups, joint_start(paper))
+def fit_joint(
+    groups: Sequence[TrialGroup], paper: PaperEstimate, cox_reid: bool = True
+) -> JointFit:
+    """The maximum-likelihood fit (Cox-Reid adjusted by default) from the
+    paper-method start."""
+    return joint_estimate(groups, joint_start(paper), cox_reid=cox_reid)
+
+
+def trial_number(observation: Observation, index: int) -> int:
+    """The trial's number: its own, else its 1-based position in the input."""
+    return observation.trial if observation.trial is not None else index + 1
+
+
+def leave_out(
+    observations: Sequence[Observation], exclude: Iterable[int]
+) -> tuple[list[Observation], tuple[int, ...]]:
+    """The trials not excluded, and the excluded numbers (sorted).
+
+    Raises:
+        MeasurementError: a number that is no trial's (the message lists the
+            trials' range).
+    """
+    wanted = sorted(set(int(t) for t in exclude))
+    numbers = [trial_number(o, i) for i, o in enumerate(observations)]
+    missing = [t for t in wanted if t not in numbers]
+    if missing:
+        span = f"{min(numbers)}..{max(numbers)}" if numbers else "none"
+        raise MeasurementError(
+            f"no trial numbered {', '.join(str(t) for t in missing)} to exclude "
+            f"(the trials are numbered {span})"
+        )
+    kept = [o for o, t in zip(observations, numbers, strict=True) if t not in wanted]
+    return kept, tuple(wanted)
+
+
+def _numbered(observations: Sequence[Observation]) -> list[Observation]:
+    return [
+        o if o.trial is not None else replace(o, trial=i + 1) for i, o in enumerate(observations)
+    ]
 
 
 def estimate(
     observations: Sequence[Observation],
-    method: Method = "joint",
+    method: Method = "robust",
     criteria: Criteria | None = None,
+    exclude: Iterable[int] = (),
+    ambiguous: Sequence[int] = (),
 ) -> EstimateResult:
     """Estimate the four parameters from trials.
 
     Args:
         observations: the trials (any mix of designs).
-        method: ``joint`` (maximum likelihood, the default) or ``paper``
-            (the sequential method of moments).
+        method: ``robust`` (the default: Gaussian with a per-trial outlier
+            probability, Cox-Reid adjusted), ``joint`` (Gaussian maximum
+            likelihood, Cox-Reid adjusted) or ``paper`` (the sequential
+            method of moments).
         criteria: precision targets of the sufficiency check.
+        exclude: trial numbers to leave out (a view: nothing is deleted).
+        ambiguous: trial numbers the caller already left out as ambiguous
+            (they make the verdict doubtful).
 
     Raises:
-        MeasurementError: too few trials, or no design that identifies E_R.
+        MeasurementError: too few trials, no design that identifies E_R, or
+            an excluded number that is no trial's.
     """
     if method not in METHODS:
         raise MeasurementError(f"method must be one of {METHODS}, got {method!r}")
+    observations, excluded = leave_out(_numbered(observations), exclude)
     if not observations:
         raise MeasurementError("no trials to estimate from")
     groups = group_trials(observations)
     summaries = summarise(groups)
     paper = paper_estimate(summaries)
+    ml = fit_joint(groups, paper)
+    common = {"excluded": excluded, "ambiguous": ambiguous, "check_params": ml.params}
     if method == "paper":
         return build_result(
             "paper",
@@ -116,14 +224,58 @@ def estimate(
             summaries,
             paper.params,
             paper.covariance,
-            paper_notes(paper),
+            (*paper_notes(paper), "model check at the joint maximum-likelihood fit"),
             criteria,
+            **common,  # type: ignore[arg-type]
         )
-    fit = fit_joint(groups, paper)
+    state = f"converged in {ml.iterations} steps" if ml.converged else "DID NOT CONVERGE"
+    if method == "joint":
+        notes = (f"joint maximum likelihood (Cox-Reid adjusted), paper-method start: {state}",)
+        return build_result(
+            "joint",
+            observations,
+            summaries,
+            ml.params,
+            ml.covariance,
+            notes,
+            criteria,
+            converged=ml.converged,
+            **common,  # type: ignore[arg-type]
+        )
+    rob = robust_fit(observations, groups, ml)
+    named = [int(i) for i in np.flatnonzero(rob.clean_probability < OUTLIER_WEIGHT)]
+    gaussian, _ = _estimates(ml.params, ml.covariance, interval_quantile(len(observations)))
+    diagnostics = tuple(
+        TrialDiagnostic(
+            trial_number(o, i),
+            o.design.label(),
+            float(rob.clean_probability[i]),
+            (
+                float(rob.influence[i, 0]),
+                float(rob.influence[i, 1]),
+                float(rob.influence[i, 2]),
+                float(rob.influence[i, 3]),
+            ),
+        )
+        for i, o in enumerate(observations)
+    )
     notes = (
-        "joint maximum likelihood from the paper-method start: "
-        + (f"converged in {fit.iterations} steps" if fit.converged else "DID NOT CONVERGE"),
+        f"robust maximum likelihood (outlier probability {EPSILON:g} per trial, Cox-Reid "
+        f"adjusted): {rob.em_iterations} EM steps from the Gaussian fit ({state})",
     )
     return build_result(
-        "joint", observations, summaries, fit.params, fit.covariance, notes, criteria
+        "robust",
+        observations,
+        summaries,
+        rob.fit.params,
+        rob.fit.covariance,
+        notes,
+        criteria,
+        check_params=rob.fit.params,
+        named_outliers=named,
+        converged=rob.converged and ml.converged,
+        gaussian=gaussian,
+        trials=diagnostics,
+        excluded=excluded,
+        ambiguous=ambiguous,
     )

@@ -86,7 +86,7 @@ class IncrementalEstimator:
         self._observations.append(observation)
         groups = self.groups
         if self._fit is not None and design in self._fit.point.means:
-            fit = refine(groups, self._fit.point, reuse_within=REUSE_WITHIN)
+            fit = refine(groups, self._fit.point, reuse_within=REUSE_WITHIN, cox_reid=True)
             if fit.converged:
                 self._fit = fit
                 return fit

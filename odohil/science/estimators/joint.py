@@ -141,6 +141,7 @@ def refine(
     start: ModelPoint,
     max_iterations: int = _MAX_ITERATIONS,
     reuse_within: float = 0.0,
+    cox_reid: bool = False,
 ) -> JointFit:
     """Fisher scoring from ``start`` (a point with derivatives for every design).
 
@@ -150,10 +151,14 @@ def refine(
     solves the likelihood equations with derivatives that are off by a
     relative amount of that order, which moves it by a negligible fraction
     of a standard error.
+
+    ``cox_reid``: solve the Cox-Reid adjusted score equation instead (see
+    :mod:`odohil.science.estimators.likelihood`); a step is kept when it
+    shrinks the Newton decrement.
     """
     designs = designs_of(groups)
     point = start
-    value = evaluate(groups, point)
+    value = evaluate(groups, point, cox_reid)
     if not math.isfinite(value.nll):
         raise FloatingPointError("the start point gives a singular covariance")
     damping = 0.0
@@ -168,6 +173,22 @@ def refine(
         iterations += 1
         step = _solve(value.information, -value.gradient, damping)
         trial_phi = _limit(point.phi, step)
+        if cox_reid:
+            # an estimating equation (score + adjustment = 0): steps are kept
+            # when they shrink the Newton decrement
+            if reuse_within > 0 and _distance(value, trial_phi - point.anchor) < reuse_within:
+                moved = with_moments(point, model_point(trial_phi, designs, derivatives=False))
+            else:
+                moved = model_point(trial_phi, designs, derivatives=True)
+            trial = evaluate(groups, moved, cox_reid=True)
+            if trial.gradient is not None and decrement(trial) < decrement(value):
+                point, value = moved, trial
+                damping = 0.0 if damping <= 1e-3 else damping / 10.0
+            else:
+                damping = 1e-3 if damping == 0.0 else damping * 10.0
+                if damping > 1e8:
+                    break
+            continue
         moved = model_point(trial_phi, designs, derivatives=False)
         trial = evaluate(groups, moved)
         if trial.nll <= value.nll + 1e-12 * abs(value.nll):
@@ -175,7 +196,7 @@ def refine(
                 point = with_moments(point, moved)
             else:
                 point = model_point(trial_phi, designs, derivatives=True)
-            value = evaluate(groups, point)
+            value = evaluate(groups, point, cox_reid)
             damping = 0.0 if damping <= 1e-3 else damping / 10.0
         else:
             damping = 1e-3 if damping == 0.0 else damping * 10.0
@@ -211,12 +232,15 @@ def _scipy_fit(groups: Sequence[TrialGroup], start: FloatArray) -> FloatArray:
     return best
 
 
-def joint_estimate(groups: Sequence[TrialGroup], start: FloatArray) -> JointFit:
-    """Maximum-likelihood estimate from phi ``start`` (see :func:`start_phi`)."""
+def joint_estimate(
+    groups: Sequence[TrialGroup], start: FloatArray, cox_reid: bool = False
+) -> JointFit:
+    """Maximum-likelihood estimate from phi ``start`` (see :func:`start_phi`);
+    ``cox_reid``: of the adjusted likelihood."""
     designs = designs_of(groups)
-    fit = refine(groups, model_point(start, designs, derivatives=True))
+    fit = refine(groups, model_point(start, designs, derivatives=True), cox_reid=cox_reid)
     if fit.converged:
         return fit
     rescue = _scipy_fit(groups, fit.point.phi)
-    second = refine(groups, model_point(rescue, designs, derivatives=True))
+    second = refine(groups, model_point(rescue, designs, derivatives=True), cox_reid=cox_reid)
     return second if second.value.nll <= fit.value.nll else fit

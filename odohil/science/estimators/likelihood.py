@@ -16,6 +16,19 @@ R = T - s mu^T - mu s^T + n mu mu^T):
     I     = n [dmu_a^T S^-1 dmu_b + 1/2 tr(S^-1 dS_a S^-1 dS_b)]
 
 (the last is the expected information, used as the Hessian in Fisher scoring).
+
+Weighted groups (the robust fit's M-step, :mod:`odohil.science.estimators.robust`)
+replace s, T and the n of the quadratic terms and of the information by their
+weighted versions W = sum w; log det S keeps the count n.
+
+Cox-Reid adjustment (``cox_reid=True``): the NLL gains 1/2 log det I_bb, the
+information of the mean parameters b = (E_R, E_T) (its mean part,
+sum W dmu_b^T S^-1 dmu_c). Its derivative in log K_theta and log K_rho,
+-1/2 tr(I_bb^-1 sum W dmu^T S^-1 dS_a S^-1 dmu), is added to the score (second
+derivatives of the model are neglected, and the term's dependence on b is
+taken as 0). This is the adjusted profile likelihood of Cox and Reid (1987)
+for the variance rates with the mean parameters as nuisance; like REML it
+removes most of the small-sample downward bias of K_theta and K_rho.
 """
 
 from __future__ import annotations
@@ -123,7 +136,7 @@ class LikelihoodValue:
 
 
 def _stack(groups: Sequence[TrialGroup], point: ModelPoint) -> tuple[FloatArray, ...]:
-    n = np.array([g.n for g in groups], dtype=np.float64)
+    n = np.array([g.weight for g in groups], dtype=np.float64)
     s = np.array([g.total for g in groups])
     t = np.array([g.outer for g in groups])
     mu = np.array([align_heading(point.means[g.design], g.reference) for g in groups])
@@ -131,11 +144,15 @@ def _stack(groups: Sequence[TrialGroup], point: ModelPoint) -> tuple[FloatArray,
     return n, s, t, mu, cov
 
 
-def evaluate(groups: Sequence[TrialGroup], point: ModelPoint) -> LikelihoodValue:
+def evaluate(
+    groups: Sequence[TrialGroup], point: ModelPoint, cox_reid: bool = False
+) -> LikelihoodValue:
     """NLL of the grouped trials at ``point``; score and information too when
-    ``point`` carries derivatives."""
+    ``point`` carries derivatives. ``cox_reid``: the adjusted NLL (see the
+    module docstring; needs derivatives, else the plain NLL is returned)."""
     groups = [g for g in groups if g.n > 0]
     n, s, t, mu, cov = _stack(groups, point)
+    counts = np.array([g.n for g in groups], dtype=np.float64)
     cov = 0.5 * (cov + np.swapaxes(cov, 1, 2))
     sign, logdet = np.linalg.slogdet(cov)
     if np.any(sign <= 0) or not np.all(np.isfinite(logdet)):
@@ -148,7 +165,9 @@ def evaluate(groups: Sequence[TrialGroup], point: ModelPoint) -> LikelihoodValue
         + n[:, None, None] * np.einsum("gi,gj->gij", mu, mu)
     )
     inv_r = np.einsum("gij,gjk->gik", inv, r)
-    nll = 0.5 * float((n * logdet).sum() + np.einsum("gii->", inv_r) + 3.0 * n.sum() * _LOG_2PI)
+    nll = 0.5 * float(
+        (counts * logdet).sum() + np.einsum("gii->", inv_r) + 3.0 * counts.sum() * _LOG_2PI
+    )
     if point.d_means is None or point.d_covs is None:
         return LikelihoodValue(nll, None, None)
     d_mu = np.array([point.d_means[g.design] for g in groups])  # (G, 4, 3)
@@ -157,10 +176,29 @@ def evaluate(groups: Sequence[TrialGroup], point: ModelPoint) -> LikelihoodValue
     w = np.einsum("gij,gajk->gaik", inv, d_cov)  # S^-1 dS_a
     grad = (
         -np.einsum("gai,gij,gj->a", d_mu, inv, resid)
-        + 0.5 * np.einsum("g,gaii->a", n, w)
+        + 0.5 * np.einsum("g,gaii->a", counts, w)
         - 0.5 * np.einsum("gaij,gji->a", w, inv_r)
     )
-    info = np.einsum("g,gai,gij,gbj->ab", n, d_mu, inv, d_mu) + 0.5 * np.einsum(
-        "g,gaij,gbji->ab", n, w, w
-    )
+    mean_info = np.einsum("g,gai,gij,gbj->ab", n, d_mu, inv, d_mu)
+    info = mean_info + 0.5 * np.einsum("g,gaij,gbji->ab", n, w, w)
+    if cox_reid:
+        adjustment = _cox_reid(mean_info[:2, :2], n, d_mu, np.asarray(inv, np.float64), w)
+        if adjustment is not None:
+            nll += adjustment[0]
+            grad = grad + adjustment[1]
     return LikelihoodValue(nll, grad, 0.5 * (info + info.T))
+
+
+def _cox_reid(
+    info_bb: FloatArray, n: FloatArray, d_mu: FloatArray, inv: FloatArray, w: FloatArray
+) -> tuple[float, FloatArray] | None:
+    """(1/2 log det I_bb, its gradient in phi), or None when I_bb is singular."""
+    sign, logdet = np.linalg.slogdet(info_bb)
+    if sign <= 0 or not math.isfinite(logdet):
+        return None
+    inv_bb = np.linalg.inv(info_bb)
+    # d I_bb / d phi_a = -sum W dmu_b^T S^-1 dS_a S^-1 dmu_c, for a = log K_theta, log K_rho
+    d_info = -np.einsum("g,gbi,gaij,gjk,gck->abc", n, d_mu[:, :2], w, inv, d_mu[:, :2])
+    grad = np.zeros(4)
+    grad[2:] = 0.5 * np.einsum("bc,acb->a", inv_bb, d_info[2:])
+    return 0.5 * float(logdet), grad

@@ -36,12 +36,15 @@ class Observation:
         measurement_cov: (3, 3) covariance of the measured pose change (m^2,
             m rad, rad^2); zeros when the pose is exact.
         line: where the trial came from (line number in a trial file), or None.
+        trial: the trial's number (the plan's trial number in a session, the
+            1-based row in a trial file), or None; how users name the trial.
     """
 
     design: Design
     pose_change: FloatArray
     measurement_cov: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
     line: int | None = None
+    trial: int | None = None
 
     def __post_init__(self) -> None:
         pose = np.asarray(self.pose_change, dtype=np.float64).reshape(-1)
@@ -62,7 +65,10 @@ class Observation:
         object.__setattr__(self, "measurement_cov", cov)
 
     def where(self) -> str:
-        """``line N`` when the line is known, else ``a trial``."""
+        """``trial N (design)`` when the trial number is known, else ``line N``,
+        else ``a trial``."""
+        if self.trial is not None:
+            return f"trial {self.trial} ({self.design.label()})"
         return f"line {self.line}" if self.line is not None else "a trial"
 
 
@@ -98,6 +104,8 @@ class TrialGroup:
         total: sum of v, (3,).
         outer: sum of v v^T, (3, 3).
         measurement_total: sum of the trials' measurement covariances, (3, 3).
+        weight: sum of the trials' weights (n when every weight is 1); total
+            and outer are weighted sums, for the robust fit's M-step.
     """
 
     design: Design
@@ -106,23 +114,25 @@ class TrialGroup:
     total: FloatArray = field(default_factory=lambda: np.zeros(3))
     outer: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
     measurement_total: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
+    weight: float = 0.0
 
     def unwrapped(self, pose_change: FloatArray) -> FloatArray:
         """The pose change with Delta within pi of the reference."""
         return align_heading(pose_change, self.reference)
 
-    def add(self, observation: Observation) -> None:
-        """Fold one trial in."""
+    def add(self, observation: Observation, weight: float = 1.0) -> None:
+        """Fold one trial in, with a weight (0 to 1) on its residual."""
         v = self.unwrapped(observation.pose_change)
         self.n += 1
-        self.total = self.total + v
-        self.outer = self.outer + np.outer(v, v)
+        self.weight += weight
+        self.total = self.total + weight * v
+        self.outer = self.outer + weight * np.outer(v, v)
         self.measurement_total = self.measurement_total + observation.measurement_cov
 
     @property
     def mean(self) -> FloatArray:
-        """Mean of v."""
-        return self.total / self.n
+        """(Weighted) mean of v."""
+        return self.total / self.weight
 
     @property
     def measurement_cov(self) -> FloatArray:

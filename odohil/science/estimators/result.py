@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from odohil.science.estimators.verdict import TRUSTED, Verdict
 from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
 
 Z95 = 1.959963984540054
@@ -33,16 +34,19 @@ class ParameterEstimate:
     unit: str
 
     @classmethod
-    def build(cls, name: str, value: float, stderr: float) -> ParameterEstimate:
-        """With the interval rule above."""
+    def build(
+        cls, name: str, value: float, stderr: float, quantile: float = Z95
+    ) -> ParameterEstimate:
+        """With the interval rule above; ``quantile`` replaces 1.96 (e.g. a
+        Student-t quantile at small n)."""
         if name in ("K_theta", "K_rho"):
             if value > 0 and math.isfinite(stderr):
-                spread = math.exp(min(Z95 * stderr / value, 700.0))
+                spread = math.exp(min(quantile * stderr / value, 700.0))
                 ci = (value / spread, value * spread)
             else:
-                ci = (0.0, value + Z95 * stderr)
+                ci = (0.0, value + quantile * stderr)
         else:
-            ci = (value - Z95 * stderr, value + Z95 * stderr)
+            ci = (value - quantile * stderr, value + quantile * stderr)
         return cls(name, value, stderr, ci, SI_UNITS[name])
 
     @property
@@ -67,6 +71,8 @@ class Outlier:
     Attributes:
         index: position of the trial in the input (0-based).
         line: its line in the trial file, or None.
+        trial: its trial number, or None.
+        design: its design's label (e.g. ``k=20 l=0.5 m turn``).
         mahalanobis2: squared Mahalanobis distance of its pose change from the
             model mean (model plus measurement covariance), chi^2(3) if it fits.
         p_value: chi^2(3) tail probability of that distance.
@@ -76,10 +82,17 @@ class Outlier:
     line: int | None
     mahalanobis2: float
     p_value: float
+    trial: int | None = None
+    design: str = ""
+
+    @property
+    def number(self) -> int:
+        """The trial number (the 1-based input position when none was given)."""
+        return self.trial if self.trial is not None else self.index + 1
 
     def label(self) -> str:
-        """``line 17`` or ``trial #17`` (1-based) when the line is unknown."""
-        return f"line {self.line}" if self.line is not None else f"trial #{self.index + 1}"
+        """``trial 17 (k=20 l=0.5 m turn)``."""
+        return f"trial {self.number}" + (f" ({self.design})" if self.design else "")
 
 
 @dataclass(frozen=True)
@@ -115,7 +128,8 @@ class ModelCheck:
             "p_value": _finite(self.p_value),
             "outliers": [
                 {
-                    "line": o.line,
+                    "trial": o.number,
+                    "design": o.design,
                     "index": o.index,
                     "mahalanobis2": _finite(o.mahalanobis2),
                     "p_value": o.p_value,
@@ -188,6 +202,36 @@ class Sufficiency:
 
 
 @dataclass(frozen=True)
+class TrialDiagnostic:
+    """How one trial sits in the fit.
+
+    Attributes:
+        trial: its trial number.
+        design: its design's label.
+        clean_probability: the robust fit's probability that it is not an
+            outlier (1 for the Gaussian methods).
+        influence: per parameter (E_R, E_T, K_theta, K_rho), how far leaving
+            it out moves the estimate, in standard errors.
+    """
+
+    trial: int
+    design: str
+    clean_probability: float
+    influence: tuple[float, float, float, float]
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """{"trial", "design", "clean_probability", "influence": {name: SE}}."""
+        return {
+            "trial": self.trial,
+            "design": self.design,
+            "clean_probability": round(self.clean_probability, 6),
+            "influence": {
+                n: round(v, 4) for n, v in zip(PARAMETER_NAMES, self.influence, strict=True)
+            },
+        }
+
+
+@dataclass(frozen=True)
 class EstimateResult:
     """An estimate of the four parameters with its checks.
 
@@ -202,6 +246,12 @@ class EstimateResult:
         model_check: see :class:`ModelCheck`.
         sufficiency: see :class:`Sufficiency`.
         notes: how the estimate was made (designs used, convergence).
+        verdict: trusted, doubtful or failed, with reasons.
+        converged: whether the fit converged (always True for ``paper``).
+        gaussian: the Gaussian joint maximum-likelihood estimate, reported
+            beside the robust one (empty for the other methods).
+        trials: per trial, its weight and influence (robust method).
+        excluded: trial numbers left out on request.
     """
 
     method: str
@@ -213,15 +263,22 @@ class EstimateResult:
     model_check: ModelCheck
     sufficiency: Sufficiency
     notes: tuple[str, ...] = ()
+    verdict: Verdict = TRUSTED
+    converged: bool = True
+    gaussian: tuple[ParameterEstimate, ...] = ()
+    trials: tuple[TrialDiagnostic, ...] = ()
+    excluded: tuple[int, ...] = ()
 
     def parameter(self, name: str) -> ParameterEstimate:
         """The estimate of one parameter by name."""
         return self.parameters[PARAMETER_NAMES.index(name)]
 
     def to_json_dict(self) -> dict[str, Any]:
-        """{"method", "n_trials", "parameters", "correlation", "model_check",
-        "sufficiency", "notes"}, SI; non-finite numbers as null."""
-        return {
+        """{"verdict", "method", "n_trials", "parameters", "correlation",
+        "model_check", "sufficiency", "notes", "excluded", and for the robust
+        method "gaussian_ml" and "trials"}, SI; non-finite numbers as null."""
+        out: dict[str, Any] = {
+            "verdict": self.verdict.to_json_dict(),
             "method": self.method,
             "n_trials": self.n_trials,
             "parameters": {p.name: p.to_json_dict() for p in self.parameters},
@@ -229,7 +286,13 @@ class EstimateResult:
             "model_check": self.model_check.to_json_dict(),
             "sufficiency": self.sufficiency.to_json_dict(),
             "notes": list(self.notes),
+            "excluded": list(self.excluded),
         }
+        if self.gaussian:
+            out["gaussian_ml"] = {p.name: p.to_json_dict() for p in self.gaussian}
+        if self.trials:
+            out["trials"] = [t.to_json_dict() for t in self.trials]
+        return out
 
 
 def _finite(value: float) -> float | None:

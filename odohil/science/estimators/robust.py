@@ -1,0 +1,222 @@
+"""The robust fit: a Gaussian with a per-trial outlier probability.
+
+Each trial's v is modelled as the mixture
+
+    (1 - EPSILON) N(mu_d, S_d) + EPSILON N(mu_d, INFLATION S_d),  S_d = Sigma_d + C_i
+
+so a trial the model cannot explain (a typo in a distance, a slipped wheel) is
+absorbed by the broad component instead of dragging K_theta and K_rho up to
+explain it. The fit is EM: the E-step gives each trial's probability r_i of
+the clean component from its squared Mahalanobis distance q_i,
+
+    r_i = 1 / (1 + EPSILON / (1 - EPSILON) INFLATION^-3/2 exp(q_i/2 (1 - 1/INFLATION)))
+
+and the M-step maximises the Gaussian likelihood with weights
+w_i = r_i + (1 - r_i) / INFLATION on the trials' residuals (one Fisher-scoring
+fit, Cox-Reid adjusted, warm-started). On clean data r_i is 1 to within 1e-4
+up to q_i of about 15 (chi^2(3) tail 0.2 %), so the fit is the Gaussian one;
+a trial at q_i = 23 or more gets half weight or less. The covariance is the
+inverse of the weighted expected information (outliers contribute nothing).
+
+Per-trial influence: how far leaving trial i out moves each parameter, in its
+standard errors, by one Newton step from the fit: I^-1 g_i, with g_i the
+trial's (weighted) score.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from odohil.science.estimators.checks import mahalanobis2
+from odohil.science.estimators.joint import JointFit, covariance_si, designs_of, refine
+from odohil.science.estimators.likelihood import evaluate, model_point, phi_jacobian
+from odohil.science.estimators.observations import Observation, TrialGroup, align_heading
+from odohil.science.moments import pose_moments
+from odohil.science.parameters import ErrorParameters
+from odohil.science.paths import Design, FloatArray
+
+EPSILON = 0.01
+"""Prior probability that a trial is an outlier."""
+INFLATION = 100.0
+"""Variance factor of the outlier component (standard deviations 10 times the model's)."""
+OUTLIER_WEIGHT = 0.5
+"""A trial whose clean-component probability falls below this is named an outlier."""
+_RESTART_D2 = 7.8
+"""Restart without the farthest trial when its squared distance exceeds this
+(chi^2(3) 95 % point)."""
+_MAX_EM = 40
+_EM_TOLERANCE = 1e-4
+"""EM stops when no parameter moves more than this many standard errors."""
+
+
+@dataclass(frozen=True)
+class RobustFit:
+    """The robust fit.
+
+    Attributes:
+        fit: the weighted, Cox-Reid adjusted fit at convergence.
+        clean_probability: per trial (input order), the probability of the
+            clean component, r_i.
+        influence: (n, 4) per trial, the change of each parameter (SI order
+            E_R, E_T, K_theta, K_rho) when it is left out, in standard errors.
+        em_iterations: EM iterations taken.
+        converged: EM and the last M-step both converged.
+    """
+
+    fit: JointFit
+    clean_probability: FloatArray
+    influence: FloatArray
+    em_iterations: int
+    converged: bool
+
+
+def clean_probability(d2: FloatArray) -> FloatArray:
+    """r_i from the squared Mahalanobis distances (see the module docstring)."""
+    log_ratio = (
+        math.log(EPSILON / (1.0 - EPSILON))
+        - 1.5 * math.log(INFLATION)
+        + 0.5 * (1.0 - 1.0 / INFLATION) * np.asarray(d2, dtype=np.float64)
+    )
+    result: FloatArray = 1.0 / (1.0 + np.exp(np.minimum(log_ratio, 700.0)))
+    return result
+
+
+def weighted_groups(
+    observations: Sequence[Observation], weights: FloatArray, references: dict[Design, float]
+) -> list[TrialGroup]:
+    """One group per design and measurement covariance, trials weighted."""
+    groups: dict[tuple[Design, bytes], TrialGroup] = {}
+    for obs, weight in zip(observations, weights, strict=True):
+        key = (obs.design, obs.measurement_cov.tobytes())
+        if key not in groups:
+            groups[key] = TrialGroup(obs.design, references[obs.design])
+        groups[key].add(obs, float(weight))
+    return list(groups.values())
+
+
+def _references(groups: Sequence[TrialGroup]) -> dict[Design, float]:
+    out: dict[Design, float] = {}
+    for g in groups:
+        out.setdefault(g.design, g.reference)
+    return out
+
+
+def mixture_nll(observations: Sequence[Observation], params: ErrorParameters) -> float:
+    """Negative log-likelihood of the mixture at ``params`` (constants dropped)."""
+    total = 0.0
+    log_det: dict[tuple[Design, bytes], float] = {}
+    d2 = mahalanobis2(observations, params)
+    moments = {}
+    for obs in observations:
+        if obs.design not in moments:
+            moments[obs.design] = pose_moments(obs.design.path(), params)
+        key = (obs.design, obs.measurement_cov.tobytes())
+        if key not in log_det:
+            cov = moments[obs.design].cov + obs.measurement_cov
+            sign, value = np.linalg.slogdet(0.5 * (cov + cov.T))
+            log_det[key] = value if sign > 0 else math.inf
+    for obs, q in zip(observations, d2, strict=True):
+        clean = math.log1p(-EPSILON) - 0.5 * float(q)
+        broad = math.log(EPSILON) - 1.5 * math.log(INFLATION) - 0.5 * float(q) / INFLATION
+        total += 0.5 * log_det[(obs.design, obs.measurement_cov.tobytes())] - float(
+            np.logaddexp(clean, broad)
+        )
+    return total
+
+
+def robust_fit(
+    observations: Sequence[Observation], groups: Sequence[TrialGroup], start: JointFit
+) -> RobustFit:
+    """EM from ``start`` (the Gaussian fit of ``groups``, the unweighted trials),
+    and from the Gaussian fit without the trial farthest from it (a gross error
+    can drag the Gaussian fit so far that it no longer stands out, above all
+    at small n); the start whose EM ends at the lower mixture NLL wins."""
+    best = _em(observations, groups, start)
+    d2 = mahalanobis2(observations, start.params)
+    if len(observations) > 8 and float(d2.max()) > _RESTART_D2:
+        worst = int(np.argmax(d2))
+        weights = np.ones(len(observations))
+        weights[worst] = 1.0 / INFLATION
+        try:
+            other = refine(
+                weighted_groups(observations, weights, _references(groups)),
+                start.point,
+                cox_reid=True,
+            )
+            second = _em(observations, groups, other)
+        except (FloatingPointError, np.linalg.LinAlgError):
+            return best
+        if mixture_nll(observations, second.fit.params) < mixture_nll(
+            observations, best.fit.params
+        ):
+            return second
+    return best
+
+
+def _em(
+    observations: Sequence[Observation], groups: Sequence[TrialGroup], start: JointFit
+) -> RobustFit:
+    """EM from ``start``."""
+    references = _references(groups)
+    fit = start
+    r = np.ones(len(observations))
+    converged = False
+    iterations = 0
+    for iterations in range(1, _MAX_EM + 1):  # noqa: B007
+        r = clean_probability(mahalanobis2(observations, fit.params))
+        weights = r + (1.0 - r) / INFLATION
+        new = refine(weighted_groups(observations, weights, references), fit.point, cox_reid=True)
+        assert new.value.information is not None
+        step = new.point.phi - fit.point.phi
+        moved = math.sqrt(max(0.0, float(step @ new.value.information @ step)))
+        fit = new
+        if moved < _EM_TOLERANCE and new.converged:
+            converged = True
+            break
+    return RobustFit(
+        fit, r, influence(observations, fit, r), iterations, converged and fit.converged
+    )
+
+
+def influence(observations: Sequence[Observation], fit: JointFit, r: FloatArray) -> FloatArray:
+    """Per trial, I^-1 g_i in standard errors (see the module docstring)."""
+    n = len(observations)
+    out = np.zeros((n, 4))
+    if not np.all(np.isfinite(fit.covariance)) or n == 0:
+        return out
+    designs = designs_of([TrialGroup(o.design, 0.0, n=1) for o in observations])
+    point = model_point(fit.point.phi, designs, derivatives=True)
+    assert point.d_means is not None
+    assert point.d_covs is not None
+    weights = r + (1.0 - r) / INFLATION
+    scores = np.zeros((n, 4))
+    for i, obs in enumerate(observations):
+        mean = align_heading(point.means[obs.design], float(obs.pose_change[2]))
+        cov = point.covs[obs.design] + obs.measurement_cov
+        inv = np.linalg.inv(0.5 * (cov + cov.T))
+        resid = obs.pose_change - mean
+        d_mu = point.d_means[obs.design]
+        d_cov = point.d_covs[obs.design]
+        w = np.einsum("ij,ajk->aik", inv, d_cov)
+        inv_rr = weights[i] * inv @ np.outer(resid, resid)
+        scores[i] = -weights[i] * d_mu @ inv @ resid + 0.5 * (
+            np.einsum("aii->a", w) - np.einsum("aij,ji->a", w, inv_rr)
+        )
+    value = evaluate(_single_groups(observations, weights), point)  # weighted information
+    assert value.information is not None
+    cov_phi = np.linalg.pinv(value.information)
+    jac = phi_jacobian(fit.params)
+    shift = (scores @ cov_phi.T) @ jac.T
+    stderr = np.sqrt(np.clip(np.diag(covariance_si(point, value)), 0.0, None))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out = np.where(stderr > 0, shift / stderr, 0.0)
+    return out
+
+
+def _single_groups(observations: Sequence[Observation], weights: FloatArray) -> list[TrialGroup]:
+    references = {o.design: float(o.pose_change[2]) for o in observations}
+    return weighted_groups(observations, weights, references)

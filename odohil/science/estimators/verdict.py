@@ -1,0 +1,120 @@
+"""The verdict on an estimate: trusted, doubtful or failed, with reasons.
+
+- failed: the fit did not converge, the data are degenerate (every trial of
+  a design has the same exact pose), or a parameter has no information
+  (infinite standard error);
+- doubtful: the model check fails, some trial is an outlier, or ambiguous
+  trials were left out by the session;
+- trusted: none of these.
+
+Precision (the sufficiency check) does not enter: an imprecise estimate with
+an honest interval is trusted; the sufficiency verdict says how to tighten it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+
+from odohil.science.estimators.observations import Observation
+
+Status = Literal["trusted", "doubtful", "failed"]
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """Can the estimate be trusted?
+
+    Attributes:
+        status: ``trusted``, ``doubtful`` or ``failed``.
+        reasons: one sentence per reason (empty when trusted).
+    """
+
+    status: Status
+    reasons: tuple[str, ...] = ()
+
+    @property
+    def trusted(self) -> bool:
+        """Whether the status is ``trusted``."""
+        return self.status == "trusted"
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """{"status", "reasons"}."""
+        return {"status": self.status, "reasons": list(self.reasons)}
+
+
+TRUSTED = Verdict("trusted")
+"""The verdict without reasons."""
+
+
+def degenerate_designs(observations: Sequence[Observation]) -> list[str]:
+    """Labels of designs with 2 or more trials whose exact poses are all identical."""
+    out = []
+    designs = dict.fromkeys(o.design for o in observations)
+    for design in designs:
+        mine = [o for o in observations if o.design == design]
+        if len(mine) < 2 or any(np.any(o.measurement_cov != 0) for o in mine):
+            continue
+        poses = np.array([o.pose_change for o in mine])
+        if np.all(np.ptp(poses, axis=0) == 0):
+            out.append(f"{design.label()} ({len(mine)} trials)")
+    return out
+
+
+def judge(
+    observations: Sequence[Observation],
+    converged: bool,
+    stderr: Sequence[float],
+    names: Sequence[str],
+    fits: bool,
+    outliers: Sequence[str],
+    check_verdict: str,
+    ambiguous: Sequence[int] = (),
+) -> Verdict:
+    """The verdict from the fit's state and its checks (see the module docstring).
+
+    Args:
+        observations: the trials used.
+        converged: whether the fit converged.
+        stderr: per parameter standard error (SI).
+        names: the parameters' names.
+        fits: whether the model check passed.
+        outliers: labels of the outlying trials.
+        check_verdict: the model check's sentence.
+        ambiguous: trial numbers the session left out as ambiguous.
+    """
+    failed: list[str] = []
+    doubtful: list[str] = []
+    degenerate = degenerate_designs(observations)
+    if degenerate:
+        failed.append(
+            "degenerate data: every trial of "
+            + ", ".join(degenerate)
+            + " has the same pose; a real robot never repeats exactly (check the file)"
+        )
+    if not converged:
+        failed.append("the fit did not converge")
+    blind = [n for n, s in zip(names, stderr, strict=True) if not math.isfinite(s)]
+    if blind:
+        failed.append(f"not identified from these trials: {', '.join(blind)}")
+    if outliers:
+        doubtful.append(
+            f"outliers: {', '.join(outliers)} (check them, re-measure, or leave them out "
+            "with --exclude)"
+        )
+    elif not fits:
+        doubtful.append(f"model check failed: {check_verdict}")
+    if ambiguous:
+        doubtful.append(
+            "ambiguous trials left out (the floor marks fit two poses): "
+            + ", ".join(str(t) for t in ambiguous)
+        )
+    if failed:
+        return Verdict("failed", tuple(failed + doubtful))
+    if doubtful:
+        return Verdict("doubtful", tuple(doubtful))
+    return TRUSTED

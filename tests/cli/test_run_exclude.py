@@ -1,0 +1,70 @@
+"""``odohil run --exclude``: the named trials are left out of the live and the
+final estimate, the journal keeps them; a number outside the plan exits 2."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from fakes.nomad.process import EmulatorProcess
+from odohil.session.state import load_session
+from tests.session.helpers import write_robot
+
+ODOHIL = shutil.which("odohil") or "odohil"
+PLAN = "k=1,l=0.5,n=4;k=0.5,l=0.5,n=4"
+
+
+@pytest.fixture
+def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
+    args = ["--time-scale", "20000", "--seed", "5", "--no-pacing"]
+    with EmulatorProcess([*args, "--truth-socket", str(tmp_path / "t.sock")]) as process:
+        yield process
+
+
+def _run(
+    emulator: EmulatorProcess, tmp_path: Path, exclude: str
+) -> subprocess.CompletedProcess[str]:
+    command = [
+        ODOHIL, "run",
+        "--port", emulator.device,
+        "--truth-socket", emulator.truth_socket,
+        "--robot", str(write_robot(tmp_path)),
+        "--plan", PLAN,
+        "--measure", "fake",
+        "--session", str(tmp_path / "session"),
+        "--exclude", exclude,
+        "--json",
+    ]  # fmt: skip
+    return subprocess.run(
+        command,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+
+
+def test_excluded_trials_are_left_out_but_journaled(
+    emulator: EmulatorProcess, tmp_path: Path
+) -> None:
+    done = _run(emulator, tmp_path, "2,7")
+    assert done.returncode in (0, 3), done.stderr
+    result = json.loads(done.stdout)
+    assert result["excluded"] == [2, 7]
+    assert result["n_trials"] == 6
+    assert 2 not in {t["trial"] for t in result["trials"]}
+    state = load_session(tmp_path / "session").state
+    assert sorted(t.trial for t in state.completed) == list(range(1, 9))
+
+
+def test_exclude_outside_the_plan_exits_2(emulator: EmulatorProcess, tmp_path: Path) -> None:
+    done = _run(emulator, tmp_path, "9")
+    assert done.returncode == 2
+    assert "--exclude" in done.stderr
+    assert "1..8" in done.stderr
+    assert not (tmp_path / "session").exists()
