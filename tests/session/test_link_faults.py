@@ -98,8 +98,11 @@ def test_a_stray_packet_on_a_paced_line_does_not_end_the_session(
         done = _run(emulator, tmp_path)
         fired = emulator.truth().faults_fired
     assert fired, "the fault never fired"
-    assert done.returncode == 0, done.stderr
-    assert json.loads(done.stdout)["n_trials"] == 6
+    # the session completes; a six-trial plan's estimate may be judged untrusted (3)
+    assert done.returncode in (0, 3), done.stderr
+    result = json.loads(done.stdout)
+    assert result["n_trials"] == 6
+    assert done.returncode == 0 or result["verdict"]["reasons"], result["verdict"]
     solved = [data["trial"] for kind, data in _records(tmp_path) if kind == ev.SOLVED]
     assert sorted(solved) == [1, 2, 3, 4, 5, 6]
 
@@ -111,19 +114,21 @@ def test_a_stale_reply_is_never_used(tmp_path: Path) -> None:
     # to 12 arrives. Whether it lands in gs 16's wait depends on the resume's
     # start-up time: tests/driver/test_link_safety.py times it exactly.
     with _emulator(tmp_path, "--fault", "late:gs@12", "--fault", "drop:gs@16") as emulator:
-        first = _run(emulator, tmp_path)
-        assert first.returncode == 1, first.stderr
+        done = _run(emulator, tmp_path)
+        # a failed gs ends the run (1); on a busy machine the late reply may
+        # instead land where it does no harm and the run finishes (0 or 3)
+        assert done.returncode in (0, 1, 3), done.stderr
         for _ in range(3):
+            if done.returncode != 1:
+                break
             done = subprocess.run(
-                [ODOHIL, "resume", str(tmp_path / "session"), "--json"],
+                [ODOHIL, "resume", str(tmp_path / "session"), "--json", "--from-here"],
                 capture_output=True,
                 text=True,
                 timeout=BOUND_S,
             )
-            if done.returncode == 0:
-                break
         fired = emulator.truth().faults_fired
-    assert done.returncode == 0, done.stderr
+    assert done.returncode in (0, 3), done.stderr
     assert "late on gs" in fired, fired
     assert "drop on gs" in fired, fired
     records = _records(tmp_path)

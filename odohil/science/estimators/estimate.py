@@ -17,6 +17,7 @@ from odohil.science.estimators.observations import (
     DesignSummary,
     Observation,
     TrialGroup,
+    forward_view,
     group_trials,
     summarise,
 )
@@ -210,6 +211,7 @@ def estimate(
     if method not in METHODS:
         raise MeasurementError(f"method must be one of {METHODS}, got {method!r}")
     observations, excluded = leave_out(_numbered(observations), exclude)
+    observations = [forward_view(o) for o in observations]
     if not observations:
         raise MeasurementError("no trials to estimate from")
     groups = group_trials(observations)

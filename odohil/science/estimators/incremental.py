@@ -28,6 +28,7 @@ from odohil.science.estimators.joint import JointFit, refine
 from odohil.science.estimators.observations import (
     Observation,
     TrialGroup,
+    forward_view,
     measurement_key,
     summarise,
 )
@@ -78,6 +79,7 @@ class IncrementalEstimator:
             The new optimum, or None while no design has the two trials with
             a non-zero signed distance that the start (the paper's method) needs.
         """
+        observation = forward_view(observation)
         design = observation.design
         reference = self._references.setdefault(design, float(observation.pose_change[2]))
         key = (design, measurement_key(observation.measurement_cov, self._relative_bin))

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -171,7 +171,7 @@ def group_trials(
     A trial driven backwards is folded into its forward design as its mirror
     image (:func:`mirrored`), which the model distributes exactly alike.
     """
-    observations = [mirrored(o) if o.design.backward else o for o in observations]
+    observations = [forward_view(o) for o in observations]
     references: dict[Design, float] = {}
     for design in _designs(observations):
         angles = np.array([o.pose_change[2] for o in observations if o.design == design])
@@ -193,12 +193,18 @@ def mirrored(observation: Observation) -> Observation:
     Delta negated, the measurement covariance transformed alike (see
     :mod:`odohil.science.paths`: a backward path's pose change is
     distributed as (-x, y, -Delta) of the forward one)."""
-    return Observation(
+    return replace(
+        observation,
         design=observation.design.mirrored,
         pose_change=_MIRROR @ np.asarray(observation.pose_change, dtype=np.float64),
         measurement_cov=_MIRROR @ np.asarray(observation.measurement_cov) @ _MIRROR,
-        line=observation.line,
     )
+
+
+def forward_view(observation: Observation) -> Observation:
+    """The trial as the estimators model it: a backward trial as its forward
+    design's mirror image (:func:`mirrored`), any other trial as it is."""
+    return mirrored(observation) if observation.design.backward else observation
 
 
 def _designs(observations: Iterable[Observation]) -> list[Design]:
