@@ -20,6 +20,7 @@ from odohil.cli.options import (
     ETOption,
     KRhoM,
     KThetaDeg2PerM,
+    bounded,
 )
 from odohil.errors import OdohilError
 
@@ -30,15 +31,25 @@ _FAULT_HELP = (
 
 
 def emulate(
-    seed: int | None = typer.Option(None, "--seed", help="Seed of the odometry noise."),
+    seed: int | None = typer.Option(
+        None, "--seed", callback=bounded("seed"), help="Seed of the odometry noise."
+    ),
     e_r: ERDegPerM = E_R_DEFAULT,
     e_t: ETOption = E_T_DEFAULT,
     k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
     k_rho: KRhoM = K_RHO_DEFAULT,
     time_scale: float = typer.Option(
-        1.0, "--time-scale", help="Simulated seconds per wall second (motion, zr, timestamp)."
+        1.0,
+        "--time-scale",
+        callback=bounded("time_scale"),
+        help="Simulated seconds per wall second (motion, zr, timestamp).",
     ),
-    baud: int = typer.Option(DEFAULT_BAUD, "--baud", help="Line rate (pacing and the pty speed)."),
+    baud: int = typer.Option(
+        DEFAULT_BAUD,
+        "--baud",
+        callback=bounded("baud"),
+        help="Line rate (pacing and the pty speed).",
+    ),
     pacing: bool = typer.Option(
         True, "--pacing/--no-pacing", help="Carry bytes at the line rate in both directions."
     ),

@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from odohil.cli.options import bounded
 from odohil.cli.run import (
     connect,
     execute,
@@ -30,7 +31,10 @@ def resume(
         typer.Option("--truth-socket", help="Fake robot truth socket (default: the session's)."),
     ] = None,
     baud: Annotated[
-        int | None, typer.Option("--baud", help="Line speed (default: the session's).")
+        int | None,
+        typer.Option(
+            "--baud", callback=bounded("baud"), help="Line speed (default: the session's)."
+        ),
     ] = None,
     json_out: Annotated[
         bool, typer.Option("--json", help="Print the final estimate as JSON.")

@@ -21,6 +21,7 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from odohil.cli.options import bounded
 from odohil.driver.link import DEFAULT_BAUD, open_port
 from odohil.driver.robot import NomadRobot
 from odohil.errors import InitError, OdohilError, ParameterError
@@ -285,9 +286,14 @@ def run(
         typer.Option("--truth-socket", help="The fake robot's truth socket (for --measure fake)."),
     ] = None,
     seed: Annotated[
-        int, typer.Option("--seed", help="Seed of the simulated tape noise (fake).")
+        int,
+        typer.Option(
+            "--seed", callback=bounded("seed"), help="Seed of the simulated tape noise (fake)."
+        ),
     ] = 0,
-    baud: Annotated[int, typer.Option("--baud", help="Line speed.")] = DEFAULT_BAUD,
+    baud: Annotated[
+        int, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
+    ] = DEFAULT_BAUD,
     json_out: Annotated[
         bool,
         typer.Option("--json", help="Print the final estimate as JSON (as estimate --json)."),

@@ -24,6 +24,7 @@ import typer
 from rich.console import Console
 
 from odohil import units
+from odohil.cli.options import bounded
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
 from odohil.cli.run import default_session_folder
 from odohil.driver.link import DEFAULT_BAUD
@@ -487,9 +488,14 @@ def wizard(
         Path | None,
         typer.Option("--session", help="Session folder; an existing one is resumed."),
     ] = None,
-    baud: Annotated[int, typer.Option("--baud", help="Line speed.")] = DEFAULT_BAUD,
+    baud: Annotated[
+        int, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
+    ] = DEFAULT_BAUD,
     max_leg_m: Annotated[
-        float, typer.Option("--max-leg", help="Longest leg the floor allows, m.")
+        float,
+        typer.Option(
+            "--max-leg", callback=bounded("max_leg_m"), help="Longest leg the floor allows, m."
+        ),
     ] = DEFAULT_MAX_LEG_M,
 ) -> None:
     """Guide a calibration session beside the robot, one trial at a time."""
