@@ -19,6 +19,7 @@ from odohil.cli.run import (
 from odohil.driver.link import DEFAULT_BAUD
 from odohil.errors import InitError
 from odohil.session.engine import description_of, resume_session
+from odohil.session.preflight import check_session_folder, check_trial_file
 
 
 def resume(
@@ -36,6 +37,13 @@ def resume(
             "--baud", callback=bounded("baud"), help="Line speed (default: the session's)."
         ),
     ] = None,
+    measure: Annotated[
+        str | None,
+        typer.Option(
+            "--measure",
+            help="`fake` or a trial file (CSV) for the remaining trials (default: the session's).",
+        ),
+    ] = None,
     json_out: Annotated[
         bool, typer.Option("--json", help="Print the final estimate as JSON.")
     ] = False,
@@ -47,6 +55,7 @@ def resume(
     """
     console = Console(stderr=True)
     with session_exit_codes(console):
+        check_session_folder(session)
         resumed = resume_session(session)
         with resumed.journal:
             if resumed.torn is not None:
@@ -63,19 +72,26 @@ def resume(
                 raise InitError("the session does not say which port; give --port")
             line_baud = baud or int(settings.get("baud") or DEFAULT_BAUD)
             socket_path = truth_socket or settings.get("truth_socket")
+            kind = str(state.header.get("measure"))
+            trial_file = settings.get("trial_file")
+            if measure is not None:
+                kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
+                settings["trial_file"] = str(Path(measure).resolve()) if trial_file else None
             done = len(state.completed)
             assert state.plan is not None
+            if kind == "file" and trial_file:  # before the port opens
+                check_trial_file(trial_file, description_of(state), state.plan)
             console.print(
                 f"resuming {session}: {done} of {state.plan.n_trials} trials done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
             )
             with connect(str(port_url), line_baud, socket_path) as (robot, truth):
                 source = make_source(
-                    str(state.header.get("measure")),
+                    kind,
                     description_of(state),
                     truth,
                     int(settings.get("seed") or 0),
-                    settings.get("trial_file"),
+                    trial_file,
                 )
                 connection = {**settings, "port": port_url, "baud": line_baud}
                 connection["truth_socket"] = socket_path

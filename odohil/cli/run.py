@@ -21,10 +21,18 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
+from odohil.cli.exit_codes import EXIT_BAD_INPUT
 from odohil.cli.options import bounded
 from odohil.driver.link import DEFAULT_BAUD, open_port
 from odohil.driver.robot import NomadRobot
-from odohil.errors import InitError, OdohilError, ParameterError
+from odohil.errors import (
+    InitError,
+    JournalError,
+    OdohilError,
+    ParameterError,
+    RobotDescriptionError,
+    TrialFileError,
+)
 from odohil.science.estimators import estimate
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.robot_description import RobotDescription
@@ -37,8 +45,7 @@ from odohil.session.engine import (
     start_session,
 )
 from odohil.session.journal import Journal, Record
-from odohil.session.plan import parse_plan
-from odohil.session.robot_file import load_robot_description
+from odohil.session.preflight import check_new_session, check_trial_file
 from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
 from odohil.session.state import SessionState, session_observations
 
@@ -257,6 +264,9 @@ def session_exit_codes(console: Console) -> Iterator[None]:
     except KeyboardInterrupt:
         console.print("[yellow]interrupted[/]")
         raise typer.Exit(EXIT_INTERRUPTED) from None
+    except (ParameterError, RobotDescriptionError, TrialFileError, JournalError) as exc:
+        console.print(f"[red]error[/]: {exc}")  # bad input, found before anything moved
+        raise typer.Exit(EXIT_BAD_INPUT) from None
     except (OdohilError, OSError) as exc:
         console.print(f"[red]error[/]: {exc}")
         raise typer.Exit(EXIT_ERROR) from None
@@ -303,10 +313,11 @@ def run(
     console = Console(stderr=True)
     folder = session or default_session_folder()
     with session_exit_codes(console):
-        plan = parse_plan(plan_text)
-        description = load_robot_description(robot_file)
-        toml = robot_file.read_text(encoding="utf-8")
+        checked = check_new_session(plan_text, robot_file, folder)  # before anything moves
+        plan, description, toml = checked.plan, checked.description, checked.toml
         kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
+        if trial_file:
+            check_trial_file(trial_file, description, plan)
         settings = {
             "port": port,
             "baud": baud,

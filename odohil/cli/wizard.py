@@ -46,7 +46,8 @@ from odohil.session.engine import (
     start_session,
 )
 from odohil.session.journal import Journal, Record, journal_path
-from odohil.session.plan import Plan, parse_plan
+from odohil.session.plan import Plan, check_session_plan, parse_plan
+from odohil.session.preflight import check_session_folder
 from odohil.session.robot_file import load_robot_description
 from odohil.session.sources import OperatorSource, TrialContext
 from odohil.session.state import SessionState
@@ -424,7 +425,7 @@ def _prepare(
         _fail(console, Check("robot description", False, str(exc)))
     console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))
     try:
-        plan = parse_plan(plan_text or DEFAULT_PLAN)
+        plan = check_session_plan(parse_plan(plan_text or DEFAULT_PLAN))  # wire range, caps
     except OdohilError as exc:
         _fail(console, Check("plan feasible", False, str(exc)))
     for check in plan_checks(plan, max_leg_m):
@@ -505,6 +506,10 @@ def wizard(
     folder = session or default_session_folder()
     console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
     try:
+        try:
+            check_session_folder(folder)
+        except OdohilError as exc:
+            _fail(console, Check("session folder", False, str(exc)))
         if journal_path(folder).exists():
             opened = _resume(console, folder, max_leg_m, port)
             robot = _connect(console, port, baud)

@@ -254,6 +254,6 @@ def test_resume_refuses_a_finished_or_missing_session(tmp_path: Path) -> None:
     done = subprocess.run(
         [ODOHIL, "resume", str(tmp_path / "nothing")], capture_output=True, text=True, timeout=60
     )
-    assert done.returncode == 1
+    assert done.returncode == 2  # bad input: nothing moved
     assert "cannot open the session journal" in done.stderr
     assert not (tmp_path / "nothing").exists()
