@@ -72,6 +72,7 @@ def resume(
                 raise InitError("the session does not say which port; give --port")
             line_baud = baud or int(settings.get("baud") or DEFAULT_BAUD)
             socket_path = truth_socket or settings.get("truth_socket")
+            description = description_of(state)  # before the port opens
             kind = str(state.header.get("measure"))
             trial_file = settings.get("trial_file")
             if measure is not None:
@@ -80,7 +81,7 @@ def resume(
             done = len(state.completed)
             assert state.plan is not None
             if kind == "file" and trial_file:  # before the port opens
-                check_trial_file(trial_file, description_of(state), state.plan)
+                check_trial_file(trial_file, description, state.plan)
             console.print(
                 f"resuming {session}: {done} of {state.plan.n_trials} trials done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
@@ -88,7 +89,7 @@ def resume(
             with connect(str(port_url), line_baud, socket_path) as (robot, truth):
                 source = make_source(
                     kind,
-                    description_of(state),
+                    description,
                     truth,
                     int(settings.get("seed") or 0),
                     trial_file,
