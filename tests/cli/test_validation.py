@@ -12,6 +12,7 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner, Result
 
@@ -290,3 +291,35 @@ def test_a_byte_order_mark_is_accepted(tmp_path: Path) -> None:
     assert "unknown column" not in flat(marked)
     assert marked.exit_code == invoke("estimate", str(plain), "--json").exit_code
     assert marked.output == invoke("estimate", str(plain), "--json").output
+
+
+# --- bounded work --------------------------------------------------------------
+
+
+@pytest.mark.slow
+def test_the_planner_work_grows_with_the_log_of_the_budget() -> None:
+    from odohil.science.parameters import NOMAD150
+    from odohil.science.planner import plan_experiment
+
+    started = time.monotonic()
+    plan = plan_experiment(NOMAD150, 1e7)  # walked one trial at a time: over 300 s
+    assert time.monotonic() - started < 60.0
+    assert plan.distance_m <= 1e7
+    assert plan.n_trials > 1000
+
+
+def test_the_largest_design_costs_a_bounded_time() -> None:
+    from odohil.errors import ParameterError
+    from odohil.science.moments import pose_moments
+    from odohil.science.parameters import ErrorParameters
+    from odohil.science.paths import Design
+
+    hardest = ErrorParameters.from_paper_units(90.0, 0.9, 1000.0, 1.0)
+    started = time.monotonic()
+    for design in (Design(500, 10.0), Design(50, 100.0), Design(250, 20.0, "reverse")):
+        moments = pose_moments(design.path(), hardest)
+        assert np.all(np.isfinite(moments.cov))
+    assert time.monotonic() - started < 10.0
+    for k, l_m in ((1e9, 1.0), (1e5, 1.0), (1.0, 1e300), (500.0, 100.0)):
+        with pytest.raises(ParameterError):
+            Design(k, l_m)
