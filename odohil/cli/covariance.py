@@ -22,10 +22,12 @@ from odohil.cli.options import (
     KThetaDeg2PerM,
     VariantChoice,
     VariantOption,
+    bounded,
     parameters_from_paper_units,
 )
 from odohil.errors import OdohilError
 from odohil.science.covariance import SimulatedMoments, predicted_moments, simulated_moments
+from odohil.science.limits import check_simulation_work, segments_of
 from odohil.science.moments import PoseMoments
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design, EncoderPath, square
@@ -124,20 +126,34 @@ def _print(
 
 def covariance(
     path_kind: Annotated[PathChoice, typer.Option("--path", help="forth-and-back or square.")],
-    k: float | None = typer.Option(None, "--k", help="Forth-and-back pairs, a multiple of 1/2."),
-    l_m: float | None = typer.Option(None, "--l", help="Forth-and-back leg length, m."),
+    k: float | None = typer.Option(
+        None, "--k", callback=bounded("k"), help="Forth-and-back pairs, a multiple of 1/2."
+    ),
+    l_m: float | None = typer.Option(
+        None, "--l", callback=bounded("l"), help="Forth-and-back leg length, m."
+    ),
     variant: VariantOption = VariantChoice.turn,
-    side: float | None = typer.Option(None, "--side", help="Square side, m."),
+    side: float | None = typer.Option(
+        None, "--side", callback=bounded("side"), help="Square side, m."
+    ),
     e_r: ERDegPerM = E_R_DEFAULT,
     e_t: ETOption = E_T_DEFAULT,
     k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
     k_rho: KRhoM = K_RHO_DEFAULT,
     n_simulate: int | None = typer.Option(
-        None, "--simulate", help="Also simulate this many trials (discrete model)."
+        None,
+        "--simulate",
+        callback=bounded("n_simulate"),
+        help="Also simulate this many trials (discrete model).",
     ),
-    seed: int | None = typer.Option(None, "--seed", help="Seed of the simulation."),
+    seed: int | None = typer.Option(
+        None, "--seed", callback=bounded("seed"), help="Seed of the simulation."
+    ),
     segment_m: float = typer.Option(
-        DEFAULT_SEGMENT_M, "--segment-m", help="Segment length of the simulation, m."
+        DEFAULT_SEGMENT_M,
+        "--segment-m",
+        callback=bounded("segment_m"),
+        help="Segment length of the simulation, m.",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print SI values as JSON."),
 ) -> None:
@@ -151,6 +167,9 @@ def covariance(
     try:
         path = _path(path_kind, k, l_m, variant, side)
         params = parameters_from_paper_units(e_r, e_t, k_theta, k_rho)
+        if n_simulate is not None:
+            legs = path.legs.length_m.tolist()
+            check_simulation_work(n_simulate, segments_of(legs, segment_m))
         exact = predicted_moments(path, params)
         sim = (
             simulated_moments(path, params, n_simulate, seed=seed, segment_m=segment_m)

@@ -15,6 +15,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from odohil.cli.options import bounded
 from odohil.cli.run import (
     SnapshotTruth,
     connect,
@@ -49,7 +50,10 @@ cross = [["A", "B"], ["B", "C"]]
 
 
 def demo(
-    seed: Annotated[int, typer.Option("--seed", help="Seed of the fake robot and tape.")] = 1,
+    seed: Annotated[
+        int,
+        typer.Option("--seed", callback=bounded("seed"), help="Seed of the fake robot and tape."),
+    ] = 1,
     json_out: Annotated[
         bool, typer.Option("--json", help="Print the estimate and the truth as JSON.")
     ] = False,

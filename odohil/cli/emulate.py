@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import logging
+import os
+from pathlib import Path
 from typing import Annotated
 
 import typer
@@ -20,6 +22,7 @@ from odohil.cli.options import (
     ETOption,
     KRhoM,
     KThetaDeg2PerM,
+    bounded,
 )
 from odohil.errors import OdohilError
 
@@ -30,15 +33,25 @@ _FAULT_HELP = (
 
 
 def emulate(
-    seed: int | None = typer.Option(None, "--seed", help="Seed of the odometry noise."),
+    seed: int | None = typer.Option(
+        None, "--seed", callback=bounded("seed"), help="Seed of the odometry noise."
+    ),
     e_r: ERDegPerM = E_R_DEFAULT,
     e_t: ETOption = E_T_DEFAULT,
     k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
     k_rho: KRhoM = K_RHO_DEFAULT,
     time_scale: float = typer.Option(
-        1.0, "--time-scale", help="Simulated seconds per wall second (motion, zr, timestamp)."
+        1.0,
+        "--time-scale",
+        callback=bounded("time_scale"),
+        help="Simulated seconds per wall second (motion, zr, timestamp).",
     ),
-    baud: int = typer.Option(DEFAULT_BAUD, "--baud", help="Line rate (pacing and the pty speed)."),
+    baud: int = typer.Option(
+        DEFAULT_BAUD,
+        "--baud",
+        callback=bounded("baud"),
+        help="Line rate (pacing and the pty speed).",
+    ),
     pacing: bool = typer.Option(
         True, "--pacing/--no-pacing", help="Carry bytes at the line rate in both directions."
     ),
@@ -52,6 +65,8 @@ def emulate(
 
     Prints the device path (first line) and the truth socket path (second line).
     """
+    if truth_socket is not None:
+        _check_socket_path(truth_socket)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
     try:
         config = build_config(
@@ -66,6 +81,25 @@ def emulate(
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
     run_emulator(config, baud=baud, pacing=pacing, truth_socket=truth_socket)
+
+
+SOCKET_PATH_MAX = 107
+"""Longest UNIX socket path, bytes (sun_path holds 108 with the final NUL)."""
+
+
+def _check_socket_path(path: str) -> None:
+    """Usage error (exit 2) unless a UNIX socket can be made at ``path``."""
+    size = len(os.fsencode(path))
+    if not path or size > SOCKET_PATH_MAX:
+        raise typer.BadParameter(
+            f"a socket path must be 1 to {SOCKET_PATH_MAX} bytes long, got {size}",
+            param_hint="--truth-socket",
+        )
+    folder = Path(path).parent
+    if not folder.is_dir():
+        raise typer.BadParameter(
+            f"folder {str(folder)!r} does not exist", param_hint="--truth-socket"
+        )
 
 
 def register(app: typer.Typer) -> None:

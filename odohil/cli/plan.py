@@ -12,7 +12,7 @@ from rich.console import Console
 from rich.table import Table
 
 from odohil import units
-from odohil.cli.options import E_R_DEFAULT, E_T_DEFAULT, K_RHO_DEFAULT, K_THETA_DEFAULT
+from odohil.cli.options import E_R_DEFAULT, E_T_DEFAULT, K_RHO_DEFAULT, K_THETA_DEFAULT, bounded
 from odohil.errors import OdohilError
 from odohil.science.fisher import default_description
 from odohil.science.parameters import (
@@ -145,17 +145,31 @@ def _print(plan: Plan, prior: ErrorParameters, measurement: str, budget_m: float
 
 
 def plan(
-    budget_m: float = typer.Option(..., "--budget-m", help="Most metres driven in all."),
-    max_trials: int | None = typer.Option(
-        None, "--max-trials", help="Most trials in all (each is marked and measured)."
+    budget_m: float = typer.Option(
+        ..., "--budget-m", callback=bounded("budget_m"), help="Most metres driven in all."
     ),
-    e_r: float = typer.Option(E_R_DEFAULT, "--E-R", help="Prior guess of E_R, deg/m."),
-    e_t: float = typer.Option(E_T_DEFAULT, "--E-T", help="Prior guess of E_T (no unit)."),
-    k_theta: float = typer.Option(K_THETA_DEFAULT, "--K-theta", help="Prior K_theta, deg^2/m."),
-    k_rho: float = typer.Option(K_RHO_DEFAULT, "--K-rho", help="Prior K_rho, m."),
+    max_trials: int | None = typer.Option(
+        None,
+        "--max-trials",
+        callback=bounded("max_trials"),
+        help="Most trials in all (each is marked and measured).",
+    ),
+    e_r: float = typer.Option(
+        E_R_DEFAULT, "--E-R", callback=bounded("E_R"), help="Prior guess of E_R, deg/m."
+    ),
+    e_t: float = typer.Option(
+        E_T_DEFAULT, "--E-T", callback=bounded("E_T"), help="Prior guess of E_T (no unit)."
+    ),
+    k_theta: float = typer.Option(
+        K_THETA_DEFAULT, "--K-theta", callback=bounded("K_theta"), help="Prior K_theta, deg^2/m."
+    ),
+    k_rho: float = typer.Option(
+        K_RHO_DEFAULT, "--K-rho", callback=bounded("K_rho"), help="Prior K_rho, m."
+    ),
     sigma_m: float | None = typer.Option(
         None,
         "--sigma-m",
+        callback=bounded("sigma_m"),
         help=f"Tape sigma of one floor-mark distance, m (default {DEFAULT_SIGMA_M}), with "
         "three screws on a 0.2 m radius circle and one cross distance.",
     ),
@@ -163,17 +177,29 @@ def plan(
         Path | None,
         typer.Option("--robot", help="Robot description (TOML): screws, sigma_m, cross pairs."),
     ] = None,
-    target_e_r: float | None = typer.Option(None, "--target-E-R", help="Wanted stderr, deg/m."),
-    target_e_t: float | None = typer.Option(None, "--target-E-T", help="Wanted stderr of E_T."),
-    target_k_theta: float | None = typer.Option(
-        None, "--target-K-theta", help="Wanted stderr, deg^2/m."
+    target_e_r: float | None = typer.Option(
+        None, "--target-E-R", callback=bounded("target_E_R"), help="Wanted stderr, deg/m."
     ),
-    target_k_rho: float | None = typer.Option(None, "--target-K-rho", help="Wanted stderr, m."),
+    target_e_t: float | None = typer.Option(
+        None, "--target-E-T", callback=bounded("target_E_T"), help="Wanted stderr of E_T."
+    ),
+    target_k_theta: float | None = typer.Option(
+        None, "--target-K-theta", callback=bounded("target_K_theta"), help="Wanted stderr, deg^2/m."
+    ),
+    target_k_rho: float | None = typer.Option(
+        None, "--target-K-rho", callback=bounded("target_K_rho"), help="Wanted stderr, m."
+    ),
     max_designs: int = typer.Option(
-        2, "--max-designs", help=f"Mix at most this many designs (1 to {MAX_DESIGNS})."
+        2,
+        "--max-designs",
+        callback=bounded("max_designs"),
+        help=f"Mix at most this many designs (1 to {MAX_DESIGNS}).",
     ),
     max_leg_m: float = typer.Option(
-        DEFAULT_MAX_LEG_M, "--max-leg-m", help="Longest leg the floor allows, m."
+        DEFAULT_MAX_LEG_M,
+        "--max-leg-m",
+        callback=bounded("max_leg_m"),
+        help="Longest leg the floor allows, m.",
     ),
     floor_m: float | None = typer.Option(
         None,

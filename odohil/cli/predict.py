@@ -20,6 +20,7 @@ from odohil.cli.options import (
     KThetaDeg2PerM,
     VariantChoice,
     VariantOption,
+    bounded,
     parameters_from_paper_units,
 )
 from odohil.errors import OdohilError
@@ -89,8 +90,10 @@ def _json(design: Design, params: ErrorParameters, means: ObservableMeans) -> st
 
 
 def predict(
-    k: float = typer.Option(..., "--k", help="Forth-and-back pairs k, a multiple of 1/2."),
-    l_m: float = typer.Option(..., "--l", help="Leg length l, metres."),
+    k: float = typer.Option(
+        ..., "--k", callback=bounded("k"), help="Forth-and-back pairs k, a multiple of 1/2."
+    ),
+    l_m: float = typer.Option(..., "--l", callback=bounded("l"), help="Leg length l, metres."),
     variant: VariantOption = VariantChoice.turn,
     e_r: ERDegPerM = E_R_DEFAULT,
     e_t: ETOption = E_T_DEFAULT,

@@ -9,6 +9,7 @@ import typer
 from rich.console import Console
 
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
+from odohil.cli.options import bounded
 from odohil.cli.run import (
     Outcome,
     connect,
@@ -22,6 +23,7 @@ from odohil.driver.link import DEFAULT_BAUD
 from odohil.errors import InitError
 from odohil.session.engine import description_of, resume_session
 from odohil.session.floor_space import check_floor
+from odohil.session.preflight import check_session_folder, check_trial_file
 from odohil.session.start_pose import (
     HEADING_TOLERANCE_DEG,
     POSITION_TOLERANCE_M,
@@ -40,7 +42,17 @@ def resume(
         typer.Option("--truth-socket", help="Fake robot truth socket (default: the session's)."),
     ] = None,
     baud: Annotated[
-        int | None, typer.Option("--baud", help="Line speed (default: the session's).")
+        int | None,
+        typer.Option(
+            "--baud", callback=bounded("baud"), help="Line speed (default: the session's)."
+        ),
+    ] = None,
+    measure: Annotated[
+        str | None,
+        typer.Option(
+            "--measure",
+            help="`fake` or a trial file (CSV) for the remaining trials (default: the session's).",
+        ),
     ] = None,
     json_out: Annotated[
         bool, typer.Option("--json", help="Print the final estimate as JSON.")
@@ -65,6 +77,7 @@ def resume(
     console = Console(stderr=True)
     with session_exit_codes(console):
         with session_input(console):
+            check_session_folder(session)
             resumed = resume_session(session)
         with resumed.journal:
             if resumed.torn is not None:
@@ -81,20 +94,28 @@ def resume(
                 raise InitError("the session does not say which port; give --port")
             line_baud = baud or int(settings.get("baud") or DEFAULT_BAUD)
             socket_path = truth_socket or settings.get("truth_socket")
+            description = description_of(state)  # before the port opens
+            kind = str(state.header.get("measure"))
+            trial_file = settings.get("trial_file")
+            if measure is not None:
+                kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
+                settings["trial_file"] = str(Path(measure).resolve()) if trial_file else None
             done = len(state.completed)
             assert state.plan is not None
             check_floor(state.plan, description_of(state))
+            if kind == "file" and trial_file:  # before the port opens
+                check_trial_file(trial_file, description, state.plan)
             console.print(
                 f"resuming {session}: {done} of {state.plan.n_trials} trials done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
             )
             with connect(str(port_url), line_baud, socket_path) as (robot, truth):
                 source = make_source(
-                    str(state.header.get("measure")),
-                    description_of(state),
+                    kind,
+                    description,
                     truth,
                     int(settings.get("seed") or 0),
-                    settings.get("trial_file"),
+                    trial_file,
                 )
                 connection = {**settings, "port": port_url, "baud": line_baud}
                 connection["truth_socket"] = socket_path

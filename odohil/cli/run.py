@@ -33,6 +33,7 @@ from odohil.cli.exit_codes import (
     EXIT_UNTRUSTED,
     exit_for_signal,
 )
+from odohil.cli.options import bounded
 from odohil.cli.verdict import verdict_line
 from odohil.driver.link import DEFAULT_BAUD, open_port
 from odohil.driver.robot import NomadRobot
@@ -41,7 +42,9 @@ from odohil.errors import (
     JournalError,
     OdohilError,
     ParameterError,
+    RobotDescriptionError,
     StopUnconfirmedError,
+    TrialFileError,
 )
 from odohil.science.estimators import EstimateResult, estimate
 from odohil.science.parameters import PARAMETER_NAMES
@@ -59,8 +62,8 @@ from odohil.session.engine import (
 )
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
-from odohil.session.plan import Plan, parse_plan
-from odohil.session.robot_file import load_robot_description
+from odohil.session.plan import Plan
+from odohil.session.preflight import check_new_session, check_trial_file
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
 from odohil.session.start_pose import StartPose
@@ -362,6 +365,9 @@ def session_exit_codes(console: Console) -> Iterator[None]:
     except StopUnconfirmedError as exc:
         console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
+    except (ParameterError, RobotDescriptionError, TrialFileError, JournalError) as exc:
+        console.print(f"[red]error[/]: {exc}", soft_wrap=True)  # found before anything moved
+        raise typer.Exit(EXIT_BAD_INPUT) from None
     except (OdohilError, OSError) as exc:
         console.print(f"[red]error[/]: {exc}", soft_wrap=True)
         raise typer.Exit(EXIT_ERROR) from None
@@ -423,9 +429,14 @@ def run(
         typer.Option("--truth-socket", help="The fake robot's truth socket (for --measure fake)."),
     ] = None,
     seed: Annotated[
-        int, typer.Option("--seed", help="Seed of the simulated tape noise (fake).")
+        int,
+        typer.Option(
+            "--seed", callback=bounded("seed"), help="Seed of the simulated tape noise (fake)."
+        ),
     ] = 0,
-    baud: Annotated[int, typer.Option("--baud", help="Line speed.")] = DEFAULT_BAUD,
+    baud: Annotated[
+        int, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
+    ] = DEFAULT_BAUD,
     json_out: Annotated[
         bool,
         typer.Option("--json", help="Print the final estimate as JSON (as estimate --json)."),
@@ -439,17 +450,18 @@ def run(
     console = Console(stderr=True)
     folder = session or default_session_folder()
     with session_exit_codes(console):
-        plan = parse_plan(plan_text)
+        checked = check_new_session(plan_text, robot_file, folder)  # before anything moves
+        plan, description, toml = checked.plan, checked.description, checked.toml
         exclude = checked_exclude(exclude_text, plan.n_trials, console)
-        description = load_robot_description(robot_file)
         refuse_unredundant(description, plan, console)
         try:
             check_floor(plan, description)
         except ParameterError as exc:
             console.print(f"[red]error[/]: {exc}; nothing moved")
             raise typer.Exit(EXIT_BAD_INPUT) from None
-        toml = robot_file.read_text(encoding="utf-8")
         kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
+        if trial_file:
+            check_trial_file(trial_file, description, plan)
         settings = {
             "port": port,
             "baud": baud,

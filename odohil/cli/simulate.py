@@ -24,9 +24,11 @@ from odohil.cli.options import (
     KThetaDeg2PerM,
     VariantChoice,
     VariantOption,
+    bounded,
     parameters_from_paper_units,
 )
 from odohil.errors import OdohilError
+from odohil.science.limits import check_simulation_work, segments_of
 from odohil.science.paths import Design, FloatArray
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.science.simulator import simulate as run_simulation
@@ -90,9 +92,17 @@ class _LazyProgress:
 
 
 def simulate(
-    k: Annotated[float, typer.Option("--k", help="Forth-and-back pairs k, a multiple of 1/2.")],
-    l_m: Annotated[float, typer.Option("--l", help="Leg length l, metres.")],
-    trials: Annotated[int, typer.Option("--trials", help="Number of simulated trials.")],
+    k: Annotated[
+        float,
+        typer.Option(
+            "--k", callback=bounded("k"), help="Forth-and-back pairs k, a multiple of 1/2."
+        ),
+    ],
+    l_m: Annotated[float, typer.Option("--l", callback=bounded("l"), help="Leg length l, metres.")],
+    trials: Annotated[
+        int,
+        typer.Option("--trials", callback=bounded("trials"), help="Number of simulated trials."),
+    ],
     out: Annotated[Path, typer.Option("--out", help="Trial file to write (CSV).")],
     variant: VariantOption = VariantChoice.turn,
     e_r: ERDegPerM = E_R_DEFAULT,
@@ -100,10 +110,16 @@ def simulate(
     k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
     k_rho: KRhoM = K_RHO_DEFAULT,
     seed: int | None = typer.Option(
-        None, "--seed", help="Random seed (a non-negative integer); default: fresh, reported."
+        None,
+        "--seed",
+        callback=bounded("seed"),
+        help="Random seed (a non-negative integer); default: fresh, reported.",
     ),
     segment_m: float = typer.Option(
-        DEFAULT_SEGMENT_M, "--segment-m", help="Largest simulated segment, metres."
+        DEFAULT_SEGMENT_M,
+        "--segment-m",
+        callback=bounded("segment_m"),
+        help="Largest simulated segment, metres.",
     ),
 ) -> None:
     """Simulate trials of k forth-and-back runs of length l and write them as a trial file.
@@ -126,6 +142,11 @@ def simulate(
         )
     if seed is not None and seed < 0:
         raise typer.BadParameter(f"must be a non-negative integer, got {seed}", param_hint="--seed")
+    try:
+        segments = segments_of(design.path().legs.length_m.tolist(), segment_m)
+        check_simulation_work(trials, segments)
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--trials") from exc
     if not out.parent.is_dir():
         raise typer.BadParameter(f"folder {str(out.parent)!r} does not exist", param_hint="--out")
     if out.is_dir():

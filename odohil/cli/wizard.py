@@ -40,6 +40,7 @@ from odohil.cli.exit_codes import (
     EXIT_UNTRUSTED,
     exit_for_signal,
 )
+from odohil.cli.options import bounded
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
 from odohil.cli.run import MAY_STILL_MOVE, default_session_folder, final_estimate, report_stop
 from odohil.cli.verdict import verdict_line
@@ -65,7 +66,8 @@ from odohil.session.engine import (
 )
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record, journal_path
-from odohil.session.plan import Plan, parse_plan
+from odohil.session.plan import Plan, check_session_plan, parse_plan
+from odohil.session.preflight import check_session_folder
 from odohil.session.robot_file import load_robot_description
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext
@@ -546,7 +548,7 @@ def _prepare(
         _fail(console, Check("robot description", False, str(exc)))
     console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))
     try:
-        plan = parse_plan(plan_text or DEFAULT_PLAN)
+        plan = check_session_plan(parse_plan(plan_text or DEFAULT_PLAN))  # wire range, caps
     except OdohilError as exc:
         _fail(console, Check("plan feasible", False, str(exc)))
     for check in [*plan_checks(plan, max_leg_m), floor_check(plan, description)]:
@@ -620,9 +622,14 @@ def wizard(
         Path | None,
         typer.Option("--session", help="Session folder; an existing one is resumed."),
     ] = None,
-    baud: Annotated[int, typer.Option("--baud", help="Line speed.")] = DEFAULT_BAUD,
+    baud: Annotated[
+        int, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
+    ] = DEFAULT_BAUD,
     max_leg_m: Annotated[
-        float, typer.Option("--max-leg", help="Longest leg the floor allows, m.")
+        float,
+        typer.Option(
+            "--max-leg", callback=bounded("max_leg_m"), help="Longest leg the floor allows, m."
+        ),
     ] = DEFAULT_MAX_LEG_M,
 ) -> None:
     """Guide a calibration session beside the robot, one trial at a time."""
@@ -631,6 +638,10 @@ def wizard(
     interrupts.install()
     folder = session or default_session_folder()
     console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
+    try:
+        check_session_folder(folder)
+    except OdohilError as exc:
+        _fail(console, Check("session folder", False, str(exc)))
     with signals_raise():
         code = _guided(console, folder, interrupts, port, baud, robot_file, plan_text, max_leg_m)
     if code not in (EXIT_OK, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):

@@ -20,9 +20,12 @@ Writing A(s) = (1+E_T) sigma(s) e^{i thetatilde(s)}:
 (K = K_theta). On a leg A is a complex exponential in s, and for s < s' both
 kernels factorise, so pairs of distinct legs reduce to products of one-leg
 integrals (a recurrence over legs, O(legs)); same-leg double integrals reduce
-to one-dimensional ones. Every one-leg integral is done by Gauss-Legendre on
-panels short enough that the integrands turn by a bounded phase, which gives
-about 1e-13 relative accuracy.
+to one-dimensional ones. A one-leg integral whose integrand turns or decays
+by a bounded amount ((2|E_R| + 2K) L <= 2) is done by one 12-node
+Gauss-Legendre panel (about 1e-13 relative accuracy); a longer leg's by closed
+forms in phi1(z) = (e^z - 1)/z and phi2(z) = (e^z - 1 - z)/z^2, whose
+arguments then have |z| >= 1/3. So a leg costs the same whatever its length,
+and a path costs O(legs).
 """
 
 from __future__ import annotations
@@ -41,7 +44,8 @@ from odohil.science.paths import EncoderPath, FloatArray
 _NODES = 12
 """Gauss-Legendre nodes per panel."""
 _PANEL_RATE_LENGTH = 2.0
-"""Largest |rate| * panel length: with 12 nodes the error is below 1e-14."""
+"""Largest |rate| * length of a leg done by quadrature: with 12 nodes the
+error is below 1e-14; longer legs use the closed forms."""
 
 ComplexArray = npt.NDArray[np.complexfloating[Any, Any]]
 
@@ -79,6 +83,45 @@ def _expm1_over(w: ComplexArray) -> ComplexArray:
     return out
 
 
+def _phi1(z: ComplexArray) -> ComplexArray:
+    """(e^z - 1)/z for |z| >= 1/3 (the long legs' arguments)."""
+    out: ComplexArray = np.expm1(z) / z
+    return out
+
+
+def _phi2(z: ComplexArray) -> ComplexArray:
+    """(e^z - 1 - z)/z^2 for |z| >= 1/3."""
+    out: ComplexArray = (np.expm1(z) - z) / (z * z)
+    return out
+
+
+def _long_leg_integrals(
+    length: FloatArray, omega: FloatArray, k: float
+) -> tuple[ComplexArray, ...]:
+    """The seven one-leg integrals of :func:`pose_moments` in closed form, for
+    legs with (2|E_R| + 2K) L > 2, where every argument below has |z| >= 1/3
+    and a real part <= 0 (no overflow, no cancellation worth the name).
+
+    With c1 = i omega - K/2, c3 = i omega - 3K/2 and z = c L:
+    int e^{c t} = L phi1(z); int (L - t) e^{c t} = L^2 phi2(z);
+    int t e^{c t} = L^2 (phi1(z) - phi2(z));
+    int e^{i omega t} e^{-K (L - t)/2} = e^{i omega L} L phi1((-i omega - K/2) L);
+    int t e^{c1 t} (e^{c3 t} - 1)/(c3 t) = L (phi1((c1 + c3) L) - phi1(c1 L)) / c3.
+    """
+    c1: ComplexArray = 1j * omega - 0.5 * k
+    c3: ComplexArray = 1j * omega - 1.5 * k
+    z1 = c1 * length
+    i_mean = length * _phi1(z1)
+    i_tail = np.exp(1j * omega * length) * length * _phi1((-1j * omega - 0.5 * k) * length)
+    i_same_abs = length**2 * _phi2(z1)
+    i_stein = length**2 * (_phi1(z1) - _phi2(z1))
+    i_f = length * _phi1((1j * omega - 1.5 * k) * length)
+    z13: ComplexArray = (c1 + c3) * length
+    i_same_sq = length * (_phi1(z13) - _phi1(z1)) / c3
+    i_noise = length * _phi1((2j * omega - 2.0 * k) * length)
+    return (i_mean, i_tail, i_same_abs, i_stein, i_f, i_same_sq, i_noise)
+
+
 def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
     """Mean vector and 3x3 covariance of (x, y, Delta) for one trial of ``path``.
 
@@ -99,17 +142,15 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
     phase = legs.heading_rad + params.e_r * legs.start_signed_m
     alpha = gain * legs.sign * np.exp(1j * phase)
 
+    # legs whose integrands turn by a bounded phase: one Gauss-Legendre panel;
+    # the others by closed forms in phi1, phi2 (cost independent of the length)
     rate = 2.0 * abs(params.e_r) + 2.0 * k
-    panels = np.maximum(1, np.ceil(rate * length / _PANEL_RATE_LENGTH)).astype(np.int64)
-    leg_of_panel = np.repeat(np.arange(length.size), panels)
-    first_panel = np.concatenate(([0], np.cumsum(panels)[:-1]))
-    panel_index = np.arange(leg_of_panel.size) - first_panel[leg_of_panel]
-    width = (length / panels)[leg_of_panel]
+    long_leg = rate * length > _PANEL_RATE_LENGTH
     x, w = _gauss_legendre()
-    t = (panel_index * width)[:, None] + width[:, None] * x[None, :]
-    wt = width[:, None] * w[None, :]
-    leg_l = length[leg_of_panel][:, None]
-    om = omega[leg_of_panel][:, None]
+    t = length[:, None] * x[None, :]
+    wt = length[:, None] * w[None, :]
+    leg_l = length[:, None]
+    om = omega[:, None]
 
     rot = np.exp(1j * om * t)
     decay = np.exp(-0.5 * k * t)
@@ -117,7 +158,7 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
     c3 = 1j * om - 1.5 * k
 
     def per_leg(values: ComplexArray) -> ComplexArray:
-        sums: ComplexArray = np.add.reduceat((wt * values).sum(axis=1), first_panel)
+        sums: ComplexArray = (wt * values).sum(axis=1)
         return sums
 
     i_mean = per_leg(e1)
@@ -127,6 +168,12 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
     i_f = per_leg(rot * decay**3)
     i_same_sq = per_leg(e1 * t * _expm1_over(c3 * t))
     i_noise = per_leg(rot * rot * decay**4)
+    if np.any(long_leg):
+        exact = _long_leg_integrals(length[long_leg], omega[long_leg], k)
+        for target, value in zip(
+            (i_mean, i_tail, i_same_abs, i_stein, i_f, i_same_sq, i_noise), exact, strict=True
+        ):
+            target[long_leg] = value
 
     mean_legs = alpha * np.exp(-0.5 * k * start) * i_mean  # m_j
     mean_z = complex(mean_legs.sum())

@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from odohil.errors import ParameterError
+from odohil.science.limits import RANGES, TRIAL_DISTANCE_MAX_M
 
 Variant = Literal["turn", "reverse"]
 VARIANTS: tuple[Variant, ...] = ("turn", "reverse")
@@ -192,6 +193,14 @@ class Design:
         _leg_count(self.k)
         if not math.isfinite(self.l_m) or self.l_m <= 0:
             raise ParameterError(f"l must be a positive length in metres, got {self.l_m!r}")
+        # caps that keep every computation on a design bounded (odohil/science/limits.py)
+        RANGES["k"].check("k", self.k)
+        RANGES["l"].check("l", self.l_m)
+        if self.distance_m > TRIAL_DISTANCE_MAX_M:
+            raise ParameterError(
+                f"one trial of k={self.k:g}, l={self.l_m:g} m drives 2kl = {self.distance_m:g} m; "
+                f"at most {TRIAL_DISTANCE_MAX_M:g} m"
+            )
         if self.variant not in VARIANTS:
             raise ParameterError(f"variant must be one of {VARIANTS}, got {self.variant!r}")
         if not isinstance(self.backward, bool):
@@ -412,6 +421,14 @@ def regular_polygon(
         raise ParameterError(f"a polygon needs at least 3 sides, got {n_sides}")
     if not math.isfinite(side_m) or side_m <= 0:
         raise ParameterError(f"side must be a positive length in metres, got {side_m!r}")
+    RANGES["side"].check("side", side_m)
+    if n_sides * side_m > TRIAL_DISTANCE_MAX_M:
+        raise ParameterError(
+            f"a path of {n_sides} sides of {side_m:g} m drives {n_sides * side_m:g} m; "
+            f"at most {TRIAL_DISTANCE_MAX_M:g} m"
+        )
+    if n_sides > 2 * RANGES["k"].high:
+        raise ParameterError(f"a polygon has at most {2 * RANGES['k'].high:g} sides, got {n_sides}")
     turn = (2.0 * math.pi / n_sides) * (1.0 if counter_clockwise else -1.0)
     steps: list[Step] = []
     for _ in range(n_sides):

@@ -60,6 +60,8 @@ _POOL_SIZE = 24
 _GRID_STEPS = 24
 """Trial counts tried per design in a mixture (before the last design takes
 what is left of the budget)."""
+_SEARCH_ROUNDS = 64
+"""Most moves of the local search at one step size."""
 
 
 @dataclass(frozen=True)
@@ -420,23 +422,29 @@ def _allocate(
     if best_counts is None:
         return None
     if head:
-        improved = True
-        while improved:
-            improved = False
-            steps = [
-                np.array(s, dtype=np.float64)
-                for s in itertools.product((-1, 0, 1), repeat=len(head))
-            ]
-            around = np.array([best_counts[:-1] + s for s in steps if np.any(s)])
-            around = around[np.all(around >= 1, axis=1)]
-            if around.size == 0:
-                break
-            trial = _complete(around, lengths, budget_m, trial_cap)
-            if trial.size == 0:
-                break
-            counts_new, value_new = _best(trial, infos, divisor, use_max)
-            if counts_new is not None and value_new < best_value - 1e-15:
-                best_counts, best_value, improved = counts_new, value_new, True
+        # pattern search: +-step moves, the step halving from about the grid's
+        # spacing down to 1, so the work grows with log(budget), not the budget
+        largest = max(float(best_counts.max()), 1.0)
+        step = 2.0 ** math.floor(math.log2(max(1.0, largest / _GRID_STEPS)))
+        moves = [
+            np.array(s, dtype=np.float64)
+            for s in itertools.product((-1, 0, 1), repeat=len(head))
+            if any(s)
+        ]
+        while step >= 1.0:
+            for _ in range(_SEARCH_ROUNDS):
+                around = np.array([best_counts[:-1] + step * s for s in moves])
+                around = around[np.all(around >= 1, axis=1)]
+                if around.size == 0:
+                    break
+                trial = _complete(around, lengths, budget_m, trial_cap)
+                if trial.size == 0:
+                    break
+                counts_new, value_new = _best(trial, infos, divisor, use_max)
+                if counts_new is None or value_new >= best_value - 1e-15:
+                    break
+                best_counts, best_value = counts_new, value_new
+            step /= 2.0
     total = np.einsum("d,dij->ij", best_counts, infos)
     errors = standard_errors(total)
     items = tuple(

@@ -41,6 +41,7 @@ import numpy.typing as npt
 
 from odohil import units
 from odohil.errors import ParameterError, RobotDescriptionError
+from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, ErrorParameters
 
 FloatArray = npt.NDArray[np.float64]
@@ -169,6 +170,7 @@ class RobotDescription:
             raise RobotDescriptionError(
                 f"measurement.sigma_m must be a positive number of metres, got {self.sigma_m!r}"
             )
+        _in_range("sigma_m", "measurement.sigma_m", self.sigma_m)
         _check_cross_pairs(self.cross_pairs, tuple(s.name for s in self.screws))
         _check_serial(self.serial)
         floor = self.floor_length_m
@@ -334,6 +336,8 @@ def _check_screws(screws: tuple[Screw, ...]) -> None:
             raise RobotDescriptionError("screws: a screw needs a non-empty name")
         if not (math.isfinite(screw.x_m) and math.isfinite(screw.y_m)):
             raise RobotDescriptionError(f"screws.{screw.name} must be finite")
+        _in_range("screw_m", f"screws.{screw.name} x", screw.x_m)
+        _in_range("screw_m", f"screws.{screw.name} y", screw.y_m)
     if len(set(names)) != len(names):
         raise RobotDescriptionError(f"screws: names must be unique, got {names}")
     points = np.array([[s.x_m, s.y_m] for s in screws], dtype=np.float64)
@@ -384,3 +388,12 @@ def _check_serial(serial: SerialSettings) -> None:
         raise RobotDescriptionError(
             f"serial.timeout_s must be a positive number of seconds, got {serial.timeout_s!r}"
         )
+    _in_range("timeout_s", "serial.timeout_s", serial.timeout_s)
+
+
+def _in_range(name: str, key: str, value: float) -> None:
+    """RobotDescriptionError naming ``key`` unless ``value`` is in ``RANGES[name]``."""
+    try:
+        RANGES[name].check(key, value)
+    except ParameterError as exc:
+        raise RobotDescriptionError(str(exc)) from None

@@ -27,6 +27,7 @@ from functools import cached_property
 from typing import Any
 
 from odohil.errors import ParameterError
+from odohil.science.limits import RANGES, check_wire_leg
 from odohil.science.paths import VARIANTS, Design, FloorChoreography, floor_choreography
 
 _KEYS = ("k", "l", "n", "variant")
@@ -132,6 +133,8 @@ class Plan:
     def from_json(cls, raw: Mapping[str, Any]) -> Plan:
         """Inverse of :meth:`to_json`; ParameterError if malformed. Without
         ``"alternate"`` (older journals) every trial was driven forwards."""
+        if not isinstance(raw, Mapping):
+            raise ParameterError(f"a plan must be an object, got {raw!r}"[:300])
         designs = raw.get("designs")
         if not isinstance(designs, list):
             raise ParameterError("a plan object needs a list of designs")
@@ -142,7 +145,7 @@ class Plan:
             try:
                 design = Design(float(entry["k"]), float(entry["l_m"]), entry["variant"])
                 items.append(PlanItem(design, int(entry["n"])))
-            except (KeyError, TypeError, ValueError) as exc:
+            except (KeyError, TypeError, ValueError, OverflowError) as exc:
                 if isinstance(exc, ParameterError):
                     raise
                 raise ParameterError(f"malformed plan design {entry!r}: {exc}") from None
@@ -155,6 +158,26 @@ class Plan:
     def of(cls, designs: Sequence[tuple[Design, int]]) -> Plan:
         """A plan from (design, n_trials) pairs, e.g. from the planner."""
         return cls(tuple(PlanItem(design, n) for design, n in designs))
+
+
+def check_session_plan(plan: Plan) -> Plan:
+    """``plan`` if a session can drive it: every leg within what one ``pr``
+    carries with enough resolution (:func:`odohil.science.limits.check_wire_leg`,
+    [0.05, 83.2] m) and every design's trial count within
+    ``RANGES["plan_n"]``; else ParameterError naming the design and the range.
+
+    Made before any session is created or any port opened.
+    """
+    for number, item in enumerate(plan.items, start=1):
+        try:
+            check_wire_leg(item.design.l_m, "l")
+            RANGES["plan_n"].check("n", item.n_trials)
+        except ParameterError as exc:
+            raise ParameterError(f"plan design {number} ({item.to_text()}): {exc}") from None
+    total = RANGES["plan_n"]
+    if plan.n_trials > total.high:
+        raise ParameterError(f"the plan has {plan.n_trials} trials; at most {total.high:g}")
+    return plan
 
 
 def parse_plan(text: str) -> Plan:

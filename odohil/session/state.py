@@ -55,17 +55,18 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
-from odohil.errors import JournalError, ParameterError
+from odohil.errors import JournalError, OdohilError, ParameterError
 from odohil.science.estimators import Observation
 from odohil.science.floor_marks import MarkDistances
+from odohil.science.limits import RANGES
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.journal import Record, TornRecord, read_journal
-from odohil.session.plan import Plan
+from odohil.session.plan import Plan, check_session_plan
 from odohil.session.trial_files import Trial, TrialSet
 
 FORMAT = 1
@@ -247,6 +248,7 @@ def replay(records: Iterable[Record]) -> SessionState:
                 raise JournalError(
                     f"record {record.seq}: journal format {fmt!r}, this odohil reads {FORMAT}"
                 )
+            validate_header(record.data, f"record {record.seq}")
             plan = None
             if "plan" in record.data:
                 try:
@@ -259,6 +261,68 @@ def replay(records: Iterable[Record]) -> SessionState:
     if state is None:
         raise JournalError("the journal holds no records")
     return state
+
+
+MEASURES = ("fake", "file", "operator")
+"""The measurement sources a session header may name."""
+_SETTING_TYPES: dict[str, tuple[type, ...]] = {
+    "port": (str,),
+    "truth_socket": (str,),
+    "trial_file": (str,),
+    "baud": (int,),
+    "seed": (int,),
+}
+
+
+def validate_header(data: Mapping[str, Any], where: str = "session record") -> None:
+    """Check the session record's members before anything uses them (a member
+    may be absent: a session record needs only its format; :func:`description_of_header`
+    refuses a header without ``robot_toml``).
+
+    Raises:
+        JournalError: naming the member and what it must be (a CRC-valid
+            journal can still carry a header another program wrote).
+    """
+
+    def bad(member: str, what: str, value: Any) -> JournalError:
+        return JournalError(f"{where}: {member} must be {what}, got {value!r}"[:500])
+
+    if "robot_toml" in data:
+        toml = data["robot_toml"]
+        if not isinstance(toml, str):
+            raise bad("robot_toml", "the robot description's TOML text", toml)
+        try:
+            parse_robot_description(toml, "robot_toml")
+        except OdohilError as exc:
+            raise JournalError(f"{where}: {exc}") from None
+    robot_path = data.get("robot_path")
+    if robot_path is not None and not isinstance(robot_path, str):
+        raise bad("robot_path", "a path (text)", robot_path)
+    measure = data.get("measure")
+    if "measure" in data and measure not in MEASURES:
+        raise bad("measure", f"one of {', '.join(MEASURES)}", measure)
+    if "plan" in data:
+        plan = data["plan"]
+        if not isinstance(plan, dict):
+            raise bad("plan", 'an object {"designs": [...]}', plan)
+        try:
+            check_session_plan(Plan.from_json(plan))
+        except ParameterError as exc:
+            raise JournalError(f"{where}: bad plan: {exc}") from None
+    settings = data.get("settings", {})
+    if not isinstance(settings, dict):
+        raise bad("settings", "an object", settings)
+    for key, types in _SETTING_TYPES.items():
+        value = settings.get(key)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, types):
+            raise bad(f"settings.{key}", types[0].__name__, value)
+        if key in ("baud", "seed"):
+            try:
+                RANGES[key].check(f"settings.{key}", cast(int, value))
+            except ParameterError as exc:
+                raise JournalError(f"{where}: {exc}") from None
 
 
 def apply(state: SessionState, record: Record) -> SessionState:
@@ -535,7 +599,13 @@ def load_session_trials(folder: str | Path) -> TrialSet:
 
 
 def description_of_header(state: SessionState) -> RobotDescription:
-    """The robot description journaled in the session header."""
+    """The robot description journaled in the session header.
+
+    Raises:
+        JournalError: the header has no robot description.
+    """
+    if not isinstance(state.header.get("robot_toml"), str):
+        raise JournalError("the session record holds no robot description (robot_toml)")
     return parse_robot_description(
         str(state.header["robot_toml"]), str(state.header.get("robot_path") or "session")
     )

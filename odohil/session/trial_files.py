@@ -41,6 +41,14 @@ BACKWARD_SUFFIX = "-backward"
 """Appended to the variant of a trial driven backwards (e.g. ``turn-backward``)."""
 POSE_COLUMNS = ("dx_m", "dy_m", "dtheta_rad")
 ODOMETRY_COLUMNS = ("odo_x_m", "odo_y_m", "odo_theta_rad")
+MAX_LINE_CHARS = 4096
+"""Longest line of a trial file (csv's own field limit is 128 KiB)."""
+MAX_ROWS = 100_000
+"""Most trial rows in one file."""
+MAX_POSE_M = 10_000.0
+"""Largest |dx|, |dy|, |odo_x|, |odo_y| and mark distance, metres."""
+MAX_ANGLE_RAD = 1_000.0
+"""Largest |dtheta| and |odo_theta|, radians."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,7 +148,11 @@ def parse_trials(
     prior: PriorForDesign | None = None,
     source: str = "trial file",
 ) -> TrialSet:
-    """Parse trial-file text; see :func:`read_trials`."""
+    """Parse trial-file text; see :func:`read_trials`.
+
+    A leading byte-order mark (Excel's "CSV UTF-8") is ignored; a line longer
+    than :data:`MAX_LINE_CHARS` or more than :data:`MAX_ROWS` rows is refused."""
+    text = text.removeprefix("\ufeff")
     lines = [
         (number, line)
         for number, line in enumerate(text.splitlines(), start=1)
@@ -148,6 +160,14 @@ def parse_trials(
     ]
     if not lines:
         raise TrialFileError(f"{source}: no header line")
+    long_lines = [number for number, line in lines if len(line) > MAX_LINE_CHARS]
+    if long_lines:
+        raise TrialFileError(
+            f"{source}: line(s) {', '.join(map(str, long_lines[:5]))} longer than "
+            f"{MAX_LINE_CHARS} characters"
+        )
+    if len(lines) - 1 > MAX_ROWS:
+        raise TrialFileError(f"{source}: {len(lines) - 1} rows; at most {MAX_ROWS} are accepted")
     header_line, header_text = lines[0]
     header = [name.strip() for name in next(csv.reader([header_text]))]
     kind, columns = _layout(header, description, f"{source}, line {header_line}")
@@ -351,6 +371,13 @@ class _RowParser:
             return None
         if not math.isfinite(value):
             problems.append(f"{name} is not a finite number: {text!r}")
+            return None
+        if name in ("k", "l_m"):
+            return value  # the design checks its own range
+        cap = MAX_ANGLE_RAD if name.endswith("_rad") else MAX_POSE_M
+        if abs(value) > cap:
+            unit = "rad" if name.endswith("_rad") else "m"
+            problems.append(f"{name} must be within [-{cap:g}, {cap:g}] {unit}, got {text!r}")
             return None
         return value
 

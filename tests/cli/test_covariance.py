@@ -72,7 +72,7 @@ def test_table_output() -> None:
         (("--path", "forth-and-back", "--k", "0.3", "--l", "2"), "multiple of 1/2"),
         (("--path", "square", "--side", "-1"), "side"),
         (("--path", "square", "--side", "1", "--simulate", "1"), "at least 2"),
-        (("--path", "square", "--side", "1", "--K-rho", "-1"), "K_rho"),
+        (("--path", "square", "--side", "1", "--K-rho", "-1"), "K-rho"),
         (("--path", "circle"), "circle"),
     ],
 )

@@ -96,9 +96,9 @@ def test_table_output_with_a_robot_description(tmp_path: Path) -> None:
         (("--budget-m", "100", "--sigma-m", "0.001", "--robot", "x.toml"), "not both"),
         (("--budget-m", "100", "--sigma-m", "-1"), "sigma-m"),
         (("--budget-m", "100", "--robot", "/no/such/robot.toml"), "cannot read"),
-        (("--budget-m", "100", "--target-E-R", "0"), "positive"),
-        (("--budget-m", "100", "--K-theta", "-0.1"), "K_theta"),
-        (("--budget-m", "100", "--max-designs", "4"), "max_designs"),
+        (("--budget-m", "100", "--target-E-R", "0"), "target-E-R"),
+        (("--budget-m", "100", "--K-theta", "-0.1"), "K-theta"),
+        (("--budget-m", "100", "--max-designs", "4"), "max-designs"),
         (("--budget-m", "0.2"), "no candidate design"),
     ],
 )

@@ -1,0 +1,95 @@
+"""Pre-flight checks of a session's inputs, made before any session folder is
+created or any port opened: the plan against what the wire carries, the robot
+description, the session folder, and a trial file against the plan.
+
+Every check raises an :class:`~odohil.errors.OdohilError` whose message names
+the option or file and what is accepted; nothing has moved yet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from odohil.errors import ParameterError, RobotDescriptionError, TrialFileError
+from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.session.plan import Plan, check_session_plan, parse_plan
+from odohil.session.trial_files import read_trials
+
+
+@dataclass(frozen=True)
+class Checked:
+    """The inputs of a new session, validated.
+
+    Attributes:
+        plan: the plan (legs within the wire range, trial counts within caps).
+        description: the robot description.
+        toml: its TOML text, as journaled.
+    """
+
+    plan: Plan
+    description: RobotDescription
+    toml: str
+
+
+def check_new_session(plan_text: str, robot_file: Path, session: Path | None) -> Checked:
+    """Validate ``--plan``, ``--robot`` and ``--session`` of a new session.
+
+    Raises:
+        ParameterError: a bad plan or a ``--session`` that is not a folder.
+        RobotDescriptionError: the robot description cannot be read or is invalid.
+    """
+    try:
+        plan = check_session_plan(parse_plan(plan_text))
+    except ParameterError as exc:
+        raise ParameterError(f"--plan: {exc}") from None
+    check_session_folder(session)
+    try:
+        toml = robot_file.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise RobotDescriptionError(f"--robot: cannot read {robot_file}: {exc}") from None
+    description = parse_robot_description(toml, source=str(robot_file))
+    return Checked(plan=plan, description=description, toml=toml)
+
+
+def check_session_folder(session: Path | None) -> None:
+    """A ``--session`` that exists must be a folder (ParameterError otherwise)."""
+    if session is not None and session.exists() and not session.is_dir():
+        raise ParameterError(
+            f"--session {session} is a file, not a session folder: give a new or "
+            "existing session folder"
+        )
+
+
+def check_trial_file(
+    path: str | Path, description: RobotDescription, plan: Plan, first_trial: int = 1
+) -> None:
+    """A trial file that serves the plan: one row per trial, row k of trial k's
+    design, for trials ``first_trial`` .. the plan's last.
+
+    Raises:
+        TrialFileError: the file is unreadable, has bad rows, too few rows or a
+            row of another design (the first few are listed).
+    """
+    trials = read_trials(path, description)
+    if len(trials) < plan.n_trials:
+        raise TrialFileError(
+            f"--measure {path}: {len(trials)} row(s) for a plan of {plan.n_trials} trials; "
+            "the file needs one row per trial, in plan order"
+        )
+    wrong = []
+    for trial in range(first_trial, plan.n_trials + 1):
+        row = trials.trials[trial - 1]
+        wanted = plan.design_of(trial)
+        if row.design != wanted:
+            wrong.append(
+                f"row {trial} (line {row.line}) is {row.design.label()}, "
+                f"trial {trial} runs {wanted.label()}"
+            )
+    if wrong:
+        shown = "\n  ".join(wrong[:5]) + (
+            f"\n  ... {len(wrong) - 5} more" if len(wrong) > 5 else ""
+        )
+        raise TrialFileError(
+            f"--measure {path}: {len(wrong)} row(s) of another design than the plan's:\n  {shown}"
+        )
