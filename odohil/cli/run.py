@@ -470,7 +470,11 @@ def run(
             "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
         }
         if kind == "fake" and not truth_socket and not port.startswith("fakerobot:"):
-            make_source(kind, description, None, seed, trial_file)  # says what is missing
+            try:
+                make_source(kind, description, None, seed, trial_file)  # says what is missing
+            except OdohilError as exc:
+                console.print(f"[red]error[/]: {exc}", soft_wrap=True)  # bad input: nothing moved
+                raise typer.Exit(EXIT_BAD_INPUT) from None
         with session_input(console):
             journal, state = start_session(
                 folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)

@@ -246,7 +246,7 @@ def test_long_run_shows_progress_on_stderr_and_interrupt_leaves_old_file(tmp_pat
             "--l",
             "6",
             "--trials",
-            "1000000",
+            "80000",
             "--seed",
             "1",
             "--out",
