@@ -159,7 +159,8 @@ def test_legs_below_the_wire_resolution_never_make_valid_trials(tmp_path: Path) 
         ]  # fmt: skip
         done = subprocess.run(args, capture_output=True, text=True, timeout=BOUND_S)
         log = emulator.truth().motion_log
-    assert done.returncode != 0, done.stdout
-    assert "leg length" in done.stderr, done.stderr
-    assert not any(kind == ev.SOLVED for kind, _ in _records(tmp_path))
+    # refused at pre-flight: bad input, no session, nothing sent
+    assert done.returncode == 2, done.stderr
+    assert "--plan" in done.stderr and "at least" in done.stderr, done.stderr
+    assert not (tmp_path / "session").exists()
     assert not [r for r in log if r.command == "pr"], log
