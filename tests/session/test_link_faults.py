@@ -161,6 +161,7 @@ def test_legs_below_the_wire_resolution_never_make_valid_trials(tmp_path: Path) 
         log = emulator.truth().motion_log
     # refused at pre-flight: bad input, no session, nothing sent
     assert done.returncode == 2, done.stderr
-    assert "--plan" in done.stderr and "at least" in done.stderr, done.stderr
+    assert "--plan" in done.stderr, done.stderr
+    assert "at least" in done.stderr, done.stderr
     assert not (tmp_path / "session").exists()
     assert not [r for r in log if r.command == "pr"], log
