@@ -4,7 +4,7 @@ The engine is transport-free: :meth:`NomadEngine.receive` takes the bytes the
 host wrote, :meth:`NomadEngine.take_output` hands out the bytes (or the
 disconnect marker) that are due, and :meth:`NomadEngine.poll` lets time pass.
 Both the pty emulator and the ``fakerobot://`` pyserial port drive this one
-class. All protocol details follow /work/shared/protocol/nomad-serial.md and
+class. All protocol details follow the Nomad serial facts document and
 its CHOICEs C2-C12 (see docs/fake-robot.md).
 
 Two clocks: motion, accelerations, ``zr`` and the robot timestamp run on the

@@ -114,8 +114,11 @@ def _motion_case(
         text=True,
         timeout=60,
     )
-    assert resumed.returncode == 0, (case, resumed.stderr)
-    assert json.loads(resumed.stdout)["n_trials"] == 2
+    # a two-trial session cannot pin four parameters: its estimate may be judged untrusted (3)
+    assert resumed.returncode in (0, 3), (case, resumed.stderr)
+    result = json.loads(resumed.stdout)
+    assert result["n_trials"] == 2
+    assert resumed.returncode == 0 or result["verdict"]["reasons"], (case, result["verdict"])
     _every_trial_once(folder, 2)
 
 
@@ -142,5 +145,6 @@ def _measurement_case(emulator: EmulatorProcess, tmp_path: Path, robot: Path, si
         _type_all(child, values, "Trial 1 solved")
         child.expect(pexpect.EOF)
         child.wait()
-        assert child.exitstatus == 0, (case, child.before)
+        # one trial gives no estimate: the wizard says so and exits 3 (not trusted)
+        assert child.exitstatus == 3, (case, child.before)
     _every_trial_once(folder, 1)

@@ -298,6 +298,6 @@ def test_resume_after_ctrl_c_mid_motion_asks_to_put_the_robot_back(tmp_path: Pat
         child.expect(r"Session complete:\S* 1 trials")
         child.expect(pexpect.EOF)
         child.close()
-        assert child.exitstatus == 0
+        assert child.exitstatus == 3  # one trial gives no estimate: not trusted
     kinds = [r.kind for r in read_journal(folder).records]
     assert kinds.count(ev.START_POSE) == 2
