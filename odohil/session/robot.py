@@ -1,0 +1,79 @@
+"""The ``Robot`` protocol: everything the session needs from a robot.
+
+The session owns this protocol and names no robot: a backend in the driver
+layer (odohil/driver/<name>/) implements it structurally and is found by the
+robot description's ``[robot] protocol`` name through the ``odohil.robots``
+entry-point group (odohil/session/robots.py), the way python-can finds a bus
+by its interface name. Values crossing it are robot-neutral and SI
+(odohil/driver/odometry.py).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from types import TracebackType
+from typing import Protocol, Self
+
+from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
+from odohil.science.paths import Design
+
+SampleCallback = Callable[[OdometrySample], None]
+"""Called with every odometry sample taken during a motion (live read-outs)."""
+
+
+class Robot(Protocol):
+    """A connected robot. Closing it (``close`` or leaving the ``with``
+    block) stops it, best effort, before the port closes."""
+
+    @property
+    def port(self) -> str:
+        """The port URL it is connected through."""
+        ...
+
+    def __enter__(self) -> Self: ...
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None: ...
+
+    def odometry(self) -> OdometrySample:
+        """Read the odometry now (also feeds the robot's watchdog)."""
+        ...
+
+    def arm(self, settings: DriveSettings) -> OdometrySample:
+        """Prepare to drive trials (mode, watchdog, speeds); the odometry after."""
+        ...
+
+    def settle(self, timeout_s: float) -> OdometrySample:
+        """Bring the robot to rest (stop it if it moves), within ``timeout_s``."""
+        ...
+
+    def zero(self) -> OdometrySample:
+        """Make the current pose the odometry frame's origin; the reading after."""
+        ...
+
+    def drive(
+        self,
+        design: Design,
+        settings: DriveSettings,
+        on_sample: SampleCallback | None = None,
+    ) -> TrialMotion:
+        """Drive one trial of ``design``, checking every step against the
+        odometry; stops the robot before raising on any failure."""
+        ...
+
+    def stop(self) -> None:
+        """Command a stop now, without waiting."""
+        ...
+
+    def stop_and_confirm(self, timeout_s: float) -> OdometrySample:
+        """Stop and wait until the robot reports standing still; raises
+        StopUnconfirmedError when it does not within ``timeout_s``."""
+        ...
+
+    def close(self) -> None:
+        """Stop (best effort) and close the port. Idempotent."""
+        ...
