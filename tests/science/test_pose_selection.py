@@ -142,7 +142,7 @@ def test_one_way_mirror_is_not_chosen_against_the_encoders() -> None:
 def test_an_ambiguous_trial_lists_its_candidates() -> None:
     """A closed trial without any cross distance: same-screw distances cannot
     tell a motion from its inverse, and a closed path's prediction is about
-    equidistant from both (NOTES section 3), so both stay plausible."""
+    equidistant from both (docs/paper-notes.md section 3), so both stay plausible."""
     description = RobotDescription(CIRCLE, 0.001, ())
     design = Design(1, 3)
     odometry = design.path().encoder_end_pose()
