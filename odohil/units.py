@@ -1,16 +1,33 @@
-"""Every unit conversion odohil makes, in one place.
+"""Every unit conversion odohil makes, and its one angle-wrapping convention.
 
 Inside odohil everything is SI: metres, radians, seconds. Two other unit
 systems exist only at the edges:
 
 - the paper's: E_R in deg/m, K_theta in deg^2/m (E_T and K_rho are already SI);
+  :func:`parameter_to_paper` and :func:`parameter_from_paper` convert one
+  parameter's value or standard error by its name;
 - the Nomad wire's: lengths in 0.1 inch, angles in 0.1 degree (and their
   per-second and per-second-squared rates).
+
+Angles. A heading, or a difference of headings, is reduced to (-pi, pi]
+radians by :func:`wrap_angle` (a float) and :func:`wrap_angles` (an array),
+both exact (``fmod`` by the float 2 pi, then one exact shift). To compare
+headings known only modulo 2 pi with a reference (a model mean, a group's
+circular mean), :func:`angle_near` moves them to within pi of it. The one
+other range is the wire's: the Nomad reports and accepts absolute angles as
+whole tenths of a degree in [0, 3600) (:func:`wire_angle_in_turn`), because
+that is what its protocol carries; a difference of two wire angles is again
+reduced to (-1800, 1800] (:func:`wire_angle_difference`), the same convention
+as :func:`wrap_angle`.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any, overload
+
+import numpy as np
+import numpy.typing as npt
 
 METRES_PER_INCH = 0.0254
 METRES_PER_WIRE_LENGTH = METRES_PER_INCH / 10.0
@@ -70,7 +87,78 @@ def wire_to_radians(angle_wire: float) -> float:
     return angle_wire * RADIANS_PER_WIRE_ANGLE
 
 
+def parameter_to_paper(name: str, value_si: float) -> float:
+    """A value (or standard error) of parameter ``name`` (E_R, E_T, K_theta,
+    K_rho) from SI to the paper's units: E_R rad/m to deg/m, K_theta rad^2/m
+    to deg^2/m, E_T and K_rho unchanged."""
+    if name == "E_R":
+        return rad_per_m_to_deg_per_m(value_si)
+    if name == "K_theta":
+        return rad2_per_m_to_deg2_per_m(value_si)
+    return value_si
+
+
+def parameter_from_paper(name: str, value_paper: float) -> float:
+    """A value (or standard error) of parameter ``name`` from the paper's
+    units to SI (the inverse of :func:`parameter_to_paper`)."""
+    if name == "E_R":
+        return deg_per_m_to_rad_per_m(value_paper)
+    if name == "K_theta":
+        return deg2_per_m_to_rad2_per_m(value_paper)
+    return value_paper
+
+
+TWO_PI = 2.0 * math.pi
+
+
 def wrap_angle(angle_rad: float) -> float:
-    """An angle reduced to (-pi, pi], in radians."""
-    wrapped = math.remainder(angle_rad, 2.0 * math.pi)
-    return math.pi if wrapped == -math.pi else wrapped
+    """An angle reduced to (-pi, pi], in radians (exact: see the module docstring)."""
+    wrapped = math.fmod(angle_rad, TWO_PI)
+    if wrapped > math.pi:
+        return wrapped - TWO_PI
+    if wrapped <= -math.pi:
+        return wrapped + TWO_PI
+    return wrapped
+
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def wrap_angles(angles_rad: npt.ArrayLike) -> FloatArray:
+    """Angles reduced to (-pi, pi], radians, element by element; the same
+    values as :func:`wrap_angle` gives one by one."""
+    wrapped = np.fmod(np.asarray(angles_rad, dtype=np.float64), TWO_PI)
+    wrapped = np.where(wrapped > math.pi, wrapped - TWO_PI, wrapped)
+    result: FloatArray = np.where(wrapped <= -math.pi, wrapped + TWO_PI, wrapped)
+    return result
+
+
+@overload
+def angle_near(angle_rad: float, reference_rad: float) -> float: ...
+@overload
+def angle_near(angle_rad: FloatArray, reference_rad: float) -> FloatArray: ...
+def angle_near(angle_rad: float | FloatArray, reference_rad: float) -> Any:
+    """The angle(s) plus the multiple of 2 pi that puts them in
+    (reference - pi, reference + pi], radians: headings known modulo 2 pi
+    made comparable with a reference heading."""
+    if isinstance(angle_rad, np.ndarray):
+        return reference_rad + wrap_angles(angle_rad - reference_rad)
+    return reference_rad + wrap_angle(float(angle_rad) - reference_rad)
+
+
+def circular_mean(angles_rad: npt.ArrayLike) -> float:
+    """The circular mean of angles (rad), in [-pi, pi]: the centre to put
+    headings known modulo 2 pi near (:func:`angle_near`)."""
+    angles = np.asarray(angles_rad, dtype=np.float64)
+    return math.atan2(float(np.sin(angles).mean()), float(np.cos(angles).mean()))
+
+
+def wire_angle_in_turn(angle_wire: int) -> int:
+    """An absolute wire angle (0.1 degree) as the wire carries it, in [0, 3600)."""
+    return angle_wire % WIRE_ANGLES_PER_TURN
+
+
+def wire_angle_difference(a_wire: int, b_wire: int) -> int:
+    """``a - b`` of two wire angles (0.1 degree), reduced to (-1800, 1800]."""
+    d = (a_wire - b_wire) % WIRE_ANGLES_PER_TURN
+    return d - WIRE_ANGLES_PER_TURN if d > WIRE_ANGLES_PER_TURN // 2 else d

@@ -57,24 +57,16 @@ def _load(source: Path, robot: Path | None, err: Console) -> TrialSet:
     return read_trials(source, description)
 
 
-def _paper(name: str, value: float) -> float:
-    if name == "E_R":
-        return units.rad_per_m_to_deg_per_m(value)
-    if name == "K_theta":
-        return units.rad2_per_m_to_deg2_per_m(value)
-    return value
-
-
 def _table(result: EstimateResult) -> Table:
     table = Table(title=f"odometry error parameters ({result.method}, {result.n_trials} trials)")
     for column in ("parameter", "value", "stderr", "95% CI", "unit", "value (SI)", "stderr (SI)"):
         table.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
     for p in result.parameters:
-        lo, hi = (_paper(p.name, v) for v in p.ci95)
+        lo, hi = (units.parameter_to_paper(p.name, v) for v in p.ci95)
         table.add_row(
             p.name,
-            f"{_paper(p.name, p.value):.4g}",
-            f"{_paper(p.name, p.stderr):.2g}",
+            f"{units.parameter_to_paper(p.name, p.value):.4g}",
+            f"{units.parameter_to_paper(p.name, p.stderr):.2g}",
             f"[{lo:.4g}, {hi:.4g}]",
             PAPER_UNITS[p.name],
             f"{p.value:.4g} {p.unit}",

@@ -34,24 +34,6 @@ from odohil.session.robot_file import load_robot_description
 DEFAULT_SIGMA_M = 0.001
 
 
-def to_paper(name: str, value_si: float) -> float:
-    """A value or standard error of parameter ``name`` from SI to the paper's units."""
-    if name == "E_R":
-        return units.rad_per_m_to_deg_per_m(value_si)
-    if name == "K_theta":
-        return units.rad2_per_m_to_deg2_per_m(value_si)
-    return value_si
-
-
-def from_paper(name: str, value_paper: float) -> float:
-    """A value or standard error of parameter ``name`` from the paper's units to SI."""
-    if name == "E_R":
-        return units.deg_per_m_to_rad_per_m(value_paper)
-    if name == "K_theta":
-        return units.deg2_per_m_to_rad2_per_m(value_paper)
-    return value_paper
-
-
 def _measurement(sigma_m: float | None, robot: Path | None) -> tuple[RobotDescription, str]:
     if sigma_m is not None and robot is not None:
         raise typer.BadParameter("give either --sigma-m or --robot, not both")
@@ -74,7 +56,7 @@ def _document(plan: Plan, prior: ErrorParameters, measurement: str) -> dict[str,
         entry: dict[str, object] = {
             "stderr_si": float(se),
             "unit_si": SI_UNITS[name],
-            "stderr_paper": to_paper(name, float(se)),
+            "stderr_paper": units.parameter_to_paper(name, float(se)),
             "unit_paper": PAPER_UNITS[name],
         }
         if name in plan.targets:
@@ -130,11 +112,11 @@ def _print(plan: Plan, prior: ErrorParameters, measurement: str, budget_m: float
         target = ""
         if name in plan.targets:
             ratio = float(se) / plan.targets[name]
-            target = f"{to_paper(name, plan.targets[name]):.3g} ({ratio:.2f}x)"
+            target = f"{units.parameter_to_paper(name, plan.targets[name]):.3g} ({ratio:.2f}x)"
         errors.add_row(
             name,
             f"{paper_prior[name]:.4g} {PAPER_UNITS[name]}",
-            f"{to_paper(name, float(se)):.3g} {PAPER_UNITS[name]}",
+            f"{units.parameter_to_paper(name, float(se)):.3g} {PAPER_UNITS[name]}",
             f"{float(se):.3g} {SI_UNITS[name]}",
             target,
         )
@@ -225,7 +207,9 @@ def plan(
     for name, value in targets_paper.items():
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise typer.BadParameter(f"--target-{name.replace('_', '-')} must be positive")
-    targets = {n: from_paper(n, v) for n, v in targets_paper.items() if v is not None}
+    targets = {
+        n: units.parameter_from_paper(n, v) for n, v in targets_paper.items() if v is not None
+    }
     try:
         prior = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
         if not math.isfinite(max_leg_m) or max_leg_m <= 0:

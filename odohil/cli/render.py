@@ -15,10 +15,10 @@ from rich.text import Text
 
 from odohil import units
 from odohil.driver.sample import EncoderSample
+from odohil.science.grouping import by_design
 from odohil.science.observables import observables
 from odohil.science.parameters import PAPER_UNITS, PARAMETER_NAMES
 from odohil.science.paths import Design, Leg, Turn
-from odohil.session.report import to_paper
 from odohil.session.state import CompletedTrial
 
 
@@ -37,27 +37,17 @@ def check_line(check: Check) -> Text:
     return Text.assemble(mark, (check.name, "bold"), ": ", check.detail)
 
 
-def _unwrapped(
-    angles: np.ndarray[Any, np.dtype[np.float64]],
-) -> np.ndarray[Any, np.dtype[np.float64]]:
-    centre = math.atan2(float(np.sin(angles).mean()), float(np.cos(angles).mean()))
-    return np.asarray(centre + (angles - centre + math.pi) % (2 * math.pi) - math.pi)
-
-
 def observables_table(trials: Sequence[CompletedTrial]) -> Table:
     """phi1..phi5 of every design with at least two completed trials."""
     table = Table(title="Observables per design", title_justify="left")
     for column in ("design", "n", "phi1 deg", "phi2 deg^2", "phi3 mm", "phi4 mm", "phi5 mm^2"):
         table.add_column(column, justify="left" if column == "design" else "right")
-    by_design: dict[Design, list[CompletedTrial]] = {}
-    for trial in trials:
-        by_design.setdefault(trial.design, []).append(trial)
-    for design, members in by_design.items():
+    for design, members in by_design(trials).items():
         if len(members) < 2:
             table.add_row(design.label(), str(len(members)), "needs 2 trials", "", "", "", "")
             continue
         poses = np.array([t.pose_change for t in members], dtype=np.float64)
-        poses[:, 2] = _unwrapped(poses[:, 2])
+        poses[:, 2] = units.angle_near(poses[:, 2], units.circular_mean(poses[:, 2]))
         phi = observables(poses)
         table.add_row(
             design.label(),
@@ -83,17 +73,17 @@ def parameters_table(result: Mapping[str, Any]) -> Table:
         entry = params.get(name, {})
         table.add_row(
             name,
-            _paper(name, entry.get("value")),
-            _paper(name, entry.get("stderr")),
+            _paper_text(name, entry.get("value")),
+            _paper_text(name, entry.get("stderr")),
             PAPER_UNITS[name],
         )
     return table
 
 
-def _paper(name: str, value: float | None) -> str:
+def _paper_text(name: str, value: float | None) -> str:
     if value is None or not math.isfinite(value):
         return "undetermined"
-    return f"{to_paper(name, float(value)):.4g}"
+    return f"{units.parameter_to_paper(name, float(value)):.4g}"
 
 
 def more_trials_text(result: Mapping[str, Any], remaining_in_plan: int) -> Text:

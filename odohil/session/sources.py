@@ -30,6 +30,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from odohil.errors import MeasurementError
+from odohil.science import frames
 from odohil.science.floor_marks import distance_labels, marks_from_pose
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription
@@ -226,11 +227,8 @@ def relative_true_pose(
 ) -> tuple[float, float, float]:
     """The true pose change from two true poses (x m, y m, heading rad): the end
     point in the start frame, and the heading change minus ``winding_rad``."""
-    x0, y0, th0 = (float(v) for v in start)
-    x1, y1, th1 = (float(v) for v in end)
-    c, s = math.cos(th0), math.sin(th0)
-    dx, dy = x1 - x0, y1 - y0
-    return (c * dx + s * dy, -s * dx + c * dy, th1 - th0 - winding_rad)
+    x, y, turned = frames.relative_pose(start, end)
+    return (x, y, turned - winding_rad)
 
 
 class FakeTruthSource:
