@@ -126,9 +126,10 @@ def test_no_other_module_wraps_angles_or_converts_paper_units() -> None:
     to_paper / wrap / relative pose."""
     banned_calls = {"math.remainder", "np.remainder", "math.fmod", "np.fmod", "np.mod"}
     banned_defs = {"def to_paper", "def from_paper", "def _paper", "def _wrap", "def wrap"}
-    banned_defs |= {"def _unwrapped", "def _angle_diff_wire", "def rotation"}
+    banned_defs |= {"def _unwrapped", "def _angle_diff_wire", "def rotation", "def paper_units"}
     offenders = []
-    for path in sorted([*(ROOT / "odohil").rglob("*.py"), *(ROOT / "fakes").rglob("*.py")]):
+    paths = [p for folder in ("odohil", "fakes", "bench") for p in (ROOT / folder).rglob("*.py")]
+    for path in sorted(paths):
         if path.name == "units.py" or path.name == "frames.py":
             continue
         for item in _calls_and_functions(path):
