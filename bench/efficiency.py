@@ -84,8 +84,7 @@ def run_chunk(
             for pose in poses[design][e]:
                 exact = marks_from_pose(description, pose).as_array()
                 noisy = np.abs(exact + rng.normal(0.0, sigma, exact.size))
-                n_same = len(description.screws)
-                marks = MarkDistances(tuple(noisy[:n_same]), tuple(noisy[n_same:]))
+                marks = MarkDistances.of(description, noisy)
                 try:
                     solution = solve_marks(description, marks, odometry, prior=priors[design])
                 except MeasurementError:

@@ -88,6 +88,17 @@ class MarkDistances:
     same_m: tuple[float, ...]
     cross_m: tuple[float, ...] = ()
 
+    @classmethod
+    def of(
+        cls, description: RobotDescription, distances: Sequence[float] | FloatArray
+    ) -> MarkDistances:
+        """The distances of one trial in the order :func:`distance_labels`
+        names them (same-screw first, then cross), metres, split by the
+        description's screws. Their count is checked by the solver."""
+        values = tuple(float(v) for v in distances)
+        n_same = len(description.screws)
+        return cls(values[:n_same], values[n_same:])
+
     def as_array(self) -> FloatArray:
         """All distances, same-screw first then cross, metres."""
         return np.array(self.same_m + self.cross_m, dtype=np.float64)

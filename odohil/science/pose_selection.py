@@ -43,6 +43,7 @@ import numpy.typing as npt
 from scipy import stats
 
 from odohil.errors import RobotDescriptionError
+from odohil.science.estimators.result import EstimateResult
 from odohil.science.fisher import moment_derivatives
 from odohil.science.floor_marks import (
     CLEAR_CUT_LIKELIHOOD_RATIO,
@@ -137,6 +138,17 @@ class ParameterBelief:
             cov = np.diag(sd**2)
         floor = (priors.mean.k_theta, priors.mean.k_rho)
         return cls(ErrorParameters(*mean), cov, "estimate", floor)
+
+    @classmethod
+    def from_result(cls, result: EstimateResult, priors: ParameterPriors) -> ParameterBelief:
+        """An estimate's values, standard errors and correlation (see
+        :meth:`from_estimate`)."""
+        return cls.from_estimate(
+            [p.value for p in result.parameters],
+            [p.stderr for p in result.parameters],
+            result.correlation,
+            priors,
+        )
 
 
 @dataclass(frozen=True, eq=False)

@@ -335,8 +335,7 @@ class _RowParser:
     ) -> Trial:
         description = self._description
         assert description is not None  # checked with the header
-        n_same = len(description.screws)
-        marks = MarkDistances(tuple(numbers[:n_same]), tuple(numbers[n_same:]))
+        marks = MarkDistances.of(description, numbers)
         if self._prior is not None:
             if design not in self._priors:
                 self._priors[design] = self._prior(design)

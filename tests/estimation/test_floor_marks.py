@@ -43,8 +43,7 @@ def noisy(
 ) -> MarkDistances:
     exact = marks_from_pose(description, pose).as_array()
     measured = np.abs(exact + rng.normal(0.0, description.sigma_m, exact.size))
-    n = len(description.screws)
-    return MarkDistances(tuple(measured[:n]), tuple(measured[n:]))
+    return MarkDistances.of(description, measured)
 
 
 def pose_error(solution: MarkSolution, truth: np.ndarray) -> np.ndarray:
@@ -54,6 +53,15 @@ def pose_error(solution: MarkSolution, truth: np.ndarray) -> np.ndarray:
 
 
 # --- forward model ------------------------------------------------------------
+
+
+def test_distances_split_by_the_description_in_label_order() -> None:
+    description = circle(cross=(("A", "B"), ("B", "C")))
+    marks = MarkDistances.of(description, [0.1, 0.2, 0.3, 0.4, 0.5])
+    assert marks == MarkDistances((0.1, 0.2, 0.3), (0.4, 0.5))
+    assert len(distance_labels(description)) == len(marks.as_array())
+    with pytest.raises(MeasurementError, match="expected 2 cross distances"):
+        solve_marks(description, MarkDistances.of(description, [0.1, 0.2, 0.3, 0.4]), ORIGIN)
 
 
 def test_forward_model_by_hand() -> None:

@@ -16,7 +16,7 @@ import pytest
 from odohil.errors import InconsistentMeasurementError, RobotDescriptionError
 from odohil.science.estimators import Observation, estimate
 from odohil.science.floor_marks import MarkDistances, marks_from_pose, solve_marks
-from odohil.science.parameters import NOMAD150, PARAMETER_NAMES
+from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design
 from odohil.science.pose_selection import (
     ParameterBelief,
@@ -58,10 +58,7 @@ def _belief(description: RobotDescription, rng: np.random.Generator) -> Paramete
             odometry = design.path().encoder_end_pose()
             solved = solve_marks(description, _marks(description, noisy), odometry)
             observations.append(Observation(design, solved.pose_change, solved.cov))
-    result = estimate(observations).to_json_dict()
-    values = [result["parameters"][n]["value"] for n in PARAMETER_NAMES]
-    stderrs = [result["parameters"][n]["stderr"] for n in PARAMETER_NAMES]
-    return ParameterBelief.from_estimate(values, stderrs, result["correlation"], ParameterPriors())
+    return ParameterBelief.from_result(estimate(observations), ParameterPriors())
 
 
 @pytest.mark.slow
