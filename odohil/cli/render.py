@@ -14,7 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from odohil import units
-from odohil.driver.sample import EncoderSample
+from odohil.driver.nomad.sample import EncoderSample
 from odohil.science.observables import observables
 from odohil.science.parameters import PAPER_UNITS, PARAMETER_NAMES
 from odohil.science.paths import Design, Leg, Turn

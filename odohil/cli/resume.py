@@ -19,7 +19,7 @@ from odohil.cli.run import (
     session_exit_codes,
     session_input,
 )
-from odohil.driver.link import DEFAULT_BAUD
+from odohil.driver.nomad.link import DEFAULT_BAUD
 from odohil.errors import InitError
 from odohil.session.engine import description_of, resume_session
 from odohil.session.floor_space import check_floor

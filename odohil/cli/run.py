@@ -35,8 +35,8 @@ from odohil.cli.exit_codes import (
 )
 from odohil.cli.options import bounded
 from odohil.cli.verdict import verdict_line
-from odohil.driver.link import DEFAULT_BAUD, open_port
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.link import DEFAULT_BAUD, open_port
+from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import (
     InitError,
     JournalError,

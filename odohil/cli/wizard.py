@@ -44,9 +44,9 @@ from odohil.cli.options import bounded
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
 from odohil.cli.run import MAY_STILL_MOVE, default_session_folder, final_estimate, report_stop
 from odohil.cli.verdict import verdict_line
-from odohil.driver.link import DEFAULT_BAUD
-from odohil.driver.robot import NomadRobot
-from odohil.driver.sample import EncoderSample
+from odohil.driver.nomad.link import DEFAULT_BAUD
+from odohil.driver.nomad.robot import NomadRobot
+from odohil.driver.nomad.sample import EncoderSample
 from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
 from odohil.science.floor_marks import marks_from_pose
 from odohil.science.moments import pose_moments

@@ -51,7 +51,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from odohil import __version__
-from odohil.driver.motion import (
+from odohil.driver.nomad.motion import (
     DEFAULT_ACCELERATIONS,
     DEFAULT_SPEEDS,
     DEFAULT_STEP_TIMEOUT_S,
@@ -59,8 +59,8 @@ from odohil.driver.motion import (
     MotionRecord,
     forth_and_back,
 )
-from odohil.driver.robot import STOP_CONFIRM_TIMEOUT_S, NomadRobot
-from odohil.driver.sample import EncoderSample
+from odohil.driver.nomad.robot import STOP_CONFIRM_TIMEOUT_S, NomadRobot
+from odohil.driver.nomad.sample import EncoderSample
 from odohil.errors import (
     InconsistentMeasurementError,
     JournalError,

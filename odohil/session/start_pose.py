@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from odohil.driver.sample import EncoderSample
+from odohil.driver.nomad.sample import EncoderSample
 from odohil.errors import SafetyError
 from odohil.session.state import Phase, SessionState
 from odohil.units import wrap_angle

@@ -8,7 +8,7 @@ from typing import Any
 import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.robot import NomadRobot
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     MotionSettings,

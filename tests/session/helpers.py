@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 import fakes  # noqa: F401  (registers the fakerobot:// URL handler)
-from odohil.driver.link import open_port
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.link import open_port
+from odohil.driver.nomad.robot import NomadRobot
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 
 ROBOT_TOML = """\

@@ -18,7 +18,7 @@ from typing import Any
 import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.robot import NomadRobot
 from odohil.science.floor_marks import marks_from_pose
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev

@@ -12,12 +12,12 @@ import math
 import time
 from dataclasses import dataclass
 
-from odohil.driver.robot import NomadRobot
-from odohil.driver.sample import EncoderSample
+from odohil.driver.nomad.robot import NomadRobot
+from odohil.driver.nomad.sample import EncoderSample
 from odohil.errors import MotionError, ParameterError
-from odohil.protocol.limits import leg_to_wire
-from odohil.protocol.messages import Pr
-from odohil.protocol.numbers import S16_MAX
+from odohil.protocol.nomad.limits import leg_to_wire
+from odohil.protocol.nomad.messages import Pr
+from odohil.protocol.nomad.numbers import S16_MAX
 from odohil.science.paths import Design, Leg
 from odohil.units import (
     WIRE_ANGLES_PER_TURN,
@@ -131,7 +131,7 @@ def forth_and_back(
     ``accelerations`` (m/s^2, rad/s^2); a ``pr`` with zero speed would not move.
 
     Raises ParameterError before anything is sent when a leg is outside the
-    wire's range (:func:`odohil.protocol.limits.check_leg_length_m`: at least
+    wire's range (:func:`odohil.protocol.nomad.limits.check_leg_length_m`: at least
     25.4 mm, at most 83.2 m) or a turn rounds to no wire units; MotionError if
     a step ends off its commanded encoder pose, and whatever the robot raises
     (after ``st``) on protocol errors or timeouts.
