@@ -1,11 +1,12 @@
 """Robot backends by name: the ``odohil.robots`` entry-point group.
 
-The robot description's ``[robot] protocol`` names the backend (default
-``nomad150``), the way python-can picks a bus by its interface name; the
-port URL says where it is. A backend is a class (or any object) with a
-``default_baud`` (int) and an ``open(url, baud)`` that returns a connected
-``Robot`` (odohil/session/robot.py). Another package adds a robot by declaring
-an entry point in the group; nothing here names one.
+The robot description's ``[robot] protocol`` names the backend (its default
+is :data:`odohil.science.robot_description.DEFAULT_PROTOCOL`), the way
+python-can picks a bus by its interface name; the port URL says where it is.
+A backend is a class (or any object) with a ``default_baud`` (int) and an
+``open(url, baud)`` that returns a connected ``Robot``
+(odohil/session/robot.py). Another package adds a robot by declaring an entry
+point in the group; nothing here names one.
 """
 
 from __future__ import annotations
@@ -17,8 +18,6 @@ from odohil.errors import InitError
 from odohil.session.robot import Robot
 
 ENTRY_POINT_GROUP = "odohil.robots"
-DEFAULT_PROTOCOL = "nomad150"
-"""The backend used when the robot description has no ``[robot] protocol``."""
 
 
 class RobotBackend(Protocol):
