@@ -67,6 +67,16 @@ def rad2_to_deg2(value: float) -> float:
     return value * (180.0 / math.pi) ** 2
 
 
+METRES_PER_LENGTH_UNIT = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+"""The length units an operator may type after a distance."""
+
+
+def to_metres(length: float, unit: str) -> float:
+    """A length typed in ``unit`` (m, cm or mm) in metres; metres are returned
+    unchanged (the same float)."""
+    return length if unit == "m" else length * METRES_PER_LENGTH_UNIT[unit]
+
+
 def metres_to_wire(length_m: float) -> int:
     """A length in metres to the nearest whole number of wire units (0.1 inch)."""
     return round(length_m / METRES_PER_WIRE_LENGTH)

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from rich.console import Console, Group, RenderableType
@@ -15,9 +14,11 @@ from rich.text import Text
 
 from odohil import units
 from odohil.driver.odometry import OdometrySample
+from odohil.science.estimators import EstimateResult
+from odohil.science.estimators.verdict import Verdict
 from odohil.science.grouping import by_design
 from odohil.science.observables import observables
-from odohil.science.parameters import PAPER_UNITS, PARAMETER_NAMES
+from odohil.science.parameters import PAPER_UNITS
 from odohil.science.paths import Design, Leg, Turn
 from odohil.session.state import CompletedTrial
 
@@ -61,43 +62,36 @@ def observables_table(trials: Sequence[CompletedTrial]) -> Table:
     return table
 
 
-def parameters_table(result: Mapping[str, Any]) -> Table:
-    """The four parameters with standard errors, paper units, from an estimate's JSON object."""
-    table = Table(
-        title=f"Estimate after {result.get('n_trials', '?')} trials", title_justify="left"
-    )
+def parameters_table(result: EstimateResult) -> Table:
+    """The four parameters with standard errors, paper units."""
+    table = Table(title=f"Estimate after {result.n_trials} trials", title_justify="left")
     for column in ("parameter", "estimate", "std. error", "unit"):
         table.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
-    params = result.get("parameters", {})
-    for name in PARAMETER_NAMES:
-        entry = params.get(name, {})
+    for p in result.parameters:
         table.add_row(
-            name,
-            _paper_text(name, entry.get("value")),
-            _paper_text(name, entry.get("stderr")),
-            PAPER_UNITS[name],
+            p.name, _paper_text(p.name, p.value), _paper_text(p.name, p.stderr), PAPER_UNITS[p.name]
         )
     return table
 
 
-def _paper_text(name: str, value: float | None) -> str:
-    if value is None or not math.isfinite(value):
+def _paper_text(name: str, value: float) -> str:
+    if not math.isfinite(value):
         return "undetermined"
-    return f"{units.parameter_to_paper(name, float(value)):.4g}"
+    return f"{units.parameter_to_paper(name, value):.4g}"
 
 
-def more_trials_text(result: Mapping[str, Any], remaining_in_plan: int) -> Text:
+def more_trials_text(result: EstimateResult, remaining_in_plan: int) -> Text:
     """How many more trials reach the target precision (the sufficiency check)."""
-    suff = result.get("sufficiency", {})
-    if suff.get("sufficient"):
+    suff = result.sufficiency
+    if suff.sufficient:
         return Text("Target precision reached for every parameter.", style="green")
-    lines = [str(suff.get("verdict", "precision target not reached"))]
+    lines = [suff.verdict or "precision target not reached"]
     # One suggestion per parameter and design: the design needs the largest.
     needed: dict[str, int | None] = {}
-    for s in suff.get("suggestions", []):
-        design, more = str(s.get("design")), s.get("more_trials")
+    for s in suff.suggestions:
+        design, more = s.design_label, s.more_trials
         if design not in needed or (
-            needed[design] is not None and (more is None or more > needed[design])
+            (known := needed[design]) is not None and (more is None or more > known)
         ):
             needed[design] = more
     for design, more in needed.items():
@@ -110,27 +104,23 @@ def more_trials_text(result: Mapping[str, Any], remaining_in_plan: int) -> Text:
 
 
 def estimate_panel(
-    trials: Sequence[CompletedTrial], result: Mapping[str, Any], remaining: int
+    trials: Sequence[CompletedTrial], result: EstimateResult, remaining: int
 ) -> RenderableType:
     """The live table after a trial: observables, parameters, trials still needed."""
-    check = result.get("model_check", {})
-    verdict = Text(f"Model check: {check.get('verdict', 'n/a')}")
     return Group(
         observables_table(trials),
         parameters_table(result),
         more_trials_text(result, remaining),
-        verdict,
-        verdict_text(result),
+        Text(f"Model check: {result.model_check.verdict}"),
+        verdict_text(result.verdict),
     )
 
 
-def verdict_text(result: Mapping[str, Any]) -> Text:
+def verdict_text(verdict: Verdict) -> Text:
     """``Verdict: trusted`` (green) or ``Verdict: doubtful: reasons`` (red)."""
-    verdict = result.get("verdict", {})
-    status = str(verdict.get("status", "n/a"))
-    reasons = "; ".join(str(r) for r in verdict.get("reasons", []))
-    style = "green" if status == "trusted" else "bold red"
-    return Text(f"Verdict: {status}" + (f": {reasons}" if reasons else ""), style=style)
+    reasons = "; ".join(verdict.reasons)
+    style = "green" if verdict.trusted else "bold red"
+    return Text(f"Verdict: {verdict.status}" + (f": {reasons}" if reasons else ""), style=style)
 
 
 class MotionProgress:

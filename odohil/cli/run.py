@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
 import time
 from collections.abc import Collection, Iterator, Mapping
 from dataclasses import dataclass
@@ -45,8 +46,7 @@ from odohil.errors import (
     StopUnconfirmedError,
     TrialFileError,
 )
-from odohil.science.estimators import EstimateResult, estimate
-from odohil.science.parameters import PARAMETER_NAMES
+from odohil.science.estimators import EstimateResult, ParameterEstimate, estimate
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
@@ -171,11 +171,6 @@ class ProgressObserver:
         """Advance on each solved trial; print voids and rejections."""
         if record.kind == ev.SOLVED:
             self.progress.update(self.task, completed=len(state.completed))
-        elif record.kind == ev.ESTIMATE and record.data.get("result"):
-            params = record.data["result"].get("parameters", {})
-            e_r = params.get("E_R", {}).get("value")
-            if e_r is not None:
-                self.progress.update(self.task, description=f"E_R {e_r:+.4g} rad/m")
         elif record.kind == ev.VOID:
             self.progress.console.print(
                 f"trial {record.data['trial']} attempt {record.data['attempt']} void: "
@@ -187,13 +182,19 @@ class ProgressObserver:
                 f"{record.data['reason']}"
             )
 
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        """Show the live E_R beside the bar."""
+        e_r = result.parameter("E_R").value
+        if math.isfinite(e_r):
+            self.progress.update(self.task, description=f"E_R {e_r:+.4g} rad/m")
+
 
 @dataclass(frozen=True)
 class Outcome:
     """How a session run ended: exit code and the final estimate (if any)."""
 
     exit_code: int
-    estimate: dict[str, Any] | None
+    estimate: EstimateResult | None
 
 
 def execute(
@@ -253,7 +254,7 @@ def execute(
         return Outcome(EXIT_ERROR, None)
     if not fitted.verdict.trusted:
         console.print(verdict_line(fitted.verdict), highlight=False)
-    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted.to_json_dict())
+    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted)
 
 
 def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateResult:
@@ -324,35 +325,34 @@ def show_start(console: Console) -> StartCheck:
 
 
 def print_summary(
-    result: Mapping[str, Any], console: Console, truth: Mapping[str, float] | None = None
+    result: EstimateResult, console: Console, truth: Mapping[str, float] | None = None
 ) -> None:
     """The estimate as a table (SI), with the true values beside when known."""
-    table = Table(title=f"estimate ({result.get('method')}, {result.get('n_trials')} trials)")
+    table = Table(title=f"estimate ({result.method}, {result.n_trials} trials)")
     for column in ("parameter", "value", "std. error", "95 % interval", "unit"):
         table.add_column(column)
     if truth is not None:
         table.add_column("true value")
         table.add_column("inside")
-    for name in PARAMETER_NAMES:
-        entry = result["parameters"][name]
-        low, high = entry["ci95"]
-        row = [name, _num(entry["value"]), _num(entry["stderr"]), f"[{_num(low)}, {_num(high)}]"]
-        row.append(entry["unit"])
+    for entry in result.parameters:
+        low, high = entry.ci95
+        row = [entry.name, _num(entry.value), _num(entry.stderr), f"[{_num(low)}, {_num(high)}]"]
+        row.append(entry.unit)
         if truth is not None:
-            row.append(_num(truth[name]))
-            row.append("yes" if inside(entry, truth[name]) else "[red]NO[/]")
+            row.append(_num(truth[entry.name]))
+            row.append("yes" if inside(entry, truth[entry.name]) else "[red]NO[/]")
         table.add_row(*row)
     console.print(table)
 
 
-def inside(entry: Mapping[str, Any], value: float) -> bool:
-    """Whether ``value`` lies in the entry's 95 % interval (None: unbounded)."""
-    low, high = entry["ci95"]
-    return (low is None or low <= value) and (high is None or value <= high)
+def inside(entry: ParameterEstimate, value: float) -> bool:
+    """Whether ``value`` lies in the entry's 95 % interval (a non-finite end: unbounded)."""
+    low, high = entry.ci95
+    return (not math.isfinite(low) or low <= value) and (not math.isfinite(high) or value <= high)
 
 
-def _num(value: float | None) -> str:
-    return "-" if value is None else f"{value:.4g}"
+def _num(value: float) -> str:
+    return f"{value:.4g}" if math.isfinite(value) else "-"
 
 
 @contextlib.contextmanager
@@ -514,7 +514,7 @@ def finish(
     """Print the summary (table on stdout, or JSON) and exit with the outcome's code."""
     if outcome.estimate is not None:
         if json_out:
-            typer.echo(json.dumps({**outcome.estimate, **(extra or {})}))
+            typer.echo(json.dumps({**outcome.estimate.to_json_dict(), **(extra or {})}))
         else:
             print_summary(outcome.estimate, Console(width=max(110, Console().width)), truth)
     if outcome.exit_code:

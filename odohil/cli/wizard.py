@@ -47,7 +47,9 @@ from odohil.cli.run import MAY_STILL_MOVE, default_session_folder, final_estimat
 from odohil.cli.verdict import verdict_line
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
+from odohil.science.estimators import EstimateResult
 from odohil.science.floor_marks import marks_from_pose
+from odohil.science.grouping import by_design
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import Design
@@ -71,7 +73,7 @@ from odohil.session.robot import Robot
 from odohil.session.robot_file import load_robot_description
 from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
-from odohil.session.sources import OperatorSource, TrialContext
+from odohil.session.sources import OperatorSource, TrialContext, check_distance
 from odohil.session.start_pose import StartPose, pose_text, sample_pose
 from odohil.session.state import SessionState
 
@@ -82,18 +84,21 @@ MAX_WIRE = 32767
 """Largest relative move one ``pr`` carries, 0.1 in."""
 _SAMPLES = 400
 _SPREAD_SIGMAS = 4.0
-_UNITS = {"": 1.0, "m": 1.0, "cm": 0.01, "mm": 0.001}
 _NUMBER = re.compile(r"^\s*(?P<number>[^a-z\s]*|nan|inf|[+-]inf|infinity)\s*(?P<unit>mm|cm|m)?\s*$")
 
 
 # --- distances -------------------------------------------------------------
 
 
-def parse_metres(text: str) -> float:
+def parse_metres(text: str, label: str) -> float:
     """A typed distance in metres: ``0.012``, ``12 mm``, ``1.2cm``, ``0.012 m``.
+    The one parse of what the operator typed: the number and its unit become
+    metres here (:data:`odohil.units.METRES_PER_LENGTH_UNIT`), and from here on
+    the distance stays that float, up to its journal record.
 
     Raises:
-        MeasurementError: not a number (with an optional unit), not finite, or negative.
+        MeasurementError: not a number (with an optional unit), or not a
+            distance (:func:`~odohil.session.sources.check_distance`).
     """
     match = _NUMBER.match(text.strip().lower())
     if match is None or not match.group("number"):
@@ -101,16 +106,12 @@ def parse_metres(text: str) -> float:
             f"{text.strip()!r} is not a number of metres (e.g. 0.012, 12 mm or 1.2 cm)"
         )
     try:
-        value = float(match.group("number")) * _UNITS[match.group("unit") or ""]
+        number = float(match.group("number"))
     except ValueError:
         raise MeasurementError(
             f"{text.strip()!r} is not a number of metres (e.g. 0.012, 12 mm or 1.2 cm)"
         ) from None
-    if not math.isfinite(value):
-        raise MeasurementError(f"{text.strip()!r} is not a finite number")
-    if value < 0:
-        raise MeasurementError(f"a distance cannot be negative ({text.strip()})")
-    return value
+    return check_distance(units.to_metres(number, match.group("unit") or "m"), label)
 
 
 @dataclass(frozen=True)
@@ -278,18 +279,16 @@ class WizardPrompts:
             self._ranges[key] = expected_ranges(self.description, ctx.design, params, ctx.trial)
         return self._ranges[key][index]
 
-    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
-        """Ask until the answer is a plausible distance; return it in metres (text)."""
+    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+        """Ask until the answer is a plausible distance; return it in metres."""
         label = ctx.labels[index]
         expected = self._range(ctx, index)
         hint = f"expected {expected.low:.4f} to {expected.high:.4f} m"
-        if problem:
-            self.console.print(f"[red]{problem}[/]")
         unconfirmed: float | None = None
         while True:
             text = self._input(f"{label}, metres ({hint}; cm/mm suffix accepted): ")
             try:
-                value = parse_metres(text)
+                value = parse_metres(text, label)
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
                 continue
@@ -306,9 +305,9 @@ class WizardPrompts:
                 )
                 unconfirmed = value
                 continue
-            return repr(value)
+            return value
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> str:
+    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
         """The slip check doubts the trial: ask for the suspect distance again."""
         label = ctx.labels[index]
         previous = ctx.measurements[index] if index < len(ctx.measurements) else float("nan")
@@ -318,13 +317,13 @@ class WizardPrompts:
                 f"Re-measure {label}, metres (you typed {previous:.4f}; press Enter to keep it): "
             )
             if not text.strip():
-                return ""
+                return None
             try:
-                return repr(parse_metres(text))
+                return parse_metres(text, label)
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> str:
+    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
         """The trial is ambiguous: ask for one more cross distance, named by its screws."""
         self.console.print(f"[yellow]two poses fit these marks:[/] {reason}")
         while True:
@@ -333,9 +332,9 @@ class WizardPrompts:
                 "the trial is then left out): "
             )
             if not text.strip():
-                return ""
+                return None
             try:
-                return repr(parse_metres(text))
+                return parse_metres(text, label)
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
 
@@ -409,46 +408,35 @@ class WizardObserver:
             self.interrupts.in_motion = True
             self.progress.start(state.plan.design_of(opened.trial))
         elif kind == ev.SOLVED:
-            x, y, theta = data["pose_change"]
+            trial = state.completed[-1]
+            x, y, theta = trial.pose_change
             self.console.print(
-                f"[green]Trial {data['trial']} solved:[/] dx={1e3 * x:+.1f} mm "
+                f"[green]Trial {trial.trial} solved:[/] dx={1e3 * x:+.1f} mm "
                 f"dy={1e3 * y:+.1f} mm dtheta={math.degrees(theta):+.3f} deg"
-                + (
-                    ""
-                    if data.get("clear_cut", True)
-                    else f" [yellow](not clear-cut: {data['reason']})"
-                )
+                + ("" if trial.clear_cut else f" [yellow](not clear-cut: {trial.note})")
             )
             if not _can_estimate(state):
                 self.console.print("No estimate yet: it needs 2 trials of a design.")
-        elif kind == ev.ESTIMATE:
-            result = data["result"]
-            self.prompts.estimate = _params_of(result)
-            assert state.plan is not None
-            remaining = state.plan.n_trials - len(state.completed)
-            self.console.print(estimate_panel(state.completed, result, remaining))
         elif kind == ev.VOID:
             self.progress.stop()
             self.console.print(f"[yellow]Trial {data['trial']} attempt voided:[/] {data['reason']}")
         elif kind == ev.FINISHED:
             self.console.print(f"[bold green]Session complete:[/] {data['n_trials']} trials.")
 
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        """The live estimate: the expected distances follow it; show the table."""
+        self.prompts.estimate = result.params
+        assert state.plan is not None
+        remaining = state.plan.n_trials - len(state.completed)
+        self.console.print(estimate_panel(state.completed, result, remaining))
+
 
 def _can_estimate(state: SessionState) -> bool:
-    counts: dict[Design, int] = {}
-    for trial in state.completed:
-        counts[trial.design.forward] = counts.get(trial.design.forward, 0) + 1
-    return any(n >= 2 and d.path().signed_distance_m != 0 for d, n in counts.items())
-
-
-def _params_of(result: Any) -> ErrorParameters | None:
-    try:
-        values = [
-            float(result["parameters"][n]["value"]) for n in ("E_R", "E_T", "K_theta", "K_rho")
-        ]
-        return ErrorParameters(*values)
-    except (KeyError, TypeError, ValueError, OdohilError):
-        return None
+    designs = by_design(state.completed, lambda trial: trial.design.forward)
+    return any(
+        len(trials) >= 2 and design.path().signed_distance_m != 0
+        for design, trials in designs.items()
+    )
 
 
 # --- pre-flight --------------------------------------------------------------
@@ -711,8 +699,6 @@ def _run(console: Console, opened: Opened, robot: Robot, interrupts: Interrupts,
     progress = MotionProgress(console)
     prompts = WizardPrompts(console, description, interrupts, progress)
     observer = WizardObserver(console, prompts, interrupts, progress)
-    if opened.state.last_estimate is not None:
-        prompts.estimate = _params_of(opened.state.last_estimate.get("result"))
     engine = SessionEngine(
         opened.journal,
         opened.state,

@@ -94,10 +94,11 @@ def _marks(child: pexpect.spawn, truth: TruthClient, asked: bool = False) -> lis
     return [float(v) for v in marks_from_pose(DESCRIPTION, change).as_array()]
 
 
-def _type_all(child: pexpect.spawn, values: list[float], done: str) -> None:
+def _type_all(child: pexpect.spawn, values: list[float], done: str, digits: str = "") -> None:
+    """Type every distance (``repr``, then ``digits`` more than a float holds)."""
     for i, value in enumerate(values):
         then = _prompt(i + 1) if i + 1 < len(values) else done
-        _answer(child, repr(value), then)
+        _answer(child, repr(value) + digits, then)
 
 
 def _refused(child: pexpect.spawn, text: str, reason: str) -> None:
@@ -237,10 +238,13 @@ def test_a_typo_is_caught_and_only_that_distance_is_re_entered(tmp_path: Path) -
     with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
         child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", "k=1,l=3,n=4",
                         "--session", str(folder)])  # fmt: skip
+        typed_first: list[float] = []
         for trial in (1, 2, 3):
             values = _marks(child, truth)
             child.expect(_prompt(0))
-            _type_all(child, values, f"Trial {trial} solved")
+            # trial 1 typed with more digits than a float holds ("0.1 + tiny digits")
+            _type_all(child, values, f"Trial {trial} solved", "00000000007" if trial == 1 else "")
+            typed_first = typed_first or [float(repr(v) + "00000000007") for v in values]
         values = _marks(child, truth)
         child.expect(_prompt(0))
         index, typed = _absorbed_typo(values)
@@ -261,6 +265,10 @@ def test_a_typo_is_caught_and_only_that_distance_is_re_entered(tmp_path: Path) -
     state = replay(records)
     assert state.completed[-1].measurements == pytest.approx(values)
     assert not state.completed[-1].slip
+    # a typed distance stays the one float Python parses from the text, up to the journal
+    journaled = [r.data["value_m"] for r in records if r.kind == ev.MEASUREMENT]
+    assert journaled[: len(typed_first)] == typed_first
+    assert all(type(v) is float for v in journaled)
 
 
 def test_resume_after_ctrl_c_mid_motion_asks_to_put_the_robot_back(tmp_path: Path) -> None:
