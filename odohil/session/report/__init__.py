@@ -1,6 +1,8 @@
 """The session report: what it shows (:mod:`.data`), its plots (:mod:`.plots`,
 matplotlib), its page (:mod:`.html`) and the files exported beside it
 (:mod:`.exports`).
+Importing this package does not import matplotlib (every ``odohil`` command
+would pay for it); :func:`write_report` does.
 
 :func:`write_report` writes, into one folder: ``index.html`` (self-contained:
 every plot inline, referring to no other file) and the exports
@@ -27,21 +29,16 @@ from odohil.session.report.exports import (
     parameters_json,
     standard_exports,
 )
-from odohil.session.report.html import render_html
-from odohil.session.report.plots import Plot, report_plots
 
 __all__ = [
     "ConvergencePoint",
     "DesignReport",
     "ExportFile",
-    "Plot",
     "SessionReport",
     "TrialPoint",
     "covariance_yaml",
     "load_report",
     "parameters_json",
-    "render_html",
-    "report_plots",
     "standard_exports",
     "to_paper",
     "write_report",
@@ -71,6 +68,10 @@ def write_report(
             raise ValueError(f"an export's name must be a plain file name, got {name!r}")
     if len(set(names)) != len(names):
         raise ValueError(f"two exports share a name: {names}")
+    # matplotlib takes most of a second to import: only when a report is written.
+    from odohil.session.report.html import render_html
+    from odohil.session.report.plots import report_plots
+
     page = render_html(report, report_plots(report), exports)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)

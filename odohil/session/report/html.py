@@ -68,7 +68,7 @@ def render_html(report: SessionReport, plots: Sequence[Plot], exports: Sequence[
             parts.append("<ul>")
             for s in suff.suggestions:
                 more = "not reachable" if s.more_trials is None else f"{s.more_trials} more trials"
-                parts.append(f"<li>{e(s.design_label)}: {e(more)}</li>")
+                parts.append(f"<li>{e(s.parameter)}: {e(s.design_label)}, {e(more)}</li>")
             parts.append("</ul>")
     parts.append('<h2 id="trials">Trials pointed out</h2>')
     parts.append(_marked_table(report.marked_trials))

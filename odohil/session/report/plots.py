@@ -2,8 +2,8 @@
 
 Figures are made with :class:`matplotlib.figure.Figure` directly (no pyplot,
 no global state, no display: the Agg-family renderers only) and saved to SVG
-with text kept as text and ids salted per plot, so that several plots can be
-inlined in one HTML page. Every plot marks the trials the report points out
+with text kept as text and every id prefixed with the plot's key, so that
+several plots can be inlined in one HTML page. Every plot marks the trials the report points out
 with the same styles: flagged, excluded, ambiguous and down-weighted trials
 each have their own marker and legend entry, and are labelled by trial number.
 """
@@ -87,12 +87,21 @@ def report_plots(report: SessionReport) -> tuple[Plot, ...]:
 
 
 def _render(key: str, title: str, figure: Figure) -> Plot:
-    with mpl.rc_context(_RC | {"svg.hashsalt": key}):
+    with mpl.rc_context(_RC):
         buffer = io.StringIO()
         figure.savefig(buffer, format="svg", metadata=_NO_METADATA)
     text = buffer.getvalue()
-    svg = text[text.index("<svg") :]
-    return Plot(key, title, re.sub(r"<metadata>.*?</metadata>\s*", "", svg, flags=re.DOTALL))
+    svg = re.sub(r"<metadata>.*?</metadata>\s*", "", text[text.index("<svg") :], flags=re.DOTALL)
+    return Plot(key, title, _own_ids(svg, key))
+
+
+def _own_ids(svg: str, key: str) -> str:
+    """The SVG with every id, and every in-document reference to one, prefixed
+    with ``key``: matplotlib numbers its ids per figure (``figure_1``,
+    ``axes_1``...), which would clash between the plots of one page."""
+    svg = re.sub(r'\bid="([^"]+)"', lambda m: f'id="{key}-{m.group(1)}"', svg)
+    svg = re.sub(r'href="#([^"]+)"', lambda m: f'href="#{key}-{m.group(1)}"', svg)
+    return re.sub(r"url\(#([^)]+)\)", lambda m: f"url(#{key}-{m.group(1)})", svg)
 
 
 def _figure(width_in: float, height_in: float) -> Figure:
