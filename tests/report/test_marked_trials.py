@@ -141,9 +141,8 @@ def test_ambiguous_trials_are_drawn_apart_and_listed(ambiguous: Path, tmp_path: 
     assert {n for n, what in page.pointed_out.items() if "ambiguous" in what} == set(left_out)
 
 
-def test_excluded_and_down_weighted_trials_are_marked(tmp_path: Path) -> None:
-    folder = tmp_path / "bumped"
-    build_session(folder, PLAN, seed=5, bump=(3, 0.05))
+def test_excluded_and_down_weighted_trials_are_marked(bumped: Path) -> None:
+    folder = bumped
     report = load_report(folder)
     down = [t.trial for t in report.trials if t.down_weighted]
     assert down == [3]

@@ -17,14 +17,6 @@ from odohil.session.state import SessionState, replay, session_observations
 from .page import assert_self_contained, parse_page
 from .session_factory import build_session
 
-PLAN = "k=1,l=2,n=6;k=4,l=0.5,n=6"
-
-
-@pytest.fixture(scope="module")
-def session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, SessionState]:
-    folder = tmp_path_factory.mktemp("report") / "session"
-    return folder, build_session(folder, PLAN, seed=5)
-
 
 def _report(session: Path, out: Path, *more: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
@@ -105,14 +97,6 @@ def test_report_of_a_missing_session_fails_cleanly(tmp_path: Path) -> None:
     run = _report(tmp_path / "nothing", tmp_path / "out")
     assert run.returncode == 2
     assert "journal" in run.stderr
-
-
-@pytest.fixture(scope="module")
-def bumped(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A session whose trial 3 was marked 5 cm across the path from the robot."""
-    folder = tmp_path_factory.mktemp("bumped") / "session"
-    build_session(folder, PLAN, seed=5, bump=(3, 0.05))
-    return folder
 
 
 def test_an_untrusted_estimate_is_refused_without_force(bumped: Path, tmp_path: Path) -> None:

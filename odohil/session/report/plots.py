@@ -43,6 +43,8 @@ BLUE, RED, GREY, ORANGE, PURPLE, DARK = (
     "#9467bd",
     "#222222",
 )
+_DESIGN_COLOURS = (BLUE, "#2ca02c", "#8c564b", PURPLE, "#17becf", ORANGE)
+_DESIGN_MARKERS = ("o", "s", "^", "D", "v", "P")
 _RC: Any = {  # matplotlib types rcParams keys as literals
     "svg.fonttype": "none",
     "font.family": "sans-serif",
@@ -234,10 +236,14 @@ def phi1_figure(report: SessionReport) -> Figure:
             line_x = np.linspace(min(0.0, *xs) * 1.08 if xs else 0.0, reach, 2)
             slope = units.rad_per_m_to_deg_per_m(report.result.params.e_r)
             ax.plot(line_x, slope * line_x, color=RED, linewidth=1.4, label="fitted E_R · 2kl")
-        ax.errorbar(
-            xs, ys, yerr=errs, fmt="o", color=BLUE, markersize=5, capsize=3,
-            label="phi1 ± 1 standard error (a design)",
-        )  # fmt: skip
+        # One colour and hollow marker per design: designs of equal 2kl sit on one another.
+        for n, (row, x, y, err) in enumerate(zip(rows, xs, ys, errs, strict=True)):
+            ax.errorbar(
+                [x], [y], yerr=[err], fmt=_DESIGN_MARKERS[n % len(_DESIGN_MARKERS)],
+                color=_DESIGN_COLOURS[n % len(_DESIGN_COLOURS)], markersize=7, capsize=3,
+                markerfacecolor="none", markeredgewidth=1.5, elinewidth=1.2,
+                label=f"phi1 ± 1 standard error, {row.design.label()}",
+            )  # fmt: skip
         ax.axhline(0.0, color=GREY, linewidth=0.8)
         ax.set_title("phi1: mean heading change per design")
         ax.set_xlabel("signed distance driven per trial, 2kl (m)")
