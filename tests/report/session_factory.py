@@ -65,7 +65,9 @@ class KeptSlips(FakeTruthSource):
         slip = ctx.trial >= self.first and ctx.rejections == 0
         return value + 0.01 if slip and index == ctx.trial % len(ctx.labels) else value
 
-    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> None:
+    def remeasure(  # type: ignore[override]  # the source protocol allows None
+        self, ctx: TrialContext, index: int, reason: str
+    ) -> None:
         """The operator keeps the value taken."""
         return None
 

@@ -6,8 +6,6 @@ in-process fake robot."""
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -29,6 +27,7 @@ from odohil.session.report.plots import (
 from tests.session.test_selection_session import NO_CROSS_TOML
 
 from .page import assert_self_contained, parse_page
+from .run import run_report
 from .session_factory import build_session
 
 PLAN = "k=1,l=2,n=6;k=4,l=0.5,n=6"
@@ -49,16 +48,6 @@ def ambiguous(tmp_path_factory: pytest.TempPathFactory) -> Path:
     folder = tmp_path_factory.mktemp("ambiguous") / "session"
     build_session(folder, "k=1,l=1,n=8", seed=4, robot_toml=NO_CROSS_TOML)
     return folder
-
-
-def _report(session: Path, out: Path, *more: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "odohil", "report", str(session), "--out", str(out), *more],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
 
 
 def _figures(report: SessionReport) -> Iterator[Figure]:
@@ -110,7 +99,7 @@ def test_a_kept_slip_is_flagged_in_the_plots_and_listed_by_number(
     assert [x for x, _ in _offsets(check, "flagged")] == [float(t.trial) for t in flagged]
 
     out = tmp_path / "out"
-    run = _report(kept, out, "--force")
+    run = run_report(kept, out, "--force")
     assert run.returncode == 0, run.stderr
     page = parse_page(out / "index.html")
     assert_self_contained(page)
@@ -134,7 +123,7 @@ def test_ambiguous_trials_are_drawn_apart_and_listed(ambiguous: Path, tmp_path: 
         float(t.trial) for t in report.trials if t.used
     ]
     out = tmp_path / "out"
-    run = _report(ambiguous, out, "--force")
+    run = run_report(ambiguous, out, "--force")
     assert run.returncode == 0, run.stderr
     page = parse_page(out / "index.html")
     assert_self_contained(page)
@@ -161,8 +150,8 @@ def test_legends_stay_off_the_data_and_show_what_is_drawn(kept: Path) -> None:
     report = load_report(kept, exclude={2})
     for figure in _figures(report):
         canvas = FigureCanvasAgg(figure)
-        canvas.draw()  # lays the figure out as when it is saved
-        renderer = canvas.get_renderer()
+        canvas.draw()  # type: ignore[no-untyped-call]  # lays the figure out as when saved
+        renderer = canvas.get_renderer()  # type: ignore[no-untyped-call]
         assert figure.legends, "no legend"
         for ax in figure.axes:
             assert ax.get_legend() is None  # legends are the figure's, outside the axes

@@ -4,28 +4,18 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
 from odohil.science.estimators import estimate
 from odohil.session.journal import read_journal
+from odohil.session.report import load_report
 from odohil.session.state import SessionState, replay, session_observations
 
 from .page import assert_self_contained, parse_page
+from .run import run_report
 from .session_factory import build_session
-
-
-def _report(session: Path, out: Path, *more: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "odohil", "report", str(session), "--out", str(out), *more],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
 
 
 def test_report_is_self_contained_and_matches_the_estimate(
@@ -34,7 +24,7 @@ def test_report_is_self_contained_and_matches_the_estimate(
     folder, state = session
     assert state.finished
     out = tmp_path / "out"
-    run = _report(folder, out)
+    run = run_report(folder, out)
     assert run.returncode == 0, run.stderr
 
     assert sorted(p.name for p in out.iterdir()) == [
@@ -68,8 +58,6 @@ def test_report_is_self_contained_and_matches_the_estimate(
 
 
 def test_report_converges_over_trials(session: tuple[Path, SessionState], tmp_path: Path) -> None:
-    from odohil.session.report import load_report
-
     folder, _ = session
     report = load_report(folder)
     assert report.result is not None
@@ -86,7 +74,7 @@ def test_report_without_an_estimate_says_why(tmp_path: Path) -> None:
     folder = tmp_path / "short"
     build_session(folder, "k=1,l=1,n=1", seed=2)
     out = tmp_path / "out"
-    run = _report(folder, out)
+    run = run_report(folder, out)
     assert run.returncode == 0, run.stderr
     assert "No estimate" in (out / "index.html").read_text()
     assert "error" in json.loads((out / "parameters.json").read_text())
@@ -94,14 +82,14 @@ def test_report_without_an_estimate_says_why(tmp_path: Path) -> None:
 
 
 def test_report_of_a_missing_session_fails_cleanly(tmp_path: Path) -> None:
-    run = _report(tmp_path / "nothing", tmp_path / "out")
+    run = run_report(tmp_path / "nothing", tmp_path / "out")
     assert run.returncode == 2
     assert "journal" in run.stderr
 
 
 def test_an_untrusted_estimate_is_refused_without_force(bumped: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
-    run = _report(bumped, out)
+    run = run_report(bumped, out)
     assert run.returncode == 3, run.stderr
     assert "--force" in run.stderr
     assert "trial 3 (k=1 l=2 m turn)" in run.stderr
@@ -110,7 +98,7 @@ def test_an_untrusted_estimate_is_refused_without_force(bumped: Path, tmp_path: 
 
 def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
-    run = _report(bumped, out, "--force")
+    run = run_report(bumped, out, "--force")
     assert run.returncode == 0, run.stderr
     written = json.loads((out / "parameters.json").read_text())
     assert written["verdict"]["status"] == "doubtful"
@@ -133,7 +121,7 @@ def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_pa
 
 def test_report_exclude_leaves_the_trial_out(bumped: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
-    run = _report(bumped, out, "--exclude", "3")
+    run = run_report(bumped, out, "--exclude", "3")
     assert run.returncode == 0, run.stderr
     written = json.loads((out / "parameters.json").read_text())
     assert written["verdict"]["status"] == "trusted"
@@ -148,7 +136,7 @@ def test_report_exclude_leaves_the_trial_out(bumped: Path, tmp_path: Path) -> No
     assert rows[3].startswith("excluded")
     assert not any("excluded" in what for n, what in rows.items() if n != 3)
 
-    bad = _report(bumped, tmp_path / "other", "--exclude", "13")
+    bad = run_report(bumped, tmp_path / "other", "--exclude", "13")
     assert bad.returncode == 2
     assert "--exclude" in bad.stderr
     assert "1..12" in bad.stderr
