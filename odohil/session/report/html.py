@@ -56,7 +56,7 @@ def render_html(report: SessionReport, plots: Sequence[Plot], exports: Sequence[
     ]
     result = report.result
     if result is None:
-        parts.append(f'<p class="bad">No estimate: {e(report.problem)}</p>')
+        parts.append('<p class="bad">No estimate yet (see above).</p>')
     else:
         parts.append(_estimates_table(result))
         parts.append(f"<p>Method: {e(result.method)}. {e(' '.join(result.notes))}</p>")

@@ -19,6 +19,7 @@ from typing import Any
 
 import matplotlib as mpl
 import numpy as np
+from matplotlib import patheffects
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse
@@ -45,6 +46,8 @@ BLUE, RED, GREY, ORANGE, PURPLE, DARK = (
 )
 _DESIGN_COLOURS = (BLUE, "#2ca02c", "#8c564b", PURPLE, "#17becf", ORANGE)
 _DESIGN_MARKERS = ("o", "s", "^", "D", "v", "P")
+_HALO = [patheffects.withStroke(linewidth=2.5, foreground="white")]
+"""A white edge around the trial numbers, readable over markers and lines."""
 _RC: Any = {  # matplotlib types rcParams keys as literals
     "svg.fonttype": "none",
     "font.family": "sans-serif",
@@ -156,7 +159,7 @@ def _mark_trials(
         if t.marked:
             ax.annotate(
                 str(t.trial), (xi, yi), xytext=(5, 4), textcoords="offset points",
-                fontsize=7, color=DARK,
+                fontsize=7, color=DARK, path_effects=_HALO,
             )  # fmt: skip
 
 
@@ -210,7 +213,8 @@ def end_points_figure(design: DesignReport) -> Figure:
         _mark_trials(ax, design.trials, list(1e3 * poses[:, 0]), 1e3 * poses[:, 1])
         ax.set_aspect("equal", adjustable="datalim")
         ax.autoscale_view()
-        ax.set_title(f"End points, {design.design.label()} ({len(design.trials)} trials)")
+        count = len(design.trials)
+        ax.set_title(f"End points, {design.design.label()} ({count} trial{'s' * (count != 1)})")
         ax.set_xlabel("x of the end point, start frame (mm)")
         ax.set_ylabel("y of the end point, start frame (mm)")
         _legend_outside(fig, ax, below=True)
