@@ -135,6 +135,4 @@ def test_no_other_module_wraps_angles_or_converts_paper_units() -> None:
         for item in _calls_and_functions(path):
             if item in banned_calls or item in banned_defs:
                 offenders.append(f"{path.relative_to(ROOT)}: {item}")
-    # report.py is rewritten by another branch; it is checked once that lands
-    offenders = [o for o in offenders if not o.startswith("odohil/session/report")]
     assert offenders == []
