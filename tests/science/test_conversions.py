@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import ast
 import math
+import re
 from pathlib import Path
 
 import numpy as np
@@ -122,8 +123,9 @@ def _calls_and_functions(path: Path) -> list[str]:
 
 def test_no_other_module_wraps_angles_or_converts_paper_units() -> None:
     """The conversions live in units.py and frames.py only: nobody else calls
-    math.remainder/fmod or np.remainder on angles, nor defines its own
-    to_paper / wrap / relative pose."""
+    math.remainder/fmod or np.remainder, wraps with ``(a + pi) % 2 pi - pi``,
+    rotates a displacement into a frame by hand, or defines its own to_paper /
+    wrap / rotation."""
     banned_calls = {"math.remainder", "np.remainder", "math.fmod", "np.fmod", "np.mod"}
     banned_defs = {"def to_paper", "def from_paper", "def _paper", "def _wrap", "def wrap"}
     banned_defs |= {"def _unwrapped", "def _angle_diff_wire", "def rotation", "def paper_units"}
@@ -135,4 +137,8 @@ def test_no_other_module_wraps_angles_or_converts_paper_units() -> None:
         for item in _calls_and_functions(path):
             if item in banned_calls or item in banned_defs:
                 offenders.append(f"{path.relative_to(ROOT)}: {item}")
+        text = path.read_text()
+        for pattern in (r"\+ math\.pi\) % ", r"\bc \* dx \+ s \* dy"):
+            if re.search(pattern, text):
+                offenders.append(f"{path.relative_to(ROOT)}: {pattern}")
     assert offenders == []
