@@ -92,6 +92,23 @@ def test_relative_pose_by_hand() -> None:
     assert frames.relative_pose((0, 0, 0), (0, 0, 7.0))[2] == 7.0
 
 
+@given(poses, poses)
+def test_relative_pose_jacobians_match_finite_differences(
+    a: tuple[float, float, float], b: tuple[float, float, float]
+) -> None:
+    by_start, by_end = frames.relative_pose_jacobians(a, b)
+    step = 1e-6
+    for which, jac in ((0, by_start), (1, by_end)):
+        for k in range(3):
+            lo, hi = [list(a), list(b)], [list(a), list(b)]
+            lo[which][k] -= step
+            hi[which][k] += step
+            numeric = (
+                np.array(frames.relative_pose(*hi)) - np.array(frames.relative_pose(*lo))
+            ) / (2 * step)
+            assert np.allclose(jac[:, k], numeric, atol=1e-5 * (1 + np.abs(numeric).max()))
+
+
 def test_rotate_points_matches_the_rotation_matrix() -> None:
     points = np.array([[1.0, 0.5], [-0.2, 0.3]])
     thetas = np.array([0.3, -2.0])
