@@ -101,11 +101,15 @@ def export(
     ] = DEFAULT_RATE_HZ,
     update_min_d: Annotated[
         float,
-        typer.Option("--update-min-d", help=f"AMCL's update distance, m, {UPDATE_D_RANGE.text()}."),
+        typer.Option(
+            "--update-min-d-m", help=f"AMCL's update distance, m, {UPDATE_D_RANGE.text()}."
+        ),
     ] = DEFAULT_UPDATE_MIN_D_M,
     update_min_a: Annotated[
         float,
-        typer.Option("--update-min-a", help=f"AMCL's update angle, rad, {UPDATE_A_RANGE.text()}."),
+        typer.Option(
+            "--update-min-a-rad", help=f"AMCL's update angle, rad, {UPDATE_A_RANGE.text()}."
+        ),
     ] = DEFAULT_UPDATE_MIN_A_RAD,
     out: Annotated[
         Path | None, typer.Option("--out", help="File to write (default: standard output).")
@@ -130,8 +134,8 @@ def export(
     lin = Linearisation(
         _checked("--speed", speed, SPEED_RANGE),
         _checked("--rate-hz", rate_hz, RATE_RANGE),
-        _checked("--update-min-d", update_min_d, UPDATE_D_RANGE),
-        _checked("--update-min-a", update_min_a, UPDATE_A_RANGE),
+        _checked("--update-min-d-m", update_min_d, UPDATE_D_RANGE),
+        _checked("--update-min-a-rad", update_min_a, UPDATE_A_RANGE),
     )
     err = Console(stderr=True)
     try:

@@ -163,7 +163,7 @@ def test_an_untrusted_estimate_is_refused_unless_forced(bumped: Path, tmp_path: 
         (("--format", "amcl", "--speed", "0"), "--speed must be at least 0.01"),
         (("--format", "amcl", "--speed", "nan"), "--speed"),
         (("--format", "amcl", "--rate-hz", "-5"), "--rate-hz must be at least 0.1"),
-        (("--format", "amcl", "--update-min-d", "100"), "--update-min-d"),
+        (("--format", "amcl", "--update-min-d-m", "100"), "--update-min-d-m"),
         (("--format", "yaml"), "--format"),
     ],
 )
