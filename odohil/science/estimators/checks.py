@@ -263,7 +263,8 @@ def sufficiency(
             if name == "E_T":
                 reasons.append(
                     f"E_T has standard error {stderr[p]:.2g} (target {targets[p]:.2g}); "
-                    "closed paths pin E_T only weakly, about as 1/|E_R|"
+                    "closed paths pin E_T only weakly, about as 1/|E_R|; one-way runs (k=0.5) "
+                    "pin it far better"
                 )
             else:
                 reasons.append(
