@@ -4,26 +4,11 @@ number of trials per design, ``--evaluate``, and operator time."""
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import subprocess
 
 import pytest
 
 from odohil.science.parameters import NOMAD150, PARAMETER_NAMES
-
-ODOHIL = shutil.which("odohil") or "odohil"
-
-
-def run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [ODOHIL, "plan", *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=False,
-        env={**os.environ, "COLUMNS": "160", "NO_COLOR": "1"},
-    )
+from tests.cli.test_plan import run
 
 
 def test_a_target_on_e_r_alone_does_not_claim_targets_it_misses() -> None:
