@@ -12,6 +12,7 @@ from rich.console import Console
 from odohil.cli.estimate import observation_of
 from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
+from odohil.cli.options import bounded
 from odohil.cli.verdict import verdict_line
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult, estimate
@@ -22,16 +23,16 @@ from odohil.science.exports import (
     DEFAULT_UPDATE_MIN_D_M,
     Linearisation,
 )
-from odohil.science.limits import Range
+from odohil.science.limits import RANGES
 from odohil.session.exports import export_text
 from odohil.session.robot_file import load_robot_description
 from odohil.session.state import load_session_trials
 from odohil.session.trial_files import read_trials
 
-SPEED_RANGE = Range(0.01, 10.0, "m/s")
-RATE_RANGE = Range(0.1, 1000.0, "Hz")
-UPDATE_D_RANGE = Range(0.001, 10.0, "m")
-UPDATE_A_RANGE = Range(0.001, 3.14159, "rad")
+SPEED_RANGE = RANGES["speed"]
+RATE_RANGE = RANGES["rate_hz"]
+UPDATE_D_RANGE = RANGES["update_min_d_m"]
+UPDATE_A_RANGE = RANGES["update_min_a_rad"]
 
 
 class FormatChoice(StrEnum):
@@ -42,13 +43,6 @@ class FormatChoice(StrEnum):
     robot_localization = "robot-localization"
     amcl = "amcl"
     json = "json"
-
-
-def _checked(option: str, value: float, bounds: Range) -> float:
-    try:
-        return bounds.check(option, value)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc)) from None
 
 
 def load_estimate(source: Path, robot: Path | None, exclude: frozenset[int]) -> EstimateResult:
@@ -89,6 +83,7 @@ def export(
         float,
         typer.Option(
             "--speed",
+            callback=bounded("speed"),
             help=f"Driving speed the constants are linearised at, m/s, {SPEED_RANGE.text()}.",
         ),
     ] = DEFAULT_SPEED_M_PER_S,
@@ -96,19 +91,24 @@ def export(
         float,
         typer.Option(
             "--rate-hz",
+            callback=bounded("rate_hz"),
             help=f"Odometry publication rate, Hz (one step = speed / rate), {RATE_RANGE.text()}.",
         ),
     ] = DEFAULT_RATE_HZ,
     update_min_d: Annotated[
         float,
         typer.Option(
-            "--update-min-d-m", help=f"AMCL's update distance, m, {UPDATE_D_RANGE.text()}."
+            "--update-min-d-m",
+            callback=bounded("update_min_d_m"),
+            help=f"AMCL's update distance, m, {UPDATE_D_RANGE.text()}.",
         ),
     ] = DEFAULT_UPDATE_MIN_D_M,
     update_min_a: Annotated[
         float,
         typer.Option(
-            "--update-min-a-rad", help=f"AMCL's update angle, rad, {UPDATE_A_RANGE.text()}."
+            "--update-min-a-rad",
+            callback=bounded("update_min_a_rad"),
+            help=f"AMCL's update angle, rad, {UPDATE_A_RANGE.text()}.",
         ),
     ] = DEFAULT_UPDATE_MIN_A_RAD,
     out: Annotated[
@@ -131,12 +131,7 @@ def export(
     An estimate that is not trusted is refused (exit 3, nothing written)
     unless --force; exit 2 on bad input.
     """
-    lin = Linearisation(
-        _checked("--speed", speed, SPEED_RANGE),
-        _checked("--rate-hz", rate_hz, RATE_RANGE),
-        _checked("--update-min-d-m", update_min_d, UPDATE_D_RANGE),
-        _checked("--update-min-a-rad", update_min_a, UPDATE_A_RANGE),
-    )
+    lin = Linearisation(speed, rate_hz, update_min_d, update_min_a)
     err = Console(stderr=True)
     try:
         result = load_estimate(source, robot, parse_exclude(exclude))

@@ -15,7 +15,7 @@ from odohil import units
 from odohil.cli.options import E_R_DEFAULT, E_T_DEFAULT, K_RHO_DEFAULT, K_THETA_DEFAULT, bounded
 from odohil.errors import OdohilError
 from odohil.science.fisher import default_description
-from odohil.science.limits import Range
+from odohil.science.limits import RANGES
 from odohil.science.parameters import (
     PAPER_UNITS,
     PARAMETER_NAMES,
@@ -41,10 +41,10 @@ from odohil.session.plan import parse_plan
 from odohil.session.robot_file import load_robot_description
 
 DEFAULT_SIGMA_M = 0.001
-MIN_TRIALS_RANGE = Range(2, 1000, "trials", integer=True)
-MEASURE_S_RANGE = Range(0.0, 3600.0, "s")
-SPEED_RANGE = Range(0.01, 10.0, "m/s")
-BUDGET_MIN_RANGE = Range(0.1, 100_000.0, "min")
+MIN_TRIALS_RANGE = RANGES["min_trials_per_design"]
+MEASURE_S_RANGE = RANGES["measure_s"]
+SPEED_RANGE = RANGES["speed"]
+BUDGET_MIN_RANGE = RANGES["budget_min"]
 DEFAULT_TARGETS_TEXT = (
     f"{TARGET_FRACTIONS['E_R']:.0%} of |E_R|, {TARGET_FRACTIONS['E_T']:.0%} of |E_T|, "
     f"{TARGET_FRACTIONS['K_theta']:.0%} of K_theta and K_rho (priors), with floors"
@@ -201,6 +201,7 @@ def plan(
     budget_min: float | None = typer.Option(
         None,
         "--budget-min",
+        callback=bounded("budget_min"),
         help=f"Most operator minutes in all, {BUDGET_MIN_RANGE.text()} (see --measure-s).",
     ),
     evaluate: str | None = typer.Option(
@@ -211,17 +212,20 @@ def plan(
     min_trials_per_design: int = typer.Option(
         DEFAULT_MIN_TRIALS_PER_DESIGN,
         "--min-trials-per-design",
+        callback=bounded("min_trials_per_design"),
         help="Fewest trials of any design, for honest 95 % intervals (they cover from about "
         f"10; 5 is marginal), {MIN_TRIALS_RANGE.text()}.",
     ),
     measure_s: float = typer.Option(
         DEFAULT_SECONDS_PER_TRIAL,
         "--measure-s",
+        callback=bounded("measure_s"),
         help=f"Seconds to mark and measure one trial, {MEASURE_S_RANGE.text()}.",
     ),
     speed: float = typer.Option(
         DEFAULT_SPEED_M_PER_S,
         "--speed",
+        callback=bounded("speed"),
         help=f"Driving speed for the time estimate, m/s, {SPEED_RANGE.text()}.",
     ),
     max_trials: int | None = typer.Option(
@@ -307,16 +311,6 @@ def plan(
     least --min-trials-per-design trials.
     """
     description, measurement = _measurement(sigma_m, robot)
-    for option, value, bounds in (
-        ("--min-trials-per-design", min_trials_per_design, MIN_TRIALS_RANGE),
-        ("--measure-s", measure_s, MEASURE_S_RANGE),
-        ("--speed", speed, SPEED_RANGE),
-        *((("--budget-min", budget_min, BUDGET_MIN_RANGE),) if budget_min is not None else ()),
-    ):
-        try:
-            bounds.check(option, value)
-        except OdohilError as exc:
-            raise typer.BadParameter(str(exc)) from None
     if evaluate is None and budget_m is None and budget_min is None:
         raise typer.BadParameter("give --budget-m (metres) or --budget-min, or --evaluate PLAN")
     if evaluate is not None and (budget_m is not None or budget_min is not None):
