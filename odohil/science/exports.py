@@ -31,6 +31,7 @@ from odohil.science.covariance import ekf_increment
 from odohil.science.estimators.result import EstimateResult
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import FloatArray
+from odohil.science.planner import DEFAULT_SPEED_M_PER_S
 
 VARIANCE_FLOOR = 1e-9
 """Smallest variance written (SI: m^2, rad^2, (m/s)^2, (rad/s)^2, and AMCL's
@@ -41,8 +42,6 @@ anything a calibration resolves: 1e-9 m^2 is (0.03 mm)^2, 1e-9 rad^2 is
 UNOBSERVED_VARIANCE = 1e6
 """Variance written for what planar odometry does not observe (z, roll,
 pitch, their rates): large enough that a filter gives it no weight."""
-DEFAULT_SPEED_M_PER_S = 0.5
-"""Driving speed of the linearisations, m/s: the driver's default translation speed."""
 DEFAULT_RATE_HZ = 50.0
 """Odometry publication rate, Hz: diff_drive_controller's default ``publish_rate``."""
 DEFAULT_UPDATE_MIN_D_M = 0.25
@@ -68,7 +67,8 @@ class Linearisation:
     """Where the per-metre model is turned into a consumer's constants.
 
     Attributes:
-        speed_m_per_s: driving speed, m/s.
+        speed_m_per_s: driving speed, m/s (default: the driver's default
+            translation speed, as the planner's time model).
         rate_hz: odometry publication rate, Hz (one step = speed / rate metres).
         update_min_d_m: AMCL's update distance, m.
         update_min_a_rad: AMCL's update angle, rad.

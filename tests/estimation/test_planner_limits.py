@@ -9,6 +9,7 @@ import pytest
 
 from odohil.driver.motion import DEFAULT_SPEEDS
 from odohil.errors import ParameterError
+from odohil.science.exports import Linearisation
 from odohil.science.fisher import default_description
 from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design
@@ -59,6 +60,7 @@ def test_evaluate_scores_the_plan_as_written() -> None:
 
 def test_the_time_model_and_a_time_budget() -> None:
     assert (OperatorTime().speed_m_per_s, OperatorTime().turn_rate_rad_per_s) == DEFAULT_SPEEDS
+    assert Linearisation().speed_m_per_s == DEFAULT_SPEEDS[0]  # the exports' default speed
     model = OperatorTime(100.0, 0.5, math.pi / 2)
     # k=1: out, half turn, back, half turn: 12 m and two half turns of 2 s
     assert model.trial_seconds(Design(1, 6.0)) == pytest.approx(100 + 24 + 4)
