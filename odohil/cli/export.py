@@ -18,12 +18,12 @@ from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult, estimate
 from odohil.science.exports import (
     DEFAULT_RATE_HZ,
-    DEFAULT_SPEED_M_PER_S,
     DEFAULT_UPDATE_MIN_A_RAD,
     DEFAULT_UPDATE_MIN_D_M,
     Linearisation,
 )
 from odohil.science.limits import RANGES
+from odohil.science.planner import DEFAULT_SPEED_M_PER_S
 from odohil.session.exports import export_text
 from odohil.session.robot_file import load_robot_description
 from odohil.session.state import load_session_trials
