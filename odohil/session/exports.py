@@ -14,8 +14,10 @@ written with a decimal point and a signed exponent so that YAML 1.1 parsers
 (libyaml, which ROS's parameter parser uses, and PyYAML) read a float, not a
 string. The tests read every file back with PyYAML.
 
-:func:`write_exports` writes all formats into a folder (``odohil report``
-calls it); :func:`export_text` gives one format's text (``odohil export``).
+:func:`write_exports` writes all formats into a folder, :func:`export_files`
+gives them as the report's ``ExportFile`` values (``odohil report`` passes them
+to ``write_report(..., extra_exports=...)``), :func:`export_text` gives one
+format's text (``odohil export``).
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from odohil.science.exports import (
     step_covariance,
 )
 from odohil.science.parameters import PARAMETER_NAMES
+from odohil.session.report.exports import ExportFile
 
 FORMATS: tuple[str, ...] = ("ros2-diff-drive", "odometry-msg", "robot-localization", "amcl", "json")
 FILE_NAMES: dict[str, str] = {
@@ -52,6 +55,14 @@ FILE_NAMES: dict[str, str] = {
     "json": "odometry_model.json",
 }
 """The file each format is written to by :func:`write_exports`."""
+DESCRIPTIONS: dict[str, str] = {
+    "ros2-diff-drive": "diff_drive_controller pose and twist covariance diagonals (ROS 2)",
+    "odometry-msg": "nav_msgs/Odometry pose covariance of one step, with its formula",
+    "robot-localization": "robot_localization process_noise_covariance (15x15, per second)",
+    "amcl": "Nav2 AMCL alpha1..alpha5 at its update distance",
+    "json": "the error model in SI: verdict, parameter covariance, corrections",
+}
+"""What each format is, for the report's list of exports."""
 DIFF_DRIVE_NODE = "diff_drive_controller"
 ROBOT_LOCALIZATION_NODE = "ekf_filter_node"
 AMCL_NODE = "amcl"
@@ -353,6 +364,20 @@ def export_text(
     return _WRITERS[fmt](result, lin or Linearisation(), source)
 
 
+def export_files(
+    result: EstimateResult,
+    lin: Linearisation | None = None,
+    formats: Sequence[str] = FORMATS,
+    source: str = "",
+) -> tuple[ExportFile, ...]:
+    """Every format as the report's :class:`ExportFile` (name, text,
+    description), for ``write_report(report, folder, extra_exports=...)``."""
+    return tuple(
+        ExportFile(FILE_NAMES[fmt], export_text(fmt, result, lin, source), DESCRIPTIONS[fmt])
+        for fmt in formats
+    )
+
+
 def write_exports(
     result: EstimateResult,
     folder: str | Path,
@@ -363,12 +388,12 @@ def write_exports(
     """Write each format into ``folder`` (created) under :data:`FILE_NAMES`;
     return the paths. The caller decides whether an untrusted estimate may
     be written (the files state its verdict either way)."""
-    texts = {fmt: export_text(fmt, result, lin, source) for fmt in formats}
+    files = export_files(result, lin, formats, source)
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
-    for fmt, text in texts.items():
-        path = out / FILE_NAMES[fmt]
-        path.write_text(text, encoding="utf-8")
+    for file in files:
+        path = out / file.name
+        path.write_text(file.text, encoding="utf-8")
         paths.append(path)
     return paths

@@ -15,7 +15,7 @@ import yaml
 from odohil.cli.export import load_estimate
 from odohil.science.estimators import EstimateResult
 from odohil.science.exports import Linearisation
-from odohil.session.exports import FILE_NAMES, export_text, write_exports
+from odohil.session.exports import FILE_NAMES, export_files, export_text, write_exports
 from tests.report.session_factory import build_session
 
 PLAN = "k=1,l=2,n=6;k=4,l=0.5,n=6"
@@ -173,3 +173,22 @@ def test_bad_input_exits_2_naming_the_option(
     run = _export(str(tmp_path), *args)
     assert run.returncode == 2
     assert named in " ".join(run.stderr.replace("│", " ").split())
+
+
+def test_the_report_writes_the_same_files_beside_its_page(
+    session: Path, estimate_of_session: EstimateResult, tmp_path: Path
+) -> None:
+    """What ``odohil report`` does with them:
+    ``write_report(..., extra_exports=export_files(...))``."""
+    from odohil.session.report import load_report, write_report
+
+    data = load_report(session)
+    assert data.result is not None
+    written = write_report(data, tmp_path, export_files(data.result, source=session.name))
+    names = {p.name for p in written}
+    assert set(FILE_NAMES.values()) <= names
+    page = (tmp_path / "index.html").read_text()
+    assert "robot_localization.yaml" in page
+    assert (tmp_path / "amcl.yaml").read_text() == export_text(
+        "amcl", estimate_of_session, source=session.name
+    )
