@@ -132,3 +132,25 @@ def test_yaml_floats_read_back_as_the_same_float(value: float) -> None:
 def test_yaml_refuses_non_finite_numbers() -> None:
     with pytest.raises(ParameterError, match="non-finite"):
         yaml_scalar(math.inf)
+
+
+def test_the_worked_examples_of_docs_exports_md() -> None:
+    """The Nomad 150 numbers docs/exports.md prints, at the default linearisation."""
+    lin = Linearisation()
+    dd = diff_drive_covariance(NOMAD150, lin)
+    assert dd.pose_covariance_diagonal[0] == pytest.approx(3.6e-7)
+    assert dd.pose_covariance_diagonal[5] == pytest.approx(3.655e-8, rel=1e-3)
+    assert dd.twist_covariance_diagonal[0] == pytest.approx(9.0e-4)
+    assert dd.twist_covariance_diagonal[1] == pytest.approx(2.93e-9, rel=2e-3)
+    assert dd.twist_covariance_diagonal[5] == pytest.approx(9.14e-5, rel=1e-3)
+    assert step_covariance(NOMAD150, 0.01)[1, 1] == pytest.approx(1.17e-12, rel=2e-3)
+    one_metre = step_covariance(NOMAD150, 1.0)
+    assert one_metre[1, 1] == pytest.approx(1.17e-6, rel=2e-3)
+    assert one_metre[1, 2] == pytest.approx(1.79e-6, rel=2e-3)
+    q = np.array(process_noise(NOMAD150, 0.5).matrix).reshape(15, 15)
+    assert q[0, 0] == pytest.approx(1.8e-5)
+    assert q[5, 5] == pytest.approx(1.828e-6, rel=1e-3)
+    a = amcl_alphas(NOMAD150, lin)
+    assert a.alpha2 == pytest.approx(7.31e-6, rel=1e-3)
+    assert a.alpha3 == pytest.approx(1.44e-4)
+    assert a.alpha5 == pytest.approx(4.68e-6, rel=1e-3)
