@@ -115,8 +115,8 @@ def republish_truth(
     lock = threading.Lock()
 
     def frame(t: float) -> bytes:
-        x, y, theta = true_pose()
-        with lock:
+        with lock:  # one truth client and one generator, shared by the senders
+            x, y, theta = true_pose()
             noise = rng.normal(0.0, 1.0, 3) * np.array(sigma)
         wx = shift_m[0] + c * x - s * y + noise[0]
         wy = shift_m[1] + s * x + c * y + noise[1]

@@ -6,13 +6,16 @@ from __future__ import annotations
 
 import math
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from fakes.nomad.process import EmulatorProcess
+from fakes.nomad.truth import TruthClient
 from odohil.errors import ConnectionFailedError, MeasurementError, ParameterError
 from odohil.session.mocap import PoseStream, StillCriteria, parse_tcp_url, take_still_pose
-from tests.session.mocap_server import FrameServer, pose_line
+from tests.session.mocap_server import FrameServer, pose_line, republish_truth
 
 SIGMA = (0.001, 0.001, 0.002)
 """pose_sigma of these tests: 1 mm, 1 mm, 2 mrad."""
@@ -201,3 +204,27 @@ def test_close_ends_the_reader_thread() -> None:
         assert thread is not None
         assert not thread.is_alive()
         assert stream.status().closed == "closed by odohil"
+
+
+def test_the_truth_republisher_shows_the_fake_robot_in_its_world_frame(tmp_path: Path) -> None:
+    rotation, shift = 2.0, (4.0, -1.5)
+    args = ["--seed", "3", "--time-scale", "20000", "--no-pacing"]
+    args += ["--truth-socket", str(tmp_path / "t.sock")]
+    with EmulatorProcess(args) as robot, TruthClient(robot.truth_socket) as truth:
+
+        def true_pose() -> tuple[float, float, float]:
+            snap = truth.snapshot()
+            return (snap.true_x_m, snap.true_y_m, snap.true_theta_rad)
+
+        frame = republish_truth(
+            true_pose, rotation_rad=rotation, shift_m=shift, sigma=SIGMA, seed=1
+        )
+        with FrameServer(frame) as server, PoseStream(server.url) as stream:
+            still = take_still_pose(stream, SIGMA, FAST)
+        x, y, theta = true_pose()
+    c, s = math.cos(rotation), math.sin(rotation)
+    assert still.pose[0] == pytest.approx(shift[0] + c * x - s * y, abs=0.001)
+    assert still.pose[1] == pytest.approx(shift[1] + s * x + c * y, abs=0.001)
+    assert math.remainder(still.pose[2] - theta - rotation, 2 * math.pi) == pytest.approx(
+        0, abs=0.002
+    )
