@@ -15,6 +15,8 @@ from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
 from odohil.errors import ConnectionFailedError, MeasurementError, ParameterError
 from odohil.session.mocap import PoseStream, StillCriteria, parse_tcp_url, take_still_pose
+from odohil.session.mocap.still import judge_window
+from odohil.session.mocap.stream import StreamedPose, StreamStatus
 from tests.session.mocap_server import FrameServer, pose_line, republish_truth
 
 SIGMA = (0.001, 0.001, 0.002)
@@ -43,6 +45,7 @@ def test_a_still_robot_gives_the_median_pose_with_its_spread() -> None:
     assert still.pose[1] == pytest.approx(WORLD[1], abs=0.001)
     # the heading's median is taken across the +-pi seam, not averaged to ~0
     assert math.remainder(still.pose[2] - WORLD[2], 2 * math.pi) == pytest.approx(0, abs=0.002)
+    # spread: the frame noise, estimated from successive differences
     assert still.spread[0] == pytest.approx(SIGMA[0], rel=0.5)
     assert still.spread[2] == pytest.approx(SIGMA[2], rel=0.5)
     assert still.malformed == 0
@@ -109,8 +112,8 @@ def test_a_moving_robot_is_not_still() -> None:
         PoseStream(server.url) as stream,
         pytest.raises(
             MeasurementError,
-            match=rf"{server.url}: the robot is not still: its x spreads .* mm .* "
-            r"more than 3 x pose_sigma = 3 mm",
+            match=rf"{server.url}: the robot is not still: its x moved .* mm between the two "
+            r"halves of the 0\.3 s still window \(medians\), more than 3 x pose_sigma = 3 mm",
         ),
     ):
         take_still_pose(stream, SIGMA, FAST)
@@ -228,3 +231,31 @@ def test_the_truth_republisher_shows_the_fake_robot_in_its_world_frame(tmp_path:
     assert math.remainder(still.pose[2] - theta - rotation, 2 * math.pi) == pytest.approx(
         0, abs=0.002
     )
+
+
+def _window(values: np.ndarray, rate_hz: float = 100.0) -> list[StreamedPose]:
+    return [StreamedPose(i / rate_hz, i / rate_hz, *row) for i, row in enumerate(values)]
+
+
+def test_frame_jitter_well_above_pose_sigma_is_no_false_alarm() -> None:
+    # pose_sigma is the still pose's (a median of ~50 frames): the frames may
+    # jitter five times more; 2000 windows at rest are all accepted
+    rng = np.random.default_rng(11)
+    jitter = 5.0 * np.array(SIGMA)
+    status = StreamStatus(50, 0, "", 0.0, 0.0, "")
+    medians = []
+    for _ in range(2000):
+        values = np.array(WORLD) + rng.normal(0.0, 1.0, (50, 3)) * jitter
+        still = judge_window(_window(values), SIGMA, FAST, "tcp://test:1", status)
+        medians.append(still.pose[:2])
+    # the median of 50 frames: about 1.2533 x jitter / sqrt(50) = 0.89 mm here
+    assert np.std(np.array(medians)[:, 0]) == pytest.approx(1.2533 * jitter[0] / 50**0.5, rel=0.1)
+
+
+def test_a_slow_drift_under_heavy_jitter_is_not_still() -> None:
+    rng = np.random.default_rng(12)
+    values = np.array(WORLD) + rng.normal(0.0, 1.0, (50, 3)) * 5.0 * np.array(SIGMA)
+    values[:, 1] += 0.04 * np.arange(50) / 100.0  # 4 cm/s: 1 cm between the halves' medians
+    status = StreamStatus(50, 0, "", 0.0, 0.0, "")
+    with pytest.raises(MeasurementError, match=r"not still: its y moved [\d.]+ mm"):
+        judge_window(_window(values), SIGMA, FAST, "tcp://test:1", status)

@@ -10,11 +10,16 @@ the first one). The window is refused when the stream is
 - silent: no pose arrived since connecting, or too few in the window;
 - stale: the newest pose arrived more than ``stale_s`` (1 s) ago;
 - closed: the sender hung up;
-- jumping: two successive poses differ by more than ``jump_sigmas`` times
-  pose_sigma (sqrt 2 for the difference of two noisy poses folded in) in
-  position or heading, a marker swap or a lost track;
-- not still: the standard deviation of x, y or theta over the window is
-  more than ``still_sigmas`` times the corresponding pose_sigma.
+- jumping: two successive poses differ, in x, y or theta, by more than
+  ``jump_sigmas`` x sqrt 2 times the larger of pose_sigma and the frame noise
+  (a marker swap or a lost track);
+- not still: the medians of the window's two halves differ, in x, y or
+  theta, by more than ``still_sigmas`` times pose_sigma and by more than
+  ``chance_sigmas`` times what the frame noise explains (the robot moves).
+
+pose_sigma is the uncertainty of a still pose (a median over many frames),
+usually well below the frame-to-frame jitter, so the window's spread itself
+is not held against it: the drift between its halves is.
 """
 
 from __future__ import annotations
@@ -44,9 +49,10 @@ class StillCriteria:
         settle_s: wait before the window starts, s.
         min_poses: fewest poses the window must hold.
         stale_s: the newest pose may be at most this old, s.
-        still_sigmas: largest standard deviation over the window, in pose_sigmas.
-        jump_sigmas: largest step between successive poses, in pose_sigmas
-            (times sqrt 2).
+        still_sigmas: largest drift between the window's halves, in pose_sigmas.
+        chance_sigmas: ... and in standard deviations of that drift by chance.
+        jump_sigmas: largest step between successive poses, in the larger of
+            pose_sigma and the frame noise (times sqrt 2).
         first_pose_timeout_s: how long to wait for a first pose at all, s.
     """
 
@@ -55,6 +61,7 @@ class StillCriteria:
     min_poses: int = 5
     stale_s: float = STALE_S
     still_sigmas: float = 3.0
+    chance_sigmas: float = 5.0
     jump_sigmas: float = 10.0
     first_pose_timeout_s: float = 3.0
 
@@ -66,7 +73,8 @@ class StillPose:
     Attributes:
         pose: (x m, y m, theta rad in (-pi, pi]) in the capture system's frame.
         n_poses: poses in the window.
-        spread: standard deviations of x m, y m, theta rad over the window.
+        spread: the frame noise of x m, y m, theta rad over the window
+            (robust standard deviation from successive differences).
         t_span: the sender's ``t`` of the window's first and last pose, s.
         malformed: lines dropped since connecting (with the last reason).
     """
@@ -156,40 +164,51 @@ def judge_window(
     url: str,
     status: StreamStatus,
 ) -> StillPose:
-    """The still pose of a window of poses, or MeasurementError (jumps, not still)."""
+    """The still pose of a window of poses, or MeasurementError (jumps, not still).
+
+    The frame noise is estimated per axis from the successive differences,
+    robustly (1.4826 x their median absolute deviation / sqrt 2), so that
+    neither a jump nor a slow drift inflates it.
+    """
     sigma = np.array(pose_sigma, dtype=np.float64)
     xy = np.array([[p.x_m, p.y_m] for p in poses], dtype=np.float64)
     reference = poses[0].theta_rad
     theta = reference + np.array([wrap_angle(p.theta_rad - reference) for p in poses])
     values = np.column_stack([xy, theta])
-    steps = np.abs(np.diff(values, axis=0))
-    step_limit = criteria.jump_sigmas * math.sqrt(2.0) * sigma
-    over = steps > step_limit
+    steps = np.diff(values, axis=0)
+    deviation = np.abs(steps - np.median(steps, axis=0))
+    frame_noise = 1.4826 * np.median(deviation, axis=0) / math.sqrt(2.0)
+    step_limit = criteria.jump_sigmas * math.sqrt(2.0) * np.maximum(sigma, frame_noise)
+    over = np.abs(steps) > step_limit
     if over.any():
         row, axis = (int(v) for v in np.argwhere(over)[0])
         gap_s = poses[row + 1].received_s - poses[row].received_s
         raise MeasurementError(
-            f"motion capture {url}: the pose jumps by {_amount(steps[row, axis], axis)} in "
+            f"motion capture {url}: the pose jumps by {_amount(abs(steps[row, axis]), axis)} in "
             f"{_AXES[axis]} between two poses {gap_s * 1e3:.0f} ms apart in the still window "
-            f"(more than {criteria.jump_sigmas:g} x sqrt 2 x pose_sigma = "
-            f"{_amount(step_limit[axis], axis)}); a marker swap or a lost track?"
+            f"(more than {criteria.jump_sigmas:g} x sqrt 2 x the larger of pose_sigma and the "
+            f"frame noise = {_amount(step_limit[axis], axis)}); a marker swap or a lost track?"
         )
-    spread = values.std(axis=0, ddof=1) if len(poses) > 1 else np.zeros(3)
-    limit = criteria.still_sigmas * sigma
-    if (spread > limit).any():
-        axis = int(np.argmax(spread / limit))
+    half = len(poses) // 2
+    drift = np.abs(np.median(values[half:], axis=0) - np.median(values[:half], axis=0))
+    # the halves' medians differ by about 1.2533 x frame noise x 2 / sqrt(n) by chance alone
+    chance = 1.2533 * frame_noise * 2.0 / math.sqrt(len(poses))
+    drift_limit = np.maximum(criteria.still_sigmas * sigma, criteria.chance_sigmas * chance)
+    if (drift > drift_limit).any():
+        axis = int(np.argmax(drift / drift_limit))
+        allowed = _amount(criteria.still_sigmas * sigma[axis], axis)
         raise MeasurementError(
-            f"motion capture {url}: the robot is not still: its {_AXES[axis]} spreads "
-            f"{_amount(spread[axis], axis)} (standard deviation) over the "
-            f"{criteria.window_s:g} s still window, more than {criteria.still_sigmas:g} x "
-            f"pose_sigma = {_amount(limit[axis], axis)}; let it come to rest (or, if the "
-            "capture noise is larger, raise [measurement] pose_sigma in the robot description)"
+            f"motion capture {url}: the robot is not still: its {_AXES[axis]} moved "
+            f"{_amount(drift[axis], axis)} between the two halves of the "
+            f"{criteria.window_s:g} s still window (medians), more than "
+            f"{criteria.still_sigmas:g} x pose_sigma = {allowed} "
+            "and more than the frame noise explains; let it come to rest"
         )
     median = np.median(values, axis=0)
     return StillPose(
         pose=(float(median[0]), float(median[1]), wrap_angle(float(median[2]))),
         n_poses=len(poses),
-        spread=(float(spread[0]), float(spread[1]), float(spread[2])),
+        spread=(float(frame_noise[0]), float(frame_noise[1]), float(frame_noise[2])),
         t_span=(poses[0].t_s, poses[-1].t_s),
         malformed=status.n_malformed,
         last_malformed=status.last_malformed,
