@@ -8,7 +8,7 @@ from typing import Any
 import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.backend import NomadBackend
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     MotionSettings,
@@ -57,7 +57,7 @@ def build_session(
     plan = parse_plan(plan_text)
     journal, state = start_session(folder, ROBOT_TOML, plan, measure="fake", settings={})
     port = serial.serial_for_url(f"fakerobot://?seed={seed}&time_scale=2000", timeout=0.5)
-    with journal, NomadRobot.from_port(port) as robot:
+    with journal, NomadBackend.from_port(port) as robot:
         engine = SessionEngine(
             journal,
             state,
