@@ -13,7 +13,7 @@ import pytest
 from odohil.science.paths import Design
 from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_change_with_covariance
 from odohil.session.mocap.still import StillPose
-from odohil.session.sources import TrialContext
+from odohil.session.pose_source import TrialContext
 
 
 def _world(pose: tuple[float, float, float], rotation: float, shift: tuple[float, float]):
@@ -97,7 +97,8 @@ def test_the_source_measures_from_the_journaled_still_poses_alone() -> None:
     assert np.array(measured.covariance) == pytest.approx(cov)
     assert measured.pose[2] == pytest.approx(2 * math.pi - 6.0)
     assert not measured.flagged
-    assert "tcp://127.0.0.1:9" in measured.note
+    assert measured.note == "motion capture: still poses of 50 and 50 frames"
+    assert measured.details == {"mocap_url": "tcp://127.0.0.1:9"}
 
 
 def test_a_missing_still_pose_is_a_measurement_error() -> None:

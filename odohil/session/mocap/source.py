@@ -17,19 +17,19 @@ from typing import Any
 
 import numpy as np
 
-from odohil.errors import InitError
+from odohil.errors import RobotDescriptionError
 from odohil.science.robot_description import RobotDescription
 from odohil.session.mocap.change import pose_change_with_covariance
 from odohil.session.mocap.still import StillCriteria, StillPose, take_still_pose
 from odohil.session.mocap.stream import PoseStream
-from odohil.session.pose_source import MeasuredPose, MeasurementLog
-from odohil.session.sources import TrialContext
+from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
 
 
 def pose_sigma_of(description: RobotDescription, url: str) -> tuple[float, float, float]:
-    """The description's pose_sigma, or InitError saying it is needed for ``url``."""
+    """The description's pose_sigma, or RobotDescriptionError saying it is
+    needed for ``url``."""
     if description.pose_sigma is None:
-        raise InitError(
+        raise RobotDescriptionError(
             f"--measure {url}: motion capture needs the standard deviations of one still "
             "pose in the robot description: [measurement] pose_sigma = "
             "[sigma_x_m, sigma_y_m, sigma_theta_rad] (docs/motion-capture.md)"
@@ -87,5 +87,9 @@ class MotionCaptureSource:
                 (rows[1][0], rows[1][1], rows[1][2]),
                 (rows[2][0], rows[2][1], rows[2][2]),
             ),
-            note=f"motion capture {self.stream.url}",
+            note=(
+                f"motion capture: still poses of {ctx.start.get('n_poses', '?')} and "
+                f"{ctx.end.get('n_poses', '?')} frames"
+            ),
+            details={"mocap_url": self.stream.url},
         )

@@ -130,8 +130,7 @@ def take_still_pose(
     """
     criteria = criteria or StillCriteria()
     url = stream.url
-    if not stream.wait_for_pose(criteria.first_pose_timeout_s):
-        raise MeasurementError(_silent(stream.status(), url, stream.clock()))
+    require_pose(stream, criteria.first_pose_timeout_s)
     begin = stream.clock() + criteria.settle_s
     end = begin + criteria.window_s
     while (left := end - stream.clock()) > 0:
@@ -155,6 +154,13 @@ def take_still_pose(
             f"{_dropped(status)}; is the sender streaming at its full rate?"
         )
     return judge_window(poses, pose_sigma, criteria, url, status)
+
+
+def require_pose(stream: PoseStream, timeout_s: float) -> None:
+    """Return once the stream has delivered a pose; MeasurementError (silent or
+    closed, naming the URL) when none arrives within ``timeout_s``."""
+    if not stream.wait_for_pose(timeout_s):
+        raise MeasurementError(_silent(stream.status(), stream.url, stream.clock()))
 
 
 def judge_window(
