@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import shutil
 import subprocess
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -149,3 +150,63 @@ def test_a_bad_tcp_url_is_bad_input(emulator: EmulatorProcess, tmp_path: Path) -
     assert done.returncode == 2, done.stderr
     assert "tcp://HOST:PORT" in done.stderr
     assert emulator.truth().motion_log == ()
+
+
+def _solved(tmp_path: Path) -> int:
+    try:
+        lines = (tmp_path / "session" / JOURNAL_NAME).read_bytes().split(b"\n")[:-1]
+    except FileNotFoundError:
+        return 0
+    return sum(json.loads(line)["kind"] == ev.SOLVED for line in lines)
+
+
+@pytest.mark.slow
+def test_a_sender_that_dies_stops_the_session_and_resume_goes_on_with_another(
+    emulator: EmulatorProcess, tmp_path: Path
+) -> None:
+    plan = "k=1,l=0.5,n=4;k=0.5,l=0.5,n=4"
+    with TruthClient(emulator.truth_socket) as truth:
+
+        def true_pose() -> tuple[float, float, float]:
+            snap = truth.snapshot()
+            return (snap.true_x_m, snap.true_y_m, snap.true_theta_rad)
+
+        def sender(seed: int) -> FrameServer:
+            frame = republish_truth(
+                true_pose, rotation_rad=-1.0, shift_m=(3.0, 4.0), sigma=FRAME_SIGMA, seed=seed
+            )
+            return FrameServer(frame)
+
+        with sender(1) as first:
+            command = [
+                ODOHIL, "run", "--port", emulator.device, "--measure", first.url,
+                "--robot", str(_robot(tmp_path)), "--plan", plan,
+                "--session", str(tmp_path / "session"), "--json",
+            ]  # fmt: skip
+            process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+            deadline = time.monotonic() + 60
+            while _solved(tmp_path) < 2 and process.poll() is None:
+                assert time.monotonic() < deadline, "the session made no progress"
+                time.sleep(0.01)
+        # the sender is gone: the next still pose fails, the robot is stopped
+        _, err = process.communicate(timeout=60)
+        assert process.returncode == 1, err
+        assert b"the sender closed the connection" in err
+        records = read_journal(tmp_path / "session").records
+        assert records[-1].kind == ev.STOPPED
+        assert f"motion capture {first.url}" in records[-1].data["message"]
+        done_before = _solved(tmp_path)
+        assert 2 <= done_before < 8
+
+        with sender(2) as second:
+            resumed = subprocess.run(
+                [ODOHIL, "resume", str(tmp_path / "session"), "--measure", second.url,
+                 "--json", "--from-here"],
+                capture_output=True, text=True, timeout=120,
+            )  # fmt: skip
+    assert resumed.returncode in (0, 3), resumed.stderr
+    assert json.loads(resumed.stdout)["n_trials"] == 8
+    records = read_journal(tmp_path / "session").records
+    assert sorted(r.data["trial"] for r in records if r.kind == ev.SOLVED) == list(range(1, 9))
+    robots = [r.data["connection"].get("mocap_url") for r in records if r.kind == ev.ROBOT]
+    assert robots == [first.url, second.url]

@@ -13,10 +13,11 @@ import pytest
 
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
-from odohil.errors import ConnectionFailedError, MeasurementError, ParameterError
+from odohil.errors import ConnectionFailedError, JournalError, MeasurementError, ParameterError
 from odohil.session.mocap import PoseStream, StillCriteria, parse_tcp_url, take_still_pose
 from odohil.session.mocap.still import judge_window
 from odohil.session.mocap.stream import StreamedPose, StreamStatus
+from odohil.session.state import validate_header
 from tests.session.mocap_server import FrameServer, pose_line, republish_truth
 
 SIGMA = (0.001, 0.001, 0.002)
@@ -259,3 +260,13 @@ def test_a_slow_drift_under_heavy_jitter_is_not_still() -> None:
     status = StreamStatus(50, 0, "", 0.0, 0.0, "")
     with pytest.raises(MeasurementError, match=r"not still: its y moved [\d.]+ mm"):
         judge_window(_window(values), SIGMA, FAST, "tcp://test:1", status)
+
+
+def test_a_journal_header_names_its_stream_by_a_tcp_url() -> None:
+    validate_header({"measure": "tcp", "settings": {"mocap_url": "tcp://10.0.0.5:5555"}})
+    with pytest.raises(JournalError, match=r"settings\.mocap_url: .*tcp://HOST:PORT"):
+        validate_header({"measure": "tcp", "settings": {"mocap_url": "10.0.0.5:5555"}})
+    with pytest.raises(JournalError, match=r"settings\.mocap_url must be str"):
+        validate_header({"measure": "tcp", "settings": {"mocap_url": 5555}})
+    with pytest.raises(JournalError, match=r"measure must be one of fake, file, operator, tcp"):
+        validate_header({"measure": "udp"})
