@@ -60,8 +60,8 @@ class StillCriteria:
     settle_s: float = 0.05
     min_poses: int = 5
     stale_s: float = STALE_S
-    still_sigmas: float = 3.0
-    chance_sigmas: float = 5.0
+    still_sigmas: float = 5.0
+    chance_sigmas: float = 6.0
     jump_sigmas: float = 10.0
     first_pose_timeout_s: float = 3.0
 
