@@ -113,7 +113,7 @@ def resume(
                 f"resuming {session}: {done} of {state.plan.n_trials} trials done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
             )
-            console.print(f"robot: {line.describe()}", soft_wrap=True)
+            console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
             with (
                 open_mocap(mocap_url, description, console) as mocap,  # before the port opens
                 connect(line, socket_path) as (robot, truth),

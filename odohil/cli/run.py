@@ -571,7 +571,7 @@ def run(
                     folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)
                 )
             console.print(f"session {folder}")
-            console.print(f"robot: {line.describe()}", soft_wrap=True)
+            console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
             with journal, connect(line, truth_socket) as (robot, truth):
                 source = make_source(kind, description, truth, seed, trial_file, mocap)
                 outcome = execute(journal, state, robot, source, settings, console, exclude=exclude)

@@ -1,11 +1,12 @@
 """Robot backends by name: the ``odohil.robots`` entry-point group.
 
-The robot description's ``[robot] protocol`` names the backend (default
-``nomad150``), the way python-can picks a bus by its interface name; the
-port URL says where it is. A backend is a class (or any object) with a
-``default_baud`` (int) and an ``open(url, baud)`` that returns a connected
-``Robot`` (odohil/session/robot.py). Another package adds a robot by declaring
-an entry point in the group; nothing here names one.
+The robot description's ``[robot] protocol`` names the backend (its default
+is :data:`odohil.science.robot_description.DEFAULT_PROTOCOL`), the way
+python-can picks a bus by its interface name; the port URL says where it is.
+A backend is a class (or any object) with a ``default_baud`` (int) and an
+``open(url, baud)`` that returns a connected ``Robot``
+(odohil/session/robot.py). Another package adds a robot by declaring an entry
+point in the group; nothing here names one.
 """
 
 from __future__ import annotations
@@ -13,12 +14,10 @@ from __future__ import annotations
 from importlib.metadata import entry_points
 from typing import Protocol, cast
 
-from odohil.errors import InitError
+from odohil.errors import InitError, RobotDescriptionError
 from odohil.session.robot import Robot
 
 ENTRY_POINT_GROUP = "odohil.robots"
-DEFAULT_PROTOCOL = "nomad150"
-"""The backend used when the robot description has no ``[robot] protocol``."""
 
 
 class RobotBackend(Protocol):
@@ -41,13 +40,14 @@ def find_backend(protocol: str) -> RobotBackend:
     """The backend registered as ``protocol``.
 
     Raises:
-        InitError: none is registered under that name (the message lists the
-            names that are), or it cannot be loaded.
+        RobotDescriptionError: none is registered under that name (the
+            message lists the names that are).
+        InitError: it is registered but cannot be loaded.
     """
     found = entry_points(group=ENTRY_POINT_GROUP, name=protocol)
     if not found:
         known = ", ".join(backend_names()) or "none"
-        raise InitError(
+        raise RobotDescriptionError(
             f"no robot backend {protocol!r} ([robot] protocol in the robot description); "
             f"installed: {known}"
         )

@@ -97,8 +97,10 @@ def test_the_source_measures_from_the_journaled_still_poses_alone() -> None:
     assert np.array(measured.covariance) == pytest.approx(cov)
     assert measured.pose[2] == pytest.approx(2 * math.pi - 6.0)
     assert not measured.flagged
-    assert measured.note == "motion capture: still poses of 50 and 50 frames"
-    assert measured.details == {"mocap_url": "tcp://127.0.0.1:9"}
+    assert measured.note == ""  # a clear-cut pose: no doubt to note
+    assert measured.details == {
+        "source": "motion capture tcp://127.0.0.1:9: still poses of 50 and 50 frames"
+    }
 
 
 def test_a_missing_still_pose_is_a_measurement_error() -> None:

@@ -87,9 +87,10 @@ class MotionCaptureSource:
                 (rows[1][0], rows[1][1], rows[1][2]),
                 (rows[2][0], rows[2][1], rows[2][2]),
             ),
-            note=(
-                f"motion capture: still poses of {ctx.start.get('n_poses', '?')} and "
-                f"{ctx.end.get('n_poses', '?')} frames"
-            ),
-            details={"mocap_url": self.stream.url},
+            details={
+                "source": (
+                    f"motion capture {self.stream.url}: still poses of "
+                    f"{ctx.start.get('n_poses', '?')} and {ctx.end.get('n_poses', '?')} frames"
+                )
+            },
         )
