@@ -64,6 +64,15 @@ def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
         yield process
 
 
+@pytest.fixture(scope="module")
+def idle(tmp_path_factory: pytest.TempPathFactory) -> Iterator[EmulatorProcess]:
+    """A fake robot the refusal tests share: none of them may move it."""
+    folder = tmp_path_factory.mktemp("idle")
+    args = ["--seed", "1", "--no-pacing", "--truth-socket", str(folder / "t.sock")]
+    with EmulatorProcess(args) as process:
+        yield process
+
+
 @pytest.fixture
 def mocap(emulator: EmulatorProcess) -> Iterator[FrameServer]:
     """The capture system: the fake's true pose in a world frame turned by
@@ -114,42 +123,43 @@ def test_motion_capture_run_brackets_the_fake_robots_parameters(
 
 
 def test_a_silent_stream_is_refused_before_anything_moves(
-    emulator: EmulatorProcess, tmp_path: Path
+    idle: EmulatorProcess, tmp_path: Path
 ) -> None:
     with FrameServer(lambda t: None) as silent:
-        done = _run(emulator, _robot(tmp_path), silent.url, tmp_path, "k=1,l=0.5,n=2")
+        done = _run(idle, _robot(tmp_path), silent.url, tmp_path, "k=1,l=0.5,n=2")
     assert done.returncode == 1, done.stderr
     assert f"motion capture {silent.url}: silent stream" in done.stderr
     assert "nothing moved" in done.stderr
-    assert emulator.truth().motion_log == ()
+    assert idle.truth().motion_log == ()
     assert not (tmp_path / "session" / JOURNAL_NAME).exists()
 
 
 def test_nobody_at_the_url_is_refused_before_anything_moves(
-    emulator: EmulatorProcess, tmp_path: Path
+    idle: EmulatorProcess, tmp_path: Path
 ) -> None:
     with FrameServer(lambda t: None) as gone:
         url = gone.url
-    done = _run(emulator, _robot(tmp_path), url, tmp_path, "k=1,l=0.5,n=2")
+    done = _run(idle, _robot(tmp_path), url, tmp_path, "k=1,l=0.5,n=2")
     assert done.returncode == 1, done.stderr
     assert f"motion capture {url}: cannot connect" in done.stderr
-    assert emulator.truth().motion_log == ()
+    assert idle.truth().motion_log == ()
 
 
-def test_motion_capture_needs_pose_sigma(
-    emulator: EmulatorProcess, mocap: FrameServer, tmp_path: Path
-) -> None:
-    done = _run(emulator, _robot(tmp_path, pose_sigma=False), mocap.url, tmp_path, "k=1,l=0.5,n=2")
+def test_motion_capture_needs_pose_sigma(idle: EmulatorProcess, tmp_path: Path) -> None:
+    with FrameServer(lambda t: None) as server:
+        robot = _robot(tmp_path, pose_sigma=False)
+        done = _run(idle, robot, server.url, tmp_path, "k=1,l=0.5,n=2")
     assert done.returncode == 2, done.stderr
     assert "[measurement] pose_sigma" in done.stderr
-    assert emulator.truth().motion_log == ()
+    assert server.clients == 0  # refused before connecting
+    assert idle.truth().motion_log == ()
 
 
-def test_a_bad_tcp_url_is_bad_input(emulator: EmulatorProcess, tmp_path: Path) -> None:
-    done = _run(emulator, _robot(tmp_path), "tcp://127.0.0.1", tmp_path, "k=1,l=0.5,n=2")
+def test_a_bad_tcp_url_is_bad_input(idle: EmulatorProcess, tmp_path: Path) -> None:
+    done = _run(idle, _robot(tmp_path), "tcp://127.0.0.1", tmp_path, "k=1,l=0.5,n=2")
     assert done.returncode == 2, done.stderr
     assert "tcp://HOST:PORT" in done.stderr
-    assert emulator.truth().motion_log == ()
+    assert idle.truth().motion_log == ()
 
 
 def _solved(tmp_path: Path) -> int:
