@@ -39,7 +39,7 @@ with seed 4 the fake's realised E_R lies 2.1 standard errors from its true
 value, and `--measure fake` (the truth itself) misses it the same way."""
 PLAN = "k=1,l=2,n=20;k=0.5,l=2,n=20"
 """Closed 4 m runs (E_R, K_theta, K_rho) and one-way 2 m runs (E_T): 40
-trials, two 0.55 s still windows each, about a minute."""
+trials, two 0.6 s still windows each, about a minute."""
 
 
 def _robot(tmp_path: Path, pose_sigma: bool = True) -> Path:

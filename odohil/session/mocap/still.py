@@ -57,7 +57,7 @@ class StillCriteria:
     """
 
     window_s: float = 0.5
-    settle_s: float = 0.05
+    settle_s: float = 0.1
     min_poses: int = 5
     stale_s: float = STALE_S
     still_sigmas: float = 5.0
