@@ -24,6 +24,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "report",
     "estimate",
     "wizard",
+    "validate",
 )
 
 app = typer.Typer(
