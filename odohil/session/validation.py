@@ -31,7 +31,13 @@ from typing import Literal
 
 import numpy as np
 
-from odohil.errors import JournalError, MeasurementError, ParameterError, TrialFileError
+from odohil.errors import (
+    JournalError,
+    MeasurementError,
+    OdohilError,
+    ParameterError,
+    TrialFileError,
+)
 from odohil.science.estimators import EstimateResult, estimate
 from odohil.science.limits import RANGES
 from odohil.science.paths import Design, EncoderPath, FloatArray, Variant, square
@@ -449,3 +455,43 @@ def validation_sessions(session: Path) -> list[Path]:
     if not root.is_dir():
         return []
     return sorted(p for p in root.iterdir() if (p / "journal.jsonl").is_file())
+
+
+@dataclass(frozen=True)
+class ValidationReport:
+    """One validation session of a calibration, tested again for the report.
+
+    Attributes:
+        folder: the validation session folder.
+        path: its ``--path`` text.
+        result: the NEES tests, or None when they could not be made.
+        plots: per path, the trials against the predicted ellipse.
+        problem: why there is no result ("" otherwise).
+    """
+
+    folder: Path
+    path: str
+    result: ValidationResult | None
+    plots: tuple[ValidationPlot, ...] = ()
+    problem: str = ""
+
+
+def load_validations(
+    session: Path, calibration: EstimateResult, alpha: float = DEFAULT_ALPHA
+) -> tuple[ValidationReport, ...]:
+    """The validation sessions under ``SESSION/validation/`` tested against
+    ``calibration`` (a folder that cannot be read says why, in ``problem``)."""
+    reports = []
+    for folder in validation_sessions(session):
+        path = folder.name
+        try:
+            state = load_session(folder).state
+            path = str(state.header.get("settings", {}).get("validation_path") or path)
+            trials = trials_of_session(state, source=str(folder))
+            result = check_trials(trials, calibration, alpha)
+            plots = tuple(plot_data(trials, calibration))
+        except OdohilError as exc:
+            reports.append(ValidationReport(folder, path, None, problem=str(exc)))
+            continue
+        reports.append(ValidationReport(folder, path, result, plots))
+    return tuple(reports)

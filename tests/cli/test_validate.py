@@ -85,10 +85,11 @@ def calibrate(folder: Path, seed: int) -> Path:
 
 
 def validate(session: Path, port_query: str, seed: int, out: Path) -> tuple[int, dict[str, Any]]:
+    default = out.name == "forth-back-k2-l1.5-turn"
     done = odohil(
         "validate", str(session), "--path", VALIDATION_PATH, "--trials", str(VALIDATION_TRIALS),
         "--port", f"fakerobot://?{port_query}", "--measure", "fake", "--seed", str(seed),
-        "--out", str(out), "--json",
+        *([] if default else ["--out", str(out)]), "--json",
     )  # fmt: skip
     assert done.returncode in (0, 3), done.stderr
     return done.returncode, json.loads(done.stdout)
@@ -99,12 +100,14 @@ def validate(session: Path, port_query: str, seed: int, out: Path) -> tuple[int,
 def test_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(tmp_path: Path, seed: int) -> None:
     session = calibrate(tmp_path, seed)
     other = seed + 100  # the validation drives other draws than the calibration
-    code, good = validate(session, f"seed={other}&time_scale=2000", other, tmp_path / "good")
+    good_folder = session / "validation" / "forth-back-k2-l1.5-turn"  # the default
+    bad_folder = session / "validation" / "wrong-robot"
+    code, good = validate(session, f"seed={other}&time_scale=2000", other, good_folder)
     assert (code, good["verdict"]["status"]) == (0, "pass"), good["verdict"]
     assert good["n_trials"] == VALIDATION_TRIALS
     assert good["verdict"]["overall"]["dof"] == 3 * VALIDATION_TRIALS
     assert good["verdict"]["parameter_uncertainty"].startswith("included")
-    code, bad = validate(session, f"seed={other}&time_scale=2000&{WRONG}", other, tmp_path / "bad")
+    code, bad = validate(session, f"seed={other}&time_scale=2000&{WRONG}", other, bad_folder)
     assert (code, bad["verdict"]["status"]) == (3, "fail"), bad["verdict"]
     assert "theta" in bad["verdict"]["failed"]
     for name, result in (("same", good), ("wrong", bad)):
@@ -120,11 +123,18 @@ def test_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(tmp_path: Path, 
     # the validation trials are journaled in their own sessions, not the calibration's
     calibration_log = (session / "journal.jsonl").read_text(encoding="utf-8")
     assert calibration_log.count('"kind":"solved"') == 24
-    assert (tmp_path / "good" / "journal.jsonl").is_file()
+    assert good["validation_session"] == str(good_folder)
+    # the report shows both validations against their predicted ellipses
+    report = in_process("report", str(session), "--out", str(tmp_path / "report"))
+    assert report.returncode == 0, report.stderr
+    page = (tmp_path / "report" / "index.html").read_text(encoding="utf-8")
+    section = page[page.index('id="validation"') :]
+    assert section.count('<figure id="validation-') == 2
+    assert "PASS" in section
+    assert "FAIL" in section
     # a finished validation is tested again without a robot
     again = odohil(
-        "validate", str(session), "--path", VALIDATION_PATH, "--out", str(tmp_path / "good"),
-        "--json",
+        "validate", str(session), "--path", VALIDATION_PATH, "--json",
     )  # fmt: skip
     assert again.returncode == 0, again.stderr
     assert json.loads(again.stdout)["verdict"] == good["verdict"]
