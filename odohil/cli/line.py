@@ -66,7 +66,7 @@ def resolve_line(
 
     Raises:
         ParameterError: no port anywhere (names --port and ``[serial] port``).
-        InitError: the robot description names no installed backend.
+        RobotDescriptionError: the robot description names no installed backend.
     """
     serial = description.serial
     where = f"{robot_path} [serial]"

@@ -14,7 +14,7 @@ from __future__ import annotations
 from importlib.metadata import entry_points
 from typing import Protocol, cast
 
-from odohil.errors import InitError
+from odohil.errors import InitError, RobotDescriptionError
 from odohil.session.robot import Robot
 
 ENTRY_POINT_GROUP = "odohil.robots"
@@ -40,13 +40,14 @@ def find_backend(protocol: str) -> RobotBackend:
     """The backend registered as ``protocol``.
 
     Raises:
-        InitError: none is registered under that name (the message lists the
-            names that are), or it cannot be loaded.
+        RobotDescriptionError: none is registered under that name (the
+            message lists the names that are).
+        InitError: it is registered but cannot be loaded.
     """
     found = entry_points(group=ENTRY_POINT_GROUP, name=protocol)
     if not found:
         known = ", ".join(backend_names()) or "none"
-        raise InitError(
+        raise RobotDescriptionError(
             f"no robot backend {protocol!r} ([robot] protocol in the robot description); "
             f"installed: {known}"
         )

@@ -522,9 +522,9 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
             design=t.design,
             pose_change=np.array(t.pose_change, dtype=np.float64),
             pose_cov=np.array(t.cov, dtype=np.float64),
-            marks=MarkDistances(
-                same_m=t.measurements[:n_screws], cross_m=t.measurements[n_screws:]
-            ),
+            marks=MarkDistances(same_m=t.measurements[:n_screws], cross_m=t.measurements[n_screws:])
+            if t.measurements
+            else None,  # measured as a pose (a trial file of poses, motion capture)
             odometry_end_pose=np.array(t.encoder_end_pose, dtype=np.float64),
             flagged=not t.clear_cut or bool(t.slip),
             note="; ".join(part for part in (t.note, t.slip) if part),
