@@ -46,7 +46,7 @@ from scipy import stats
 
 from odohil.errors import ParameterError
 from odohil.science.moments import pose_moments
-from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
+from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import EncoderPath, FloatArray
 
 AXES = ("x", "y", "theta")
@@ -358,7 +358,3 @@ def ellipse_data(
         axes_m=(major, minor),
         angle_rad=angle,
     )
-
-
-PARAMETERS = PARAMETER_NAMES
-"""The order of the Jacobian's columns and of the parameter covariance."""
