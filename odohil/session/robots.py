@@ -3,8 +3,9 @@
 The robot description's ``[robot] protocol`` names the backend (its default
 is :data:`odohil.science.robot_description.DEFAULT_PROTOCOL`), the way
 python-can picks a bus by its interface name; the port URL says where it is.
-A backend is a class (or any object) with a ``default_baud`` (int) and an
-``open(url, baud)`` that returns a connected ``Robot``
+A backend is a class (or any object) with a ``default_baud`` (int), optionally
+``baud_rates`` (the line speeds it accepts, checked before anything is sent),
+and an ``open(url, baud)`` that returns a connected ``Robot``
 (odohil/session/robot.py). Another package adds a robot by declaring an entry
 point in the group; nothing here names one.
 """

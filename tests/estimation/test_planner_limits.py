@@ -6,8 +6,8 @@ import math
 
 import numpy as np
 import pytest
-from odohil.driver.motion import DEFAULT_SPEEDS
 
+from odohil.driver.nomad.motion import DEFAULT_SPEEDS
 from odohil.errors import ParameterError
 from odohil.science.exports import Linearisation
 from odohil.science.fisher import default_description

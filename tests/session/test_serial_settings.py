@@ -147,3 +147,9 @@ def test_an_unknown_robot_protocol_is_refused_before_anything_moves(tmp_path: Pa
     assert "'roomba9000'" in done.stderr
     assert "nomad150" in done.stderr  # the installed backends are named
     assert not (tmp_path / "s").exists()
+
+
+def test_a_baud_the_robot_does_not_speak_is_refused_before_the_port_opens() -> None:
+    text = ROBOT_TOML + '[serial]\nport = "/dev/odohil-no-such-port"\n'
+    with pytest.raises(ParameterError, match=r"baud 57600 \(--baud\).*4800, 9600, 19200, 38400"):
+        resolve_line(parse_robot_description(text), None, 57600)
