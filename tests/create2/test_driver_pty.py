@@ -206,7 +206,7 @@ def test_ctrl_c_in_a_callback_stops_the_robot(connect: Connect) -> None:
 
 
 def test_a_cut_line_raises_disconnected(connect: Connect) -> None:
-    process, robot = connect("--fault", "disconnect@0.2")
+    _process, robot = connect("--fault", "disconnect@0.2")
     robot.arm(SETTINGS)
     with pytest.raises(DisconnectedError):
         robot.drive(Design(0.5, 1.0), SETTINGS)
