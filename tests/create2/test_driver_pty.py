@@ -87,9 +87,10 @@ def test_reverse_trial_ends_where_it_started_and_close_leaves_the_oi_off(
     assert abs(truth.left_counts) < 5
     assert truth.left_counts == truth.right_counts
     sent = opcodes(process)
-    assert sent[:3] == [Opcode.START, Opcode.STREAM, Opcode.SAFE]  # 148 0: no stream
+    # 148 0 (no stream), Safe, 148 n ids (the driver's stream), then Drive Direct only
+    assert sent[:4] == [Opcode.START, Opcode.STREAM, Opcode.SAFE, Opcode.STREAM]
     assert Opcode.FULL not in sent
-    assert set(sent[3:]) == {Opcode.DRIVE_DIRECT}
+    assert set(sent[4:]) == {Opcode.DRIVE_DIRECT}
     robot.close()
     time.sleep(0.05)
     truth = process.truth()
@@ -102,10 +103,10 @@ def test_reverse_trial_ends_where_it_started_and_close_leaves_the_oi_off(
     ]
 
 
-def test_full_mode_only_when_asked_and_streaming_works(connect: Connect) -> None:
-    process, robot = connect(full_mode=True, sampling="stream")
+def test_full_mode_only_when_asked_and_polling_works(connect: Connect) -> None:
+    process, robot = connect(full_mode=True, sampling="poll")
     robot.arm(SETTINGS)
-    robot.link.start_stream()
+    assert not robot.link.streaming
     motion = robot.drive(Design(0.5, 0.5), SETTINGS)
     assert motion.end_pose[0] == pytest.approx(0.5, abs=0.003)
     assert process.truth().mode == 3

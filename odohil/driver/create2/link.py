@@ -33,7 +33,7 @@ from odohil.protocol.create2.packets import (
     decode_reply,
     reply_size,
 )
-from odohil.protocol.create2.stream import STREAM_PERIOD_S, StreamDecoder
+from odohil.protocol.create2.stream import STREAM_PERIOD_S, StreamDecoder, frame_size
 
 Sampling = Literal["poll", "stream"]
 SAMPLINGS: tuple[Sampling, ...] = ("poll", "stream")
@@ -48,8 +48,8 @@ SAMPLE_IDS: tuple[int, ...] = (
 bytes (a 21-byte stream frame, within the 28 bytes per 15 ms of 19200 baud)."""
 READ_SLICE_S = 0.005
 """pyserial read timeout: how often the link checks its own deadlines, s."""
-REPLY_TIMEOUT_S = 0.5
-"""Longest wait for a reading, s."""
+REPLY_TIMEOUT_S = 1.0
+"""Longest wait for a reading, s (66 stream frames; 1 s as the fake Nomad link's)."""
 _IO_ERRORS = (serial.SerialException, OSError, termios.error)
 
 
@@ -148,6 +148,17 @@ class Create2Link:
             self.port.write(data)
         except _IO_ERRORS as exc:
             raise DisconnectedError(f"writing to {self.url}: {exc}") from exc
+
+    @property
+    def transfer_s(self) -> float:
+        """Line time of one reading at the port's baud rate (10 bits a byte), s:
+        the request and its reply when polling, one frame when streaming. By
+        then the wheels have turned on."""
+        if self.sampling == "poll":
+            size = len(commands.query_list(SAMPLE_IDS)) + reply_size_of_samples()
+        else:
+            size = frame_size(SAMPLE_IDS)
+        return size * 10.0 / float(self.port.baudrate)
 
     def drain(self) -> None:
         """Wait until every byte written has left the host."""

@@ -7,7 +7,10 @@ What it sends (facts §3-§9 and the CHOICEs in protocols/create2/README.md):
   mode: it must be Passive; a robot that reports 2 there has the +1 mode bug
   (C7) and every later mode reading is corrected by it;
 - arm: Safe (``131``; Full ``132`` only when asked), checked by reading the
-  mode back; refused while a cliff, wheel drop or bump is reported;
+  mode back; refused while a cliff, wheel drop or bump is reported; then the
+  stream of the driver's packets starts (``148``; or, with ``sampling="poll"``,
+  every reading is a Query List): bench/create2_leg_end.py found streaming
+  ends legs at least as tightly at 115200 and 19200 baud (BENCHMARKS.md);
 - drive: straight legs with Drive Direct (both wheels at the set speed),
   in-place turns with the wheels at opposite speeds; each step ends on the
   encoder counts 43/44 (deltas mod 65536, wrap-safe both ways) against
@@ -76,8 +79,13 @@ SLOW_HORIZON_S = 0.06
 """A step slows to the crawl when it is this long (at its current rate) from its end:
 about two readings, so the crawl starts before the slow zone is crossed."""
 STOP_LEAD_S = 0.012
-"""Stop this long (at the current rate) before the target: the wheels turn on
-while a reading is on its way (up to 15 ms old) and the stop goes out."""
+"""Stop this long (at the current rate) before the target, plus the line time of
+a reading: the wheels turn on while a reading is on its way (its values up to
+15 ms old) and the stop goes out."""
+RATE_WINDOW_S = 0.1
+"""The wheels' rate is measured over this much time of readings, s..."""
+RATE_MIN_SPAN_S = 0.025
+"""...and over at least this much (before that, the previous rate holds), s."""
 STILL_READINGS = 2
 """A robot is still when this many readings in a row show the same counts."""
 STALL_S = 0.6
@@ -143,7 +151,7 @@ class Create2Robot:
         baud: int = DEFAULT_BAUD,
         geometry: DiffDriveGeometry | None = None,
         full_mode: bool = False,
-        sampling: Sampling = "poll",
+        sampling: Sampling = "stream",
         open_wait_s: float = OPEN_WAIT_S,
     ) -> Create2Robot:
         """Open ``url`` and bring the OI to Passive (module docstring).
@@ -292,6 +300,8 @@ class Create2Robot:
                 "nothing moved, OI back in Passive"
             )
         self._armed = True
+        if self._link.sampling == "stream" and not self._link.streaming:
+            self._link.start_stream()
         return sample
 
     def _check(self, reading: Reading) -> None:
@@ -471,6 +481,8 @@ class Create2Robot:
         crawl = min(speed, CRAWL_MM_S)
         deadline = time.monotonic() + settings.step_timeout_s
         rate = 0.0  # counts per second along the step, measured
+        history: list[tuple[float, float]] = []  # (host time, -remaining) at this speed
+        lead_s = STOP_LEAD_S + self._link.transfer_s
         moved_at = time.monotonic()
         if remaining() > 0:
             self._command(step, speed)
@@ -482,24 +494,22 @@ class Create2Robot:
             self._check(reading)
             self._track(previous, reading, travelled)
             now = reading.host_time_s
-            progress = (
-                sum(
-                    s * encoder_delta(getattr(previous, side), getattr(reading, side))
-                    for s, side in zip(signs, ("left_counts", "right_counts"), strict=True)
-                )
-                / 2
-            )
-            dt = max(1e-3, now - previous.host_time_s)
-            if progress != 0:
-                rate = max(0.0, progress) / dt
+            if (previous.left_counts, previous.right_counts) != (
+                reading.left_counts,
+                reading.right_counts,
+            ):
                 moved_at = now
+            history.append((now, -remaining()))
+            rate = _rate(history, rate)
             left_to_go = remaining()
-            if left_to_go <= rate * STOP_LEAD_S or left_to_go <= 0:
+            if left_to_go <= rate * lead_s or left_to_go <= 0:
                 self.stop()
                 break
             if speed > crawl and left_to_go <= rate * SLOW_HORIZON_S:
                 speed = crawl
                 self._command(step, speed)
+                history.clear()
+                rate *= crawl / step.speed_mm_s
             if now - moved_at > STALL_S:
                 self.stop()
                 raise MotionError(
@@ -545,6 +555,19 @@ class Create2Robot:
     def _command(self, step: _Step, speed: int) -> None:
         self._commanded = True
         self._link.send(commands.drive_direct(step.right_sign * speed, step.left_sign * speed))
+
+
+def _rate(history: list[tuple[float, float]], previous: float) -> float:
+    """Counts per second over the readings of the last :data:`RATE_WINDOW_S`
+    (readings can arrive bunched: one interval alone says little); the
+    previous rate while they span less than :data:`RATE_MIN_SPAN_S`."""
+    now = history[-1][0]
+    while len(history) > 2 and now - history[1][0] >= RATE_WINDOW_S:
+        del history[0]
+    span = now - history[0][0]
+    if span < RATE_MIN_SPAN_S:
+        return previous
+    return max(0.0, (history[-1][1] - history[0][1]) / span)
 
 
 def _relative(start: OdometrySample, end: OdometrySample) -> tuple[float, float, float]:
