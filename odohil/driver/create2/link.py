@@ -49,7 +49,7 @@ bytes (a 21-byte stream frame, within the 28 bytes per 15 ms of 19200 baud)."""
 READ_SLICE_S = 0.005
 """pyserial read timeout: how often the link checks its own deadlines, s."""
 REPLY_TIMEOUT_S = 1.0
-"""Longest wait for a reading, s (66 stream frames; 1 s as the fake Nomad link's)."""
+"""Longest wait for a reading, s (66 stream frames; the Nomad link's normal timeout)."""
 _IO_ERRORS = (serial.SerialException, OSError, termios.error)
 
 
