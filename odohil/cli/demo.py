@@ -15,6 +15,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from odohil.cli.line import resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.run import (
     SnapshotTruth,
@@ -28,7 +29,7 @@ from odohil.science.parameters import SI_UNITS, ErrorParameters
 from odohil.science.robot_description import parse_robot_description
 from odohil.session.engine import start_session
 from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource
+from odohil.session.sources import FakeTruthSource, TapeSource
 
 DEMO_TRUTH = ErrorParameters.from_paper_units(-1.0, -0.05, 0.3, 9e-4)
 """The fake robot's true parameters: the Nomad 150's (-0.202 deg/m, -0.02,
@@ -98,11 +99,10 @@ def demo(
                         measure="fake",
                         settings=settings,
                     )
-                with (
-                    journal,
-                    connect(emulator.device, 38400, emulator.truth_socket) as (robot, reader),
-                ):
-                    source = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+                line = resolve_line(description, emulator.device, 38400)
+                with journal, connect(line, emulator.truth_socket) as (robot, reader):
+                    tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+                    source = TapeSource(tape, description)
                     outcome = execute(journal, state, robot, source, settings, console)
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}

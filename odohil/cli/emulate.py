@@ -1,4 +1,8 @@
-"""``odohil emulate``: serve a fake Nomad 150 on a pseudo-terminal."""
+"""``odohil emulate``: serve a fake Nomad 150 on a pseudo-terminal.
+
+The fake (fakes/nomad/) is imported only when the command runs, so that no
+other ``odohil`` command loads it.
+"""
 
 from __future__ import annotations
 
@@ -9,10 +13,6 @@ from typing import Annotated
 
 import typer
 
-from fakes.nomad.config import build_config
-from fakes.nomad.faults import FAULT_NAMES
-from fakes.nomad.pacing import DEFAULT_BAUD
-from fakes.nomad.run import run_emulator
 from odohil.cli.options import (
     E_R_DEFAULT,
     E_T_DEFAULT,
@@ -24,11 +24,12 @@ from odohil.cli.options import (
     KThetaDeg2PerM,
     bounded,
 )
+from odohil.driver.nomad.link import DEFAULT_BAUD
 from odohil.errors import OdohilError
 
 _FAULT_HELP = (
     "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
-    f"repeatable; NAME one of {', '.join(FAULT_NAMES)}. See docs/fake-robot.md."
+    "repeatable; NAME as listed in docs/fake-robot.md (a wrong one is refused with the list)."
 )
 
 
@@ -70,6 +71,9 @@ def emulate(
 
     Prints the device path (first line) and the truth socket path (second line).
     """
+    from fakes.nomad.config import build_config
+    from fakes.nomad.run import run_emulator
+
     if truth_socket is not None:
         _check_socket_path(truth_socket)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)

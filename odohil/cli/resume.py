@@ -9,6 +9,7 @@ import typer
 from rich.console import Console
 
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
+from odohil.cli.line import resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.run import (
     Outcome,
@@ -19,7 +20,6 @@ from odohil.cli.run import (
     session_exit_codes,
     session_input,
 )
-from odohil.driver.link import DEFAULT_BAUD
 from odohil.errors import InitError
 from odohil.session.engine import description_of, resume_session
 from odohil.session.floor_space import check_floor
@@ -89,12 +89,10 @@ def resume(
                     f"with `odohil wizard --port PORT --session {session}`"
                 )
             settings = dict(state.header.get("settings", {}))
-            port_url = port or settings.get("port")
-            if not port_url:
-                raise InitError("the session does not say which port; give --port")
-            line_baud = baud or int(settings.get("baud") or DEFAULT_BAUD)
-            socket_path = truth_socket or settings.get("truth_socket")
             description = description_of(state)  # before the port opens
+            robot_path = str(state.header.get("robot_path") or "robot.toml")
+            line = resolve_line(description, port, baud, robot_path, journaled=settings)
+            socket_path = truth_socket or settings.get("truth_socket")
             kind = str(state.header.get("measure"))
             trial_file = settings.get("trial_file")
             if measure is not None:
@@ -109,7 +107,8 @@ def resume(
                 f"resuming {session}: {done} of {state.plan.n_trials} trials done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
             )
-            with connect(str(port_url), line_baud, socket_path) as (robot, truth):
+            console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
+            with connect(line, socket_path) as (robot, truth):
                 source = make_source(
                     kind,
                     description,
@@ -117,7 +116,7 @@ def resume(
                     int(settings.get("seed") or 0),
                     trial_file,
                 )
-                connection = {**settings, "port": port_url, "baud": line_baud}
+                connection = {**settings, **line.to_json()}
                 connection["truth_socket"] = socket_path
                 refused: list[StartPose] = []
 

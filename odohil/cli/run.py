@@ -33,10 +33,9 @@ from odohil.cli.exit_codes import (
     EXIT_UNTRUSTED,
     exit_for_signal,
 )
+from odohil.cli.line import Line, register_fake_urls, resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.verdict import verdict_line
-from odohil.driver.link import DEFAULT_BAUD, open_port
-from odohil.driver.robot import NomadRobot
 from odohil.errors import (
     InitError,
     JournalError,
@@ -63,9 +62,12 @@ from odohil.session.engine import (
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
 from odohil.session.plan import Plan
+from odohil.session.pose_source import PoseSource
 from odohil.session.preflight import check_new_session, check_trial_file
+from odohil.session.robot import Robot
+from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
-from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
+from odohil.session.sources import FakeTruthSource, TapeSource, TruthReader
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState, ambiguous_trials, session_observations
 
@@ -91,16 +93,17 @@ class SnapshotTruth:
 
 
 @contextlib.contextmanager
-def connect(port: str, baud: int, truth_socket: str | None) -> Iterator[tuple[NomadRobot, Any]]:
-    """The robot on ``port`` and its truth side channel (None when there is none).
+def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]:
+    """The robot on ``line`` (through the backend its protocol names) and its
+    truth side channel (None when there is none).
 
-    ``fakerobot://`` ports carry their own truth; a pty fake robot needs
-    ``truth_socket``. The robot is closed (``st`` sent) on exit.
+    ``fakerobot://`` ports carry their own truth (on the backend's
+    ``transport``, the open port); a pty fake robot needs ``truth_socket``.
+    The robot is closed (stopped) on exit.
     """
-    if port.startswith("fakerobot:"):
-        import fakes  # noqa: F401  (registers the fakerobot:// URL handler)
-    raw = open_port(port, baud)
-    robot = NomadRobot.from_port(raw)
+    register_fake_urls(line.port)
+    robot = open_robot(line.protocol, line.port, line.baud)
+    transport = getattr(robot, "transport", None)
     truth: Any = None
     try:
         if truth_socket:
@@ -109,14 +112,14 @@ def connect(port: str, baud: int, truth_socket: str | None) -> Iterator[tuple[No
             client = TruthClient(truth_socket)
             client.open()
             truth = client
-        elif hasattr(raw, "truth"):
-            truth = raw
+        elif hasattr(transport, "truth"):
+            truth = transport
         yield robot, truth
     finally:
         try:
             robot.close()
         finally:
-            if truth is not None and hasattr(truth, "close") and truth is not raw:
+            if truth is not None and hasattr(truth, "close") and truth is not transport:
                 truth.close()
 
 
@@ -126,8 +129,10 @@ def make_source(
     truth: Any,
     seed: int,
     trial_file: str | None,
-) -> MeasurementSource:
-    """The measurement source named by ``measure`` (``fake`` or ``file``)."""
+) -> PoseSource:
+    """The pose source named by ``measure``: ``fake`` (the fake's truth as a
+    tape with simulated noise, through the floor-marks solver) or ``file`` (a
+    trial file: poses read as poses, raw distances through the solver)."""
     if measure == "fake":
         if truth is None:
             raise InitError(
@@ -135,11 +140,11 @@ def make_source(
                 "--truth-socket PATH (the path `odohil emulate` printed) or a fakerobot:// port"
             )
         reader: TruthReader = SnapshotTruth(truth)
-        return FakeTruthSource(reader, description, seed=seed)
+        return TapeSource(FakeTruthSource(reader, description, seed=seed), description)
     if measure == "file" and trial_file:
-        from odohil.session.sources import recorded_source_from_file
+        from odohil.session.sources import pose_source_from_file
 
-        return recorded_source_from_file(trial_file, description)
+        return pose_source_from_file(trial_file, description)
     raise ParameterError(f"unknown measurement source {measure!r}")
 
 
@@ -194,8 +199,8 @@ class Outcome:
 def execute(
     journal: Journal,
     state: SessionState,
-    robot: NomadRobot,
-    source: MeasurementSource,
+    robot: Robot,
+    source: PoseSource,
     connection: Mapping[str, Any],
     console: Console,
     motion: MotionSettings | None = None,
@@ -411,7 +416,14 @@ def default_session_folder() -> Path:
 
 
 def run(
-    port: Annotated[str, typer.Option("--port", help="Serial device, pty path or pyserial URL.")],
+    port: Annotated[
+        str | None,
+        typer.Option(
+            "--port",
+            help="Serial device, pty path or pyserial URL (default: robot.toml [serial] port).",
+        ),
+    ] = None,
+    *,
     robot_file: Annotated[Path, typer.Option("--robot", help="Robot description (TOML).")],
     plan_text: Annotated[str, typer.Option("--plan", help=_PLAN_HELP)],
     measure: Annotated[
@@ -435,8 +447,13 @@ def run(
         ),
     ] = 0,
     baud: Annotated[
-        int, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
-    ] = DEFAULT_BAUD,
+        int | None,
+        typer.Option(
+            "--baud",
+            callback=bounded("baud"),
+            help="Line speed (default: robot.toml [serial] baud, else the robot's default).",
+        ),
+    ] = None,
     json_out: Annotated[
         bool,
         typer.Option("--json", help="Print the final estimate as JSON (as estimate --json)."),
@@ -459,17 +476,17 @@ def run(
         except ParameterError as exc:
             console.print(f"[red]error[/]: {exc}; nothing moved")
             raise typer.Exit(EXIT_BAD_INPUT) from None
+        line = resolve_line(description, port, baud, str(robot_file))
         kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
         if trial_file:
             check_trial_file(trial_file, description, plan)
         settings = {
-            "port": port,
-            "baud": baud,
+            **line.to_json(),
             "truth_socket": truth_socket,
             "seed": seed,
             "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
         }
-        if kind == "fake" and not truth_socket and not port.startswith("fakerobot:"):
+        if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
             try:
                 make_source(kind, description, None, seed, trial_file)  # says what is missing
             except OdohilError as exc:
@@ -480,7 +497,8 @@ def run(
                 folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)
             )
         console.print(f"session {folder}")
-        with journal, connect(port, baud, truth_socket) as (robot, truth):
+        console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
+        with journal, connect(line, truth_socket) as (robot, truth):
             source = make_source(kind, description, truth, seed, trial_file)
             outcome = execute(journal, state, robot, source, settings, console, exclude=exclude)
     finish(outcome, json_out, console)

@@ -10,9 +10,11 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
     [measurement]
     sigma_m = 0.001          # standard deviation of one tape reading, metres
     cross = [["A", "B"], ["B", "C"]]  # start mark of A to end mark of B, B to C
+    [robot]                  # optional: which driver backend speaks to it
+    protocol = "nomad150"    # an odohil.robots entry point (default nomad150)
     [serial]                 # optional, for the driver
     port = "/dev/ttyUSB0"    # or any pyserial URL
-    baud = 38400             # 4800, 9600, 19200 or 38400
+    baud = 38400             # nomad150: 4800, 9600, 19200 or 38400
     timeout_s = 1.0
     [priors]                 # optional: belief in the four parameters before any trial
     E_R_deg_per_m = -0.202   # (paper units; defaults: the paper's Nomad 150 values)
@@ -59,7 +61,13 @@ MIN_SPREAD_RATIO = 0.1
 is less than this fraction of their spread along it (ratio of the singular
 values of the centred positions); the pose from such marks is ill-conditioned."""
 
-_TOP_KEYS = ("screws", "measurement", "serial", "priors", "floor")
+_TOP_KEYS = ("robot", "screws", "measurement", "serial", "priors", "floor")
+DEFAULT_PROTOCOL = "nomad150"
+"""The robot protocol (driver backend) when ``[robot] protocol`` is absent."""
+_ROBOT_KEYS = ("protocol",)
+PROTOCOL_BAUD_RATES: dict[str, tuple[int, ...]] = {"nomad150": BAUD_RATES}
+"""Line speeds a protocol accepts, checked when the description is read; a
+protocol not listed takes any positive integer (its backend checks it)."""
 _FLOOR_KEYS = ("length_m",)
 _PRIOR_KEYS = (
     "E_R_deg_per_m",
@@ -95,18 +103,33 @@ class Screw:
 
 
 @dataclass(frozen=True)
+class RobotSettings:
+    """Which robot this is (``[robot]``).
+
+    Attributes:
+        protocol: the driver backend's name in the ``odohil.robots``
+            entry-point group (odohil/session/robots.py).
+    """
+
+    protocol: str = DEFAULT_PROTOCOL
+
+
+@dataclass(frozen=True)
 class SerialSettings:
     """How the driver reaches the robot.
 
     Attributes:
         port: device path or any pyserial URL; None when not configured.
-        baud: line speed in baud, one of :data:`BAUD_RATES`.
+        baud: line speed in baud (for nomad150 one of :data:`BAUD_RATES`).
         timeout_s: reply timeout in seconds.
+        given: the keys the file gave (the others are defaults), so that a
+            command can say where each value in force came from.
     """
 
     port: str | None = None
     baud: int = DEFAULT_BAUD
     timeout_s: float = DEFAULT_TIMEOUT_S
+    given: frozenset[str] = field(default=frozenset(), compare=False)
 
 
 def _paper_to_si(values: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
@@ -155,6 +178,7 @@ class RobotDescription:
         priors: belief in the parameters before any trial (``[priors]``).
         floor_length_m: free floor along the robot's line of travel, metres
             (``[floor] length_m``); None when not given. No plan may need more.
+        robot: which robot this is (``[robot]``).
     """
 
     screws: tuple[Screw, ...]
@@ -163,6 +187,7 @@ class RobotDescription:
     serial: SerialSettings = field(default_factory=SerialSettings)
     priors: ParameterPriors = field(default_factory=ParameterPriors)
     floor_length_m: float | None = None
+    robot: RobotSettings = field(default_factory=RobotSettings)
 
     def __post_init__(self) -> None:
         _check_screws(self.screws)
@@ -172,7 +197,7 @@ class RobotDescription:
             )
         _in_range("sigma_m", "measurement.sigma_m", self.sigma_m)
         _check_cross_pairs(self.cross_pairs, tuple(s.name for s in self.screws))
-        _check_serial(self.serial)
+        _check_serial(self.serial, self.robot.protocol)
         floor = self.floor_length_m
         if floor is not None and (not math.isfinite(floor) or not 0 < floor <= MAX_FLOOR_M):
             raise RobotDescriptionError(
@@ -214,6 +239,7 @@ def parse_robot_description(text: str, source: str = "robot description") -> Rob
 
 def _from_mapping(data: dict[str, Any]) -> RobotDescription:
     _reject_unknown(data, _TOP_KEYS, "")
+    robot = _robot(_table(data, "robot", required=False))
     screws_table = _table(data, "screws", required=True)
     screws = tuple(_screw(name, value, f"screws.{name}") for name, value in screws_table.items())
     measurement = _table(data, "measurement", required=True)
@@ -236,7 +262,18 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
         serial=serial,
         priors=_priors(_table(data, "priors", required=False)),
         floor_length_m=floor_m,
+        robot=robot,
     )
+
+
+def _robot(table: dict[str, Any]) -> RobotSettings:
+    _reject_unknown(table, _ROBOT_KEYS, "robot.")
+    protocol = table.get("protocol", DEFAULT_PROTOCOL)
+    if not isinstance(protocol, str) or not protocol.strip():
+        raise RobotDescriptionError(
+            f"robot.protocol must be a backend name like {DEFAULT_PROTOCOL!r}, got {protocol!r}"
+        )
+    return RobotSettings(protocol=protocol.strip())
 
 
 def _priors(table: dict[str, Any]) -> ParameterPriors:
@@ -322,7 +359,7 @@ def _serial(table: dict[str, Any]) -> SerialSettings:
     if isinstance(baud_value, bool) or not isinstance(baud_value, int):
         raise RobotDescriptionError(f"serial.baud must be an integer, got {baud_value!r}")
     timeout_s = _number(table.get("timeout_s", DEFAULT_TIMEOUT_S), "serial.timeout_s")
-    return SerialSettings(port=port, baud=baud_value, timeout_s=timeout_s)
+    return SerialSettings(port=port, baud=baud_value, timeout_s=timeout_s, given=frozenset(table))
 
 
 def _check_screws(screws: tuple[Screw, ...]) -> None:
@@ -379,11 +416,14 @@ def _check_cross_pairs(pairs: tuple[tuple[str, str], ...], names: tuple[str, ...
         raise RobotDescriptionError(f"{key}: the same pair is listed twice: {list(pairs)}")
 
 
-def _check_serial(serial: SerialSettings) -> None:
-    if serial.baud not in BAUD_RATES:
+def _check_serial(serial: SerialSettings, protocol: str) -> None:
+    rates = PROTOCOL_BAUD_RATES.get(protocol)
+    if rates is not None and serial.baud not in rates:
         raise RobotDescriptionError(
-            f"serial.baud must be one of {list(BAUD_RATES)}, got {serial.baud!r}"
+            f"serial.baud must be one of {list(rates)} for {protocol}, got {serial.baud!r}"
         )
+    if serial.baud <= 0:
+        raise RobotDescriptionError(f"serial.baud must be a positive integer, got {serial.baud!r}")
     if not math.isfinite(serial.timeout_s) or serial.timeout_s <= 0:
         raise RobotDescriptionError(
             f"serial.timeout_s must be a positive number of seconds, got {serial.timeout_s!r}"
