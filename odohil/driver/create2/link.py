@@ -11,15 +11,12 @@ port is opened with ``serial.serial_for_url``, so a device, ``socket://``,
 from __future__ import annotations
 
 import contextlib
-import termios
 import time
 from dataclasses import dataclass
 from typing import Literal
 
-import serial
-
+from odohil.driver.port import IO_ERRORS, Port, open_serial_url
 from odohil.errors import (
-    ConnectionFailedError,
     DisconnectedError,
     OdohilTimeoutError,
     ParameterError,
@@ -50,7 +47,7 @@ READ_SLICE_S = 0.005
 """pyserial read timeout: how often the link checks its own deadlines, s."""
 REPLY_TIMEOUT_S = 1.0
 """Longest wait for a reading, s (66 stream frames; the Nomad link's normal timeout)."""
-_IO_ERRORS = (serial.SerialException, OSError, termios.error)
+_IO_ERRORS = IO_ERRORS
 
 
 @dataclass(frozen=True)
@@ -100,23 +97,11 @@ def _reading(values: dict[int, int], host_time_s: float) -> Reading:
     )
 
 
-def open_port(url: str, baud: int = DEFAULT_BAUD) -> serial.SerialBase:
-    """Open ``url`` 8N1 without flow control (facts §2; CHOICE C1)."""
+def open_port(url: str, baud: int = DEFAULT_BAUD) -> Port:
+    """Open ``url`` 8N1 without flow control (facts §2; CHOICE C1) at an OI rate."""
     if baud not in BAUD_RATES:
-        raise ParameterError(f"baud must be one of {BAUD_RATES}, got {baud}")
-    try:
-        return serial.serial_for_url(
-            url,
-            baudrate=baud,
-            bytesize=8,
-            parity="N",
-            stopbits=1,
-            rtscts=False,
-            xonxoff=False,
-            timeout=READ_SLICE_S,
-        )
-    except (serial.SerialException, OSError, ValueError) as exc:
-        raise ConnectionFailedError(f"cannot open {url!r}: {exc}") from exc
+        raise ParameterError(f"baud must be one of {BAUD_RATES} for the Create 2, got {baud}")
+    return open_serial_url(url, baud, READ_SLICE_S)
 
 
 class Create2Link:
@@ -125,14 +110,18 @@ class Create2Link:
     Args:
         port: an open pyserial port.
         url: what it was opened from (for messages).
+        baud: its line rate (for the line time of a reading).
         sampling: ``poll`` or ``stream`` (see the module docstring).
     """
 
-    def __init__(self, port: serial.SerialBase, url: str, sampling: Sampling = "poll") -> None:
+    def __init__(
+        self, port: Port, url: str, baud: int = DEFAULT_BAUD, sampling: Sampling = "poll"
+    ) -> None:
         if sampling not in SAMPLINGS:
             raise ParameterError(f"sampling must be one of {SAMPLINGS}, got {sampling!r}")
         self.port = port
         self.url = url
+        self.baud = baud
         self.sampling = sampling
         self.closed = False
         self.streaming = False
@@ -158,7 +147,7 @@ class Create2Link:
             size = len(commands.query_list(SAMPLE_IDS)) + reply_size_of_samples()
         else:
             size = frame_size(SAMPLE_IDS)
-        return size * 10.0 / float(self.port.baudrate)
+        return size * 10.0 / self.baud
 
     def drain(self) -> None:
         """Wait until every byte written has left the host."""

@@ -65,9 +65,10 @@ from odohil.errors import (
 from odohil.protocol.create2 import commands
 from odohil.protocol.create2.commands import MAX_SPEED_MM_S
 from odohil.protocol.create2.numbers import encoder_delta
-from odohil.protocol.create2.opcodes import DEFAULT_BAUD, Mode
+from odohil.protocol.create2.opcodes import BAUD_RATES, DEFAULT_BAUD, Mode
 from odohil.science.diff_drive import DiffDriveGeometry, odometry_step
 from odohil.science.paths import Design, Leg, Turn
+from odohil.science.robot_description import RobotSettings
 
 OPEN_WAIT_S = 1.0
 """Wait after opening the port before the first byte, s (C17; libcreate)."""
@@ -117,12 +118,20 @@ class _Step:
 class Create2Robot:
     """A connected Create 2 (context manager; :meth:`close` stops it).
 
+    Also the ``create2`` backend of the ``odohil.robots`` entry-point group
+    (pyproject.toml; odohil/session/robots.py): :meth:`open` and
+    :attr:`default_baud`.
+
     Args:
         link: the open link.
         geometry: the description's counts per revolution, wheel diameter
             and wheel base.
         full_mode: drive in Full (no OI safety stops) instead of Safe.
     """
+
+    name = "create2"
+    default_baud = DEFAULT_BAUD
+    baud_rates = BAUD_RATES
 
     def __init__(
         self,
@@ -159,7 +168,7 @@ class Create2Robot:
         Raises ConnectionFailedError when the port does not open or the robot
         does not answer in Passive (asleep? BRC wiring, docs/create2.md).
         """
-        link = Create2Link(open_port(url, baud), url, sampling)
+        link = Create2Link(open_port(url, baud), url, baud, sampling)
         robot = cls(link, geometry, full_mode=full_mode)
         try:
             time.sleep(open_wait_s)
@@ -184,10 +193,29 @@ class Create2Robot:
             ) from exc
         return robot
 
+    @classmethod
+    def open(
+        cls, url: str, baud: int | None = None, robot: RobotSettings | None = None
+    ) -> Create2Robot:
+        """The backend entry: connect at ``baud`` (115200 when None) with the
+        description's ``[robot]`` constants and mode (defaults: the Create 2's)."""
+        settings = robot or RobotSettings(protocol="create2")
+        return cls.connect(
+            url,
+            baud=cls.default_baud if baud is None else baud,
+            geometry=settings.drive,
+            full_mode=settings.full_mode,
+        )
+
     @property
     def port(self) -> str:
         """The port URL."""
         return self._link.url
+
+    @property
+    def transport(self) -> object:
+        """The open pyserial port (a ``fakecreate2://`` port carries the fake's truth)."""
+        return self._link.port
 
     @property
     def link(self) -> Create2Link:
@@ -262,11 +290,15 @@ class Create2Robot:
         """Read the encoders now; the odometry pose."""
         return self._guarded(lambda: self._reading_sample()[1])
 
-    def zero(self) -> OdometrySample:
-        """The current pose becomes the odometry frame's origin (host side:
+    def zero(self, pose: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> OdometrySample:
+        """The odometry reads ``pose`` (x m, y m, heading rad) here (host side:
         the OI's encoders cannot be zeroed without Reset)."""
         sample = self.odometry()
-        self._origin = self._pose
+        px, py, pth = pose
+        qx, qy, qth = self._pose
+        oth = qth - pth
+        c, s = math.cos(oth), math.sin(oth)
+        self._origin = (qx - (c * px - s * py), qy - (s * px + c * py), oth)
         return self._sample(self._last or self._read(), sample.moving)
 
     # ---- modes and safety ------------------------------------------------------------
