@@ -56,6 +56,9 @@ class Reading:
 
     Attributes:
         host_time_s: host monotonic time when it arrived, s.
+        robot_time_s: the robot's clock: stream frames counted times 15 ms
+            (frames come on the OI's own ticks however the host is scheduled);
+            the host time when polling.
         bumps_drops: packet 7 (bit0 bump R, bit1 bump L, bit2 drop R, bit3 drop L).
         cliffs: packets 9-12 (left, front left, front right, right).
         mode_raw: packet 35 as sent (some robots add 1).
@@ -63,6 +66,7 @@ class Reading:
     """
 
     host_time_s: float
+    robot_time_s: float
     bumps_drops: int
     cliffs: tuple[int, int, int, int]
     mode_raw: int
@@ -79,7 +83,7 @@ class Reading:
         return found
 
 
-def _reading(values: dict[int, int], host_time_s: float) -> Reading:
+def _reading(values: dict[int, int], host_time_s: float, robot_time_s: float) -> Reading:
     cliffs = tuple(values[p] for p in CLIFF_PACKETS)
     bumps = values[Packet.BUMPS_WHEEL_DROPS]
     if bumps > 0x1F or any(c > 1 for c in cliffs) or values[Packet.OI_MODE] > 4:
@@ -89,6 +93,7 @@ def _reading(values: dict[int, int], host_time_s: float) -> Reading:
         )
     return Reading(
         host_time_s=host_time_s,
+        robot_time_s=robot_time_s,
         bumps_drops=bumps,
         cliffs=(cliffs[0], cliffs[1], cliffs[2], cliffs[3]),
         mode_raw=values[Packet.OI_MODE],
@@ -128,6 +133,8 @@ class Create2Link:
         self._decoder = StreamDecoder(SAMPLE_IDS)
         self._last_poll = -1.0
         self.readings = 0
+        self.frames = 0
+        """Stream frames received."""
 
     def send(self, data: bytes) -> None:
         """Write command bytes (DisconnectedError when the line is gone)."""
@@ -207,7 +214,8 @@ class Create2Link:
         self.readings += 1
         if self.sampling == "poll" or not self.streaming:
             data = self.ask(commands.query_list(SAMPLE_IDS), reply_size_of_samples())
-            return _reading(decode_reply(SAMPLE_IDS, data), time.monotonic())
+            now = time.monotonic()
+            return _reading(decode_reply(SAMPLE_IDS, data), now, now)
         deadline = time.monotonic() + timeout_s
         while True:
             try:
@@ -217,7 +225,9 @@ class Create2Link:
             frames = self._decoder.feed(self._read(max(1, waiting)))
             if frames:
                 # only the newest frame: older ones are stale by 15 ms each
-                return _reading(frames[-1].values, time.monotonic())
+                self.frames += len(frames)
+                robot_time = self.frames * STREAM_PERIOD_S
+                return _reading(frames[-1].values, time.monotonic(), robot_time)
             if time.monotonic() >= deadline:
                 raise OdohilTimeoutError(f"no stream frame from {self.url} in {timeout_s:g} s")
 

@@ -74,9 +74,9 @@ OPEN_WAIT_S = 1.0
 """Wait after opening the port before the first byte, s (C17; libcreate)."""
 MODE_WAIT_S = 0.02
 """Wait after a mode command, s (C17)."""
-CRAWL_MM_S = 25
+CRAWL_MM_S = 40
 """Wheel speed for the last part of a step, mm/s."""
-SLOW_HORIZON_S = 0.06
+SLOW_HORIZON_S = 0.045
 """A step slows to the crawl when it is this long (at its current rate) from its end:
 about two readings, so the crawl starts before the slow zone is crossed."""
 STOP_LEAD_S = 0.012
@@ -91,8 +91,15 @@ STILL_READINGS = 2
 """A robot is still when this many readings in a row show the same counts."""
 STALL_S = 0.6
 """Encoders that have not moved for this long while the wheels should turn: a stall, s."""
+MAX_ATTEMPTS = 3
+"""A step that stopped short (a reading came late) is finished at the crawl, at most
+this many drives in all."""
 STEP_TOLERANCE_M = 0.01
-"""Largest distance (per wheel) a step may end from its target, m."""
+"""Largest distance (per wheel) a step may end from its target, m, ...
+"""
+STEP_TOLERANCE_FRACTION = 0.01
+"""...or this fraction of the step's wheel travel, when larger (a late stop on a
+busy host; the next step's target makes up for it)."""
 MIN_STEP_COUNTS = 10
 """Shortest step the backend drives, counts (4.4 mm at the Create 2's constants)."""
 STOP_CONFIRM_TIMEOUT_S = 2.0
@@ -503,17 +510,62 @@ class Create2Robot:
         record: Callable[[OdometrySample], None],
     ) -> None:
         signs = (step.left_sign, step.right_sign)
-        last = self._last
-        assert last is not None
 
         def remaining() -> float:
             return sum(s * (t - d) for s, t, d in zip(signs, target, travelled, strict=True)) / 2
 
-        speed = step.speed_mm_s
-        crawl = min(speed, CRAWL_MM_S)
+        crawl = min(step.speed_mm_s, CRAWL_MM_S)
         deadline = time.monotonic() + settings.step_timeout_s
+        tolerance = max(
+            self.geometry.counts_for(STEP_TOLERANCE_M), STEP_TOLERANCE_FRACTION * step.counts
+        )
+        speed = step.speed_mm_s
+        for _attempt in range(MAX_ATTEMPTS):
+            last = self._run_to_target(step, speed, crawl, remaining, travelled, deadline, record)
+            # wait until the wheels stand still, then check where the step ended
+            still = 0
+            while still < STILL_READINGS - 1:
+                previous = last
+                reading, sample = self._reading_sample()
+                last = reading
+                record(sample)
+                self._check(reading)
+                self._track(previous, reading, travelled)
+                moved = (previous.left_counts, previous.right_counts) != (
+                    reading.left_counts,
+                    reading.right_counts,
+                )
+                still = 0 if moved else still + 1
+                if time.monotonic() > deadline:
+                    raise StopUnconfirmedError(f"{step.what}: the wheels still turn after the stop")
+            if remaining() <= tolerance:
+                break
+            speed = crawl  # stopped short (a late reading): finish at the crawl
+        off = [t - d for t, d in zip(target, travelled, strict=True)]
+        if max(abs(o) for o in off) > tolerance:
+            raise MotionError(
+                f"{step.what} ended {off[0]:+.0f} (left), {off[1]:+.0f} (right) counts from "
+                f"its target (tolerance {tolerance:.0f} counts, "
+                f"{tolerance * self.geometry.metres_per_count:.3g} m); "
+                "robot stopped"
+            )
+
+    def _run_to_target(
+        self,
+        step: _Step,
+        speed: int,
+        crawl: int,
+        remaining: Callable[[], float],
+        travelled: list[float],
+        deadline: float,
+        record: Callable[[OdometrySample], None],
+    ) -> Reading:
+        """Drive the step's wheels until the target is (about to be) reached,
+        then stop; the last reading."""
+        last = self._last
+        assert last is not None
         rate = 0.0  # counts per second along the step, measured
-        history: list[tuple[float, float]] = []  # (host time, -remaining) at this speed
+        history: list[tuple[float, float]] = []  # (robot time, -remaining) at this speed
         lead_s = STOP_LEAD_S + self._link.transfer_s
         moved_at = time.monotonic()
         if remaining() > 0:
@@ -531,17 +583,17 @@ class Create2Robot:
                 reading.right_counts,
             ):
                 moved_at = now
-            history.append((now, -remaining()))
+            history.append((reading.robot_time_s, -remaining()))
             rate = _rate(history, rate)
             left_to_go = remaining()
             if left_to_go <= rate * lead_s or left_to_go <= 0:
                 self.stop()
                 break
             if speed > crawl and left_to_go <= rate * SLOW_HORIZON_S:
-                speed = crawl
-                self._command(step, speed)
+                self._command(step, crawl)
                 history.clear()
-                rate *= crawl / step.speed_mm_s
+                rate *= crawl / speed
+                speed = crawl
             if now - moved_at > STALL_S:
                 self.stop()
                 raise MotionError(
@@ -552,33 +604,10 @@ class Create2Robot:
             if now > deadline:
                 self.stop()
                 raise OdohilTimeoutError(
-                    f"{step.what} not done after {settings.step_timeout_s:g} s; robot "
+                    f"{step.what} not done within its step timeout; robot "
                     f"told to stop at {sample.pose_text()}"
                 )
-        # wait until the wheels stand still, then check where the step ended
-        still = 0
-        while still < STILL_READINGS - 1:
-            previous = last
-            reading, sample = self._reading_sample()
-            last = reading
-            record(sample)
-            self._check(reading)
-            self._track(previous, reading, travelled)
-            moved = (previous.left_counts, previous.right_counts) != (
-                reading.left_counts,
-                reading.right_counts,
-            )
-            still = 0 if moved else still + 1
-            if time.monotonic() > deadline:
-                raise StopUnconfirmedError(f"{step.what}: the wheels still turn after the stop")
-        tolerance = self.geometry.counts_for(STEP_TOLERANCE_M)
-        off = [t - d for t, d in zip(target, travelled, strict=True)]
-        if max(abs(o) for o in off) > tolerance:
-            raise MotionError(
-                f"{step.what} ended {off[0]:+.0f} (left), {off[1]:+.0f} (right) counts from "
-                f"its target (tolerance {tolerance:.0f} counts = {STEP_TOLERANCE_M:g} m); "
-                "robot stopped"
-            )
+        return last
 
     def _track(self, previous: Reading, reading: Reading, travelled: list[float]) -> None:
         travelled[0] += encoder_delta(previous.left_counts, reading.left_counts)
