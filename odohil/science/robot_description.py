@@ -10,6 +10,8 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
     [measurement]
     sigma_m = 0.001          # standard deviation of one tape reading, metres
     cross = [["A", "B"], ["B", "C"]]  # start mark of A to end mark of B, B to C
+    pose_sigma = [0.0005, 0.0005, 0.001]  # optional, motion capture: one still pose's
+                             # standard deviations (x m, y m, theta rad), world axes
     [robot]                  # optional: which driver backend speaks to it
     protocol = "nomad150"    # an odohil.robots entry point (default nomad150)
     # create2 only (defaults: the Create 2's; docs/create2.md):
@@ -93,7 +95,7 @@ DEFAULT_PRIOR_SD_PAPER: tuple[float, float, float, float] = (0.5, 0.05, 0.05, 2e
 """Default prior spreads (deg/m, 1, deg^2/m, m): 2.5 times |E_R|, 5 % on the
 distance scale, 4 times K_theta and 5 times K_rho of the Nomad 150, so that a
 robot several times worse than the paper's still lies within two of them."""
-_MEASUREMENT_KEYS = ("sigma_m", "cross")
+_MEASUREMENT_KEYS = ("sigma_m", "cross", "pose_sigma")
 _SERIAL_KEYS = ("port", "baud", "timeout_s")
 
 
@@ -194,6 +196,10 @@ class RobotDescription:
         priors: belief in the parameters before any trial (``[priors]``).
         floor_length_m: free floor along the robot's line of travel, metres
             (``[floor] length_m``); None when not given. No plan may need more.
+        pose_sigma: standard deviations of one still pose taken by motion
+            capture (``[measurement] pose_sigma``): x m, y m along the capture
+            system's world axes, theta rad; None when not given (motion
+            capture then refuses to start).
         robot: which robot this is (``[robot]``).
     """
 
@@ -203,6 +209,7 @@ class RobotDescription:
     serial: SerialSettings = field(default_factory=SerialSettings)
     priors: ParameterPriors = field(default_factory=ParameterPriors)
     floor_length_m: float | None = None
+    pose_sigma: tuple[float, float, float] | None = None
     robot: RobotSettings = field(default_factory=RobotSettings)
 
     def __post_init__(self) -> None:
@@ -214,6 +221,8 @@ class RobotDescription:
         _in_range("sigma_m", "measurement.sigma_m", self.sigma_m)
         _check_cross_pairs(self.cross_pairs, tuple(s.name for s in self.screws))
         _check_serial(self.serial, self.robot.protocol)
+        if self.pose_sigma is not None:
+            _check_pose_sigma(self.pose_sigma)
         floor = self.floor_length_m
         if floor is not None and (not math.isfinite(floor) or not 0 < floor <= MAX_FLOOR_M):
             raise RobotDescriptionError(
@@ -264,6 +273,7 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
         raise RobotDescriptionError("measurement.sigma_m is missing")
     sigma_m = _number(measurement["sigma_m"], "measurement.sigma_m")
     cross_pairs = _cross_pairs(measurement.get("cross", []))
+    pose_sigma = _pose_sigma(measurement["pose_sigma"]) if "pose_sigma" in measurement else None
     serial_table = _table(data, "serial", required=False)
     _reject_unknown(serial_table, _SERIAL_KEYS, "serial.")
     serial = _serial(serial_table)
@@ -278,6 +288,7 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
         serial=serial,
         priors=_priors(_table(data, "priors", required=False)),
         floor_length_m=floor_m,
+        pose_sigma=pose_sigma,
         robot=robot,
     )
 
@@ -379,6 +390,23 @@ def _cross_pairs(value: Any) -> tuple[tuple[str, str], ...]:
             )
         pairs.append((pair[0], pair[1]))
     return tuple(pairs)
+
+
+def _pose_sigma(value: Any) -> tuple[float, float, float]:
+    key = "measurement.pose_sigma"
+    if not isinstance(value, list) or len(value) != 3:
+        raise RobotDescriptionError(
+            f"{key} must be [sigma_x_m, sigma_y_m, sigma_theta_rad], got {value!r}"
+        )
+    x, y, theta = (_number(v, f"{key}[{i}]") for i, v in enumerate(value))
+    return (x, y, theta)
+
+
+def _check_pose_sigma(sigma: tuple[float, float, float]) -> None:
+    key = "measurement.pose_sigma"
+    _in_range("pose_sigma_m", f"{key}[0] (sigma_x_m)", sigma[0])
+    _in_range("pose_sigma_m", f"{key}[1] (sigma_y_m)", sigma[1])
+    _in_range("pose_sigma_rad", f"{key}[2] (sigma_theta_rad)", sigma[2])
 
 
 def _serial(table: dict[str, Any]) -> SerialSettings:

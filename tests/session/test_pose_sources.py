@@ -22,7 +22,7 @@ from odohil.session.sources import (
     TruthPoseSource,
     pose_source_from_file,
 )
-from odohil.session.state import SessionState
+from odohil.session.state import SessionState, session_trials
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
 
 QUERY = f"seed=11&{FAST}&E_R=-1.0&E_T=-0.05&K_theta=0.3&K_rho=0.0009"
@@ -63,6 +63,9 @@ def test_a_trial_file_of_poses_is_read_as_poses(tmp_path: Path) -> None:
         np.testing.assert_allclose(trial.cov, expected_cov, rtol=1e-12)
         assert trial.measurements == ()
     assert ev.MEASUREMENT not in _kinds(tmp_path / "s")
+    offline = session_trials(final)  # odohil estimate SESSION, the report
+    assert [t.marks for t in offline.trials] == [None, None]
+    assert [t.flagged for t in offline.trials] == [False, False]
 
 
 def test_a_trial_file_of_distances_goes_through_the_solver(tmp_path: Path) -> None:
