@@ -16,7 +16,7 @@ from odohil.errors import ParameterError
 from odohil.science.robot_description import RobotDescription
 from odohil.session.robots import find_backend
 
-FAKE_URL_SCHEMES = ("fakerobot:",)
+FAKE_URL_SCHEMES = ("fakerobot:", "fakecreate2:")
 """URL schemes served by the fakes (registered with pyserial only when used)."""
 
 

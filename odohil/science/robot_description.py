@@ -14,6 +14,9 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
                              # standard deviations (x m, y m, theta rad), world axes
     [robot]                  # optional: which driver backend speaks to it
     protocol = "nomad150"    # an odohil.robots entry point (default nomad150)
+    # create2 only (defaults: the Create 2's; docs/create2.md):
+    # counts_per_rev = 508.8, wheel_diameter_m = 0.072, wheel_base_m = 0.235,
+    # full_mode = false
     [serial]                 # optional, for the driver
     port = "/dev/ttyUSB0"    # or any pyserial URL
     baud = 38400             # nomad150: 4800, 9600, 19200 or 38400
@@ -45,6 +48,7 @@ import numpy.typing as npt
 
 from odohil import units
 from odohil.errors import ParameterError, RobotDescriptionError
+from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, PARAMETER_NAMES, ErrorParameters
 
@@ -66,7 +70,13 @@ values of the centred positions); the pose from such marks is ill-conditioned.""
 _TOP_KEYS = ("robot", "screws", "measurement", "serial", "priors", "floor")
 DEFAULT_PROTOCOL = "nomad150"
 """The robot protocol (driver backend) when ``[robot] protocol`` is absent."""
-_ROBOT_KEYS = ("protocol",)
+_ROBOT_KEYS = ("protocol", "counts_per_rev", "wheel_diameter_m", "wheel_base_m", "full_mode")
+_DRIVE_RANGES = {
+    "counts_per_rev": (1.0, 1e6),
+    "wheel_diameter_m": (0.005, 2.0),
+    "wheel_base_m": (0.02, 5.0),
+}
+"""Accepted ranges of a differential drive's kinematic constants (``[robot]``)."""
 PROTOCOL_BAUD_RATES: dict[str, tuple[int, ...]] = {"nomad150": BAUD_RATES}
 """Line speeds a protocol accepts, checked when the description is read; a
 protocol not listed takes any positive integer (its backend checks it)."""
@@ -114,6 +124,12 @@ class RobotSettings:
     """
 
     protocol: str = DEFAULT_PROTOCOL
+    drive: DiffDriveGeometry = field(default_factory=DiffDriveGeometry)
+    """A differential drive's counts per revolution, wheel diameter and wheel
+    base (``counts_per_rev``, ``wheel_diameter_m``, ``wheel_base_m``; defaults:
+    the iRobot Create 2's); backends of other drives ignore them."""
+    full_mode: bool = False
+    """``full_mode``: the Create 2 drives in the OI's Full mode (no safety stops)."""
 
 
 @dataclass(frozen=True)
@@ -283,7 +299,21 @@ def _robot(table: dict[str, Any]) -> RobotSettings:
         raise RobotDescriptionError(
             f"robot.protocol must be a backend name like {DEFAULT_PROTOCOL!r}, got {protocol!r}"
         )
-    return RobotSettings(protocol=protocol.strip())
+    nominal = DiffDriveGeometry()
+    constants = {}
+    for key, (low, high) in _DRIVE_RANGES.items():
+        value = _number(table.get(key, getattr(nominal, key)), f"robot.{key}")
+        if not low <= value <= high:
+            raise RobotDescriptionError(
+                f"robot.{key} must be in [{low:g}, {high:g}], got {value!r}"
+            )
+        constants[key] = value
+    full_mode = table.get("full_mode", False)
+    if not isinstance(full_mode, bool):
+        raise RobotDescriptionError(f"robot.full_mode must be true or false, got {full_mode!r}")
+    return RobotSettings(
+        protocol=protocol.strip(), drive=DiffDriveGeometry(**constants), full_mode=full_mode
+    )
 
 
 def _priors(table: dict[str, Any]) -> ParameterPriors:
