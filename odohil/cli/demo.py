@@ -16,7 +16,8 @@ import typer
 from rich.console import Console
 
 from odohil.cli.line import resolve_line
-from odohil.cli.options import bounded
+from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
+from odohil.cli.render import parameters_line
 from odohil.cli.run import (
     SnapshotTruth,
     connect,
@@ -62,12 +63,19 @@ def demo(
         Path | None,
         typer.Option("--session", help="Keep the session folder here (default: a temp folder)."),
     ] = None,
+    units_choice: UnitsOption = UNITS_DEFAULT,
 ) -> None:
-    """Calibrate the fake robot unattended and compare with its true parameters."""
+    """Calibrate the fake robot unattended and compare with its true parameters.
+
+    The simulated operator measures with a 1 mm tape; when its distances fit no
+    rigid motion (or one looks like a slip) it measures again, as a person
+    would, and the demo says so.
+    """
     console = Console(stderr=True)
+    system = unit_system(units_choice)
     truth = DEMO_TRUTH.to_si_dict()
     paper = DEMO_TRUTH.to_paper_units()
-    with session_exit_codes(console):
+    with session_exit_codes(console, json_out):
         from fakes.nomad.process import EmulatorProcess
 
         with tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
@@ -82,7 +90,11 @@ def demo(
                 "--truth-socket", str(Path(tmp) / "truth.sock"),
             ]  # fmt: skip
             with EmulatorProcess(args) as emulator:
-                console.print(f"fake robot on {emulator.device}; true parameters (SI) {truth}")
+                console.print(
+                    f"fake robot on {emulator.device}; its true parameters: "
+                    f"{parameters_line(truth, system)}",
+                    highlight=False,
+                )
                 description = parse_robot_description(DEMO_ROBOT_TOML, "demo robot")
                 settings = {
                     "port": emulator.device,
@@ -103,11 +115,20 @@ def demo(
                 with journal, connect(line, emulator.truth_socket) as (robot, reader):
                     tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
                     source = TapeSource(tape, description)
-                    outcome = execute(journal, state, robot, source, settings, console)
+                    outcome = execute(
+                        journal,
+                        state,
+                        robot,
+                        source,
+                        settings,
+                        console,
+                        system=system,
+                        measurer="the simulated operator",
+                    )
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
     }
-    finish(outcome, json_out, console, extra=extra, truth=truth)
+    finish(outcome, json_out, console, extra=extra, truth=truth, system=system)
 
 
 def register(app: typer.Typer) -> None:
