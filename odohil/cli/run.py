@@ -164,6 +164,7 @@ class ProgressObserver:
         self.console = console
         self.system = system
         self.measurer = measurer
+        self.remeasured: dict[int, None] = {}  # trial numbers, in order
         self.progress = Progress(
             TextColumn("[bold]trials"),
             BarColumn(),
@@ -188,19 +189,25 @@ class ProgressObserver:
             )
         elif record.kind == ev.MEASUREMENTS_REJECTED:
             self.progress.console.print(
-                f"trial {record.data['trial']}: {self.measurer} gave distances that fit no "
-                "rigid motion, so they were measured again (the checks working, nothing "
-                f"lost; the trial counts once). Why: {record.data['reason']}",
+                f"trial {record.data['trial']}: the distances {self.measurer} took fit no "
+                f"rigid motion, so {self.measurer} measured them again: the check at work; "
+                "nothing is lost and the trial counts once (the reason is in the journal).",
                 soft_wrap=True,
                 highlight=False,
             )
         elif record.kind == ev.REMEASURED and not record.data.get("kept"):
-            self.progress.console.print(
-                f"trial {record.data['trial']}: {record.data['label']} looked like a slip, so "
-                f"{self.measurer} measured it again (nothing lost).",
-                soft_wrap=True,
-                highlight=False,
-            )
+            self.remeasured.setdefault(int(record.data["trial"]), None)
+
+    def remeasure_summary(self) -> str | None:
+        """One line for every distance the slip check had taken again (None if none)."""
+        if not self.remeasured:
+            return None
+        trials = list(self.remeasured)
+        return (
+            f"In {units.plural(len(trials), 'trial')} ({', '.join(map(str, trials))}) the "
+            f"slip check doubted a distance and {self.measurer} measured it again: the check "
+            "at work; nothing is lost and each trial counts once."
+        )
 
     def estimated(self, result: EstimateResult, state: SessionState) -> None:
         """Show the live E_R beside the bar."""
@@ -283,6 +290,8 @@ def execute(
         return ended(EXIT_ERROR, "error", engine, exclude, str(exc))
     finally:
         observer.progress.stop()
+        if (summary := observer.remeasure_summary()) is not None:
+            console.print(summary, soft_wrap=True, highlight=False)
     try:
         fitted = final_estimate(final, exclude)
     except OdohilError as exc:
