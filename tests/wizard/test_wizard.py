@@ -350,7 +350,7 @@ def test_resumed_mid_trial_shows_its_context_and_back_corrects_the_last_value(
         assert child.exitstatus == 130
 
         child = _spawn(["--port", emu.device, "--session", str(folder)])
-        child.expect(re.escape("Trial 1/1 (attempt 1): k=1 l=1"))
+        child.expect(r"Trial 1/1\S* \(attempt 1\): k=1 l=1 m")
         child.expect("resumed: the motion is done")
         child.expect(re.escape(f"Already entered and saved: {LABELS[0]} = {values[0]:.4f} m"))
         child.expect(re.escape(f"Trial 1/1, {LABELS[1]}, metres ("))
