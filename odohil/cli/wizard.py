@@ -247,6 +247,7 @@ class WizardPrompts:
         self.estimate: ErrorParameters | None = None
         self._ranges: dict[tuple[int, int, int], tuple[ExpectedRange, ...]] = {}
         self._shown: set[tuple[int, int]] = set()
+        self._helped: set[tuple[int, int]] = set()
         # per (trial, attempt, rejections): a typed value held until the next is
         # typed (so ``back`` can correct it), and values a rejection did not name
         self._held: dict[tuple[int, int, int], dict[int, float]] = {}
@@ -356,11 +357,16 @@ class WizardPrompts:
         expected = self._range(ctx, index)
         hint = f"expected {expected.low:.4f} to {expected.high:.4f} m"
         back = f"; back: correct {ctx.labels[back_to]}" if back_to is not None else ""
+        if (ctx.trial, ctx.attempt) not in self._helped:
+            self._helped.add((ctx.trial, ctx.attempt))
+            self.console.print(
+                "Type each distance in metres, or with a unit (12 mm, 1.2 cm); "
+                f"type {' or '.join(BACK_WORDS)} to correct the value typed just before."
+            )
         unconfirmed: float | None = None
         while True:
             text = self._input(
-                f"Trial {ctx.trial}/{ctx.n_trials}, {label}, metres "
-                f"({hint}; cm/mm suffix accepted{back}): "
+                f"Trial {ctx.trial}/{ctx.n_trials}, {label}, metres ({hint}{back}): "
             )
             if text.strip().lower() in BACK_WORDS:
                 if back_to is not None:
