@@ -22,6 +22,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "resume",
     "demo",
     "report",
+    "export",
     "estimate",
     "wizard",
 )

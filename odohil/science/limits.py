@@ -96,6 +96,14 @@ RANGES: dict[str, Range] = {
     "target_E_T": Range(1e-12, 10.0),
     "target_K_theta": Range(1e-12, 100.0, "deg^2/m"),
     "target_K_rho": Range(1e-12, 10.0, "m"),
+    "min_trials_per_design": Range(2, 1000, "trials", integer=True),
+    "measure_s": Range(0.0, 3600.0, "s"),
+    "budget_min": Range(0.1, 100_000.0, "min"),
+    # driving speed (plan's time model, export's linearisation) and exports
+    "speed": Range(0.01, 10.0, "m/s"),
+    "rate_hz": Range(0.1, 1000.0, "Hz"),
+    "update_min_d_m": Range(0.001, 10.0, "m"),
+    "update_min_a_rad": Range(0.001, 3.14159, "rad"),
     # the link and the fake robot
     "baud": Range(50, 4_000_000, "bit/s", integer=True),
     "time_scale": Range(0.01, 1e6),
