@@ -69,13 +69,13 @@ def test_plural() -> None:
     assert units.plural_noun(1, "distance") == "distance"
 
 
-def test_no_message_of_the_cli_counts_trials_by_hand() -> None:
-    """Before: "1 more trials", "(1 trials remain", "Session complete: 1 trials":
-    every count of trials goes through units.plural."""
+def test_no_message_counts_trials_by_hand() -> None:
+    """Before: "1 more trials", "(1 trials remain", "Session complete: 1 trials",
+    "about 1 more trials of": every count of trials goes through units.plural."""
     hand_made = re.compile(r"\{[^{}]*\}\s+(more )?trials\b")
     found = [
-        f"{path.name}:{number}: {line.strip()}"
-        for path in sorted((ROOT / "odohil" / "cli").glob("*.py"))
+        f"{path.relative_to(ROOT)}:{number}: {line.strip()}"
+        for path in sorted((ROOT / "odohil").rglob("*.py"))
         for number, line in enumerate(path.read_text().splitlines(), 1)
         if hand_made.search(line)
     ]

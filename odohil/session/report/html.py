@@ -67,7 +67,11 @@ def render_html(report: SessionReport, plots: Sequence[Plot], exports: Sequence[
         if suff.suggestions:
             parts.append("<ul>")
             for s in suff.suggestions:
-                more = "not reachable" if s.more_trials is None else f"{s.more_trials} more trials"
+                more = (
+                    "not reachable"
+                    if s.more_trials is None
+                    else units.plural(s.more_trials, "more trial")
+                )
                 parts.append(f"<li>{e(s.parameter)}: {e(s.design_label)}, {e(more)}</li>")
             parts.append("</ul>")
     parts.append('<h2 id="trials">Trials pointed out</h2>')
@@ -152,7 +156,7 @@ def _session(report: SessionReport) -> str:
     plan = state.plan.to_text() if state.plan else "none"
     return (
         f"<p>Plan <code>{e(plan)}</code>; {len(state.completed)} of "
-        f"{state.plan.n_trials if state.plan else 0} trials completed"
+        f"{units.plural(state.plan.n_trials if state.plan else 0, 'trial')} completed"
         f"{' (session finished)' if state.finished else ' (session not finished)'}; "
         f"{state.voided} attempt(s) voided. Robot description: "
         f"<code>{e(str(state.header.get('robot_path') or 'journaled'))}</code>.</p>"
