@@ -13,7 +13,6 @@ from collections.abc import Sequence
 
 from odohil import units
 from odohil.science.estimators import EstimateResult
-from odohil.science.parameters import PAPER_UNITS
 from odohil.session.report.data import SessionReport, TrialPoint, to_paper
 from odohil.session.report.exports import ExportFile
 from odohil.session.report.plots import Plot
@@ -225,7 +224,7 @@ def _estimates_table(result: EstimateResult) -> str:
         rows.append(
             f"<tr><td class=l>{p.name}</td><td>{to_paper(p.name, p.value):.4g}</td>"
             f"<td>{_fmt(to_paper(p.name, p.stderr))}</td><td>[{_fmt(lo)}, {_fmt(hi)}]</td>"
-            f"<td class=l>{PAPER_UNITS[p.name]}</td></tr>"
+            f"<td class=l>{units.unit_column(p.name, 'paper')}</td></tr>"
         )
     rows.append("</table>")
     return "\n".join(rows)
