@@ -71,7 +71,12 @@ from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, TapeSource, TruthReader
 from odohil.session.start_pose import StartPose
-from odohil.session.state import SessionState, ambiguous_trials, session_observations
+from odohil.session.state import (
+    SessionState,
+    ambiguous_trials,
+    load_session,
+    session_observations,
+)
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
@@ -323,17 +328,21 @@ def ended(
     on the way out (the robot's stop, the journal) and the estimate of the
     trials done so far (None when they are too few)."""
     stop = engine.stop_outcome
+    state = engine.state
+    # what is on disk: a signal may land between a record and the state it makes
+    with contextlib.suppress(OdohilError):
+        state = load_session(engine.journal.folder).state
     info: dict[str, Any] = {
         **details,
         "message": message,
         "stop_confirmed": None if stop is None else stop.robot_stopped,
         "journaled": None if stop is None else stop.journaled,
-        "trials_done": len(engine.state.completed),
+        "trials_done": len(state.completed),
         "session": str(engine.journal.folder),
     }
     partial: EstimateResult | None = None
     try:
-        partial = final_estimate(engine.state, exclude)
+        partial = final_estimate(state, exclude)
     except OdohilError as exc:
         info["partial_estimate_note"] = str(exc)
     info["partial_estimate"] = None if partial is None else partial.to_json_dict()
