@@ -25,6 +25,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "export",
     "estimate",
     "wizard",
+    "validate",
 )
 
 app = typer.Typer(

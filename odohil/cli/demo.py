@@ -15,6 +15,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from odohil import units
 from odohil.cli.line import resolve_line
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_line
@@ -64,6 +65,10 @@ def demo(
         typer.Option("--session", help="Keep the session folder here (default: a temp folder)."),
     ] = None,
     units_choice: UnitsOption = UNITS_DEFAULT,
+    robot_name: Annotated[
+        str,
+        typer.Option("--robot", help="Which fake robot: nomad150 or create2 (docs/create2.md)."),
+    ] = "nomad150",
 ) -> None:
     """Calibrate the fake robot unattended and compare with its true parameters.
 
@@ -71,8 +76,15 @@ def demo(
     rigid motion (or one looks like a slip) it measures again, as a person
     would, and the demo says so.
     """
-    console = Console(stderr=True)
     system = unit_system(units_choice)
+    if robot_name == "create2":
+        _demo_create2(seed, json_out, session, system)
+        return
+    if robot_name != "nomad150":
+        raise typer.BadParameter(
+            f"one of nomad150, create2; got {robot_name!r}", param_hint="--robot"
+        )
+    console = Console(stderr=True)
     truth = DEMO_TRUTH.to_si_dict()
     paper = DEMO_TRUTH.to_paper_units()
     with session_exit_codes(console, json_out):
@@ -125,6 +137,69 @@ def demo(
                         system=system,
                         measurer="the simulated operator",
                     )
+    extra = {
+        "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
+    }
+    finish(outcome, json_out, console, extra=extra, truth=truth, system=system)
+
+
+CREATE2_PLAN = "k=1,l=2,n=18,variant=reverse;k=0.5,l=2,n=18,variant=reverse"
+"""Turn-free designs (docs/create2.md): closed 4 m runs and one-way 2 m runs."""
+CREATE2_TIME_SCALE = 10.0
+"""The fake Create 2's time scale: its legs end on 15 ms readings of the
+encoders and a stop sent by the host, so on a faster clock a late reading
+ends a leg centimetres long."""
+
+
+def _demo_create2(
+    seed: int, json_out: bool, session: Path | None, system: units.UnitSystem
+) -> None:
+    """``--robot create2``: the same job on the fake Create 2 (in process, through
+    ``fakecreate2://`` and the real driver), reverse designs only.
+
+    In process rather than on a pty: a Create 2 leg ends when the host's stop
+    command arrives, so a fake in another process that a busy machine
+    deschedules for 20 ms drives a time-scaled leg centimetres long; in process
+    the fake reads each command the moment the driver writes it.
+    """
+    console = Console(stderr=True)
+    truth = DEMO_TRUTH.to_si_dict()
+    paper = DEMO_TRUTH.to_paper_units()
+    toml = DEMO_ROBOT_TOML + '[robot]\nprotocol = "create2"\n'
+    query = "&".join(
+        [f"seed={seed}", f"time_scale={CREATE2_TIME_SCALE!r}"]
+        + [f"{name}={paper[name]!r}" for name in ("E_R", "E_T", "K_theta", "K_rho")]
+    )
+    port = f"fakecreate2://?{query}"
+    with (
+        session_exit_codes(console, json_out),
+        tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp,
+    ):
+        folder = session or Path(tmp) / "session"
+        console.print(
+            f"fake Create 2 at {port}; its true parameters: {parameters_line(truth, system)}",
+            highlight=False,
+        )
+        description = parse_robot_description(toml, "demo robot")
+        line = resolve_line(description, port, None)
+        settings = {"port": port, "baud": line.baud, "seed": seed, "truth": truth}
+        with session_input(console):
+            journal, state = start_session(
+                folder, toml, parse_plan(CREATE2_PLAN), measure="fake", settings=settings
+            )
+        with journal, connect(line, None) as (robot, reader):
+            tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+            source = TapeSource(tape, description)
+            outcome = execute(
+                journal,
+                state,
+                robot,
+                source,
+                settings,
+                console,
+                system=system,
+                measurer="the simulated operator",
+            )
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
     }

@@ -16,7 +16,7 @@ from odohil.errors import ParameterError
 from odohil.science.robot_description import RobotDescription
 from odohil.session.robots import find_backend
 
-FAKE_URL_SCHEMES = ("fakerobot:",)
+FAKE_URL_SCHEMES = ("fakerobot:", "fakecreate2:")
 """URL schemes served by the fakes (registered with pyserial only when used)."""
 
 
@@ -65,8 +65,10 @@ def resolve_line(
     """The connection in force (see the module docstring).
 
     Raises:
-        ParameterError: no port anywhere (names --port and ``[serial] port``).
-        InitError: the robot description names no installed backend.
+        ParameterError: no port anywhere (names --port and ``[serial] port``),
+            or a baud the backend does not speak (its ``baud_rates``, when it
+            lists them).
+        RobotDescriptionError: the robot description names no installed backend.
     """
     serial = description.serial
     where = f"{robot_path} [serial]"
@@ -97,6 +99,12 @@ def resolve_line(
         )
     )
     assert found_baud is not None
+    rates = getattr(backend, "baud_rates", None)  # checked before anything is sent
+    if rates is not None and int(found_baud[0]) not in rates:
+        raise ParameterError(
+            f"baud {found_baud[0]} ({found_baud[1]}) is not one {description.robot.protocol} "
+            f"speaks: give one of {', '.join(map(str, rates))}"
+        )
     return Line(
         description.robot.protocol,
         str(found_port[0]),

@@ -18,6 +18,8 @@ from odohil.cli.run import (
     execute,
     finish,
     make_source,
+    open_mocap,
+    parse_measure,
     session_exit_codes,
     session_input,
 )
@@ -52,7 +54,8 @@ def resume(
         str | None,
         typer.Option(
             "--measure",
-            help="`fake` or a trial file (CSV) for the remaining trials (default: the session's).",
+            help="`fake`, a trial file (CSV) or tcp://HOST:PORT (motion capture) for the "
+            "remaining trials (default: the session's).",
         ),
     ] = None,
     json_out: Annotated[
@@ -103,9 +106,12 @@ def resume(
             socket_path = truth_socket or settings.get("truth_socket")
             kind = str(state.header.get("measure"))
             trial_file = settings.get("trial_file")
+            mocap_url = settings.get("mocap_url") if kind == "tcp" else None
             if measure is not None:
-                kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
+                option = parse_measure(measure)
+                kind, trial_file, mocap_url = option.kind, option.trial_file, option.mocap_url
                 settings["trial_file"] = str(Path(measure).resolve()) if trial_file else None
+                settings["mocap_url"] = mocap_url
             done = len(state.completed)
             assert state.plan is not None
             check_floor(state.plan, description_of(state))
@@ -117,13 +123,17 @@ def resume(
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
             )
             console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
-            with connect(line, socket_path) as (robot, truth):
+            with (
+                open_mocap(mocap_url, description, console) as mocap,  # before the port opens
+                connect(line, socket_path) as (robot, truth),
+            ):
                 source = make_source(
                     kind,
                     description,
                     truth,
                     int(settings.get("seed") or 0),
                     trial_file,
+                    mocap,
                 )
                 connection = {**settings, **line.to_json()}
                 connection["truth_socket"] = socket_path

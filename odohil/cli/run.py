@@ -42,6 +42,7 @@ from odohil.cli.verdict import verdict_line
 from odohil.errors import (
     InitError,
     JournalError,
+    MeasurementError,
     OdohilError,
     ParameterError,
     RobotDescriptionError,
@@ -63,6 +64,7 @@ from odohil.session.engine import (
 )
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
+from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
 from odohil.session.plan import Plan
 from odohil.session.pose_source import PoseSource
 from odohil.session.preflight import check_new_session, check_trial_file
@@ -136,10 +138,19 @@ def make_source(
     truth: Any,
     seed: int,
     trial_file: str | None,
+    mocap: PoseStream | None = None,
 ) -> PoseSource:
     """The pose source named by ``measure``: ``fake`` (the fake's truth as a
-    tape with simulated noise, through the floor-marks solver) or ``file`` (a
-    trial file: poses read as poses, raw distances through the solver)."""
+    tape with simulated noise, through the floor-marks solver), ``file`` (a
+    trial file: poses read as poses, raw distances through the solver) or
+    ``tcp`` (motion capture on the open ``mocap`` stream)."""
+    if measure == "tcp":
+        if mocap is None:
+            raise InitError(
+                "the session measures by motion capture but names no stream: give "
+                "--measure tcp://HOST:PORT"
+            )
+        return MotionCaptureSource(mocap, pose_sigma_of(description, mocap.url))
     if measure == "fake":
         if truth is None:
             raise InitError(
@@ -155,6 +166,61 @@ def make_source(
     raise ParameterError(f"unknown measurement source {measure!r}")
 
 
+MOCAP_SCHEME = "tcp://"
+"""``--measure`` values starting so name a motion-capture stream."""
+MOCAP_FIRST_POSE_S = 3.0
+"""How long a motion-capture stream may take to deliver its first pose, s."""
+
+
+@dataclass(frozen=True)
+class MeasureOption:
+    """What ``--measure`` names.
+
+    Attributes:
+        kind: ``fake``, ``file`` or ``tcp`` (as journaled in the header).
+        trial_file: the trial file of ``file``.
+        mocap_url: the stream of ``tcp``.
+    """
+
+    kind: str
+    trial_file: str | None = None
+    mocap_url: str | None = None
+
+
+def parse_measure(measure: str) -> MeasureOption:
+    """``--measure``: ``fake``, ``tcp://HOST:PORT`` or a trial file's path."""
+    if measure == "fake":
+        return MeasureOption("fake")
+    if measure.startswith(MOCAP_SCHEME) or "://" in measure:
+        return MeasureOption("tcp", mocap_url=measure)
+    return MeasureOption("file", trial_file=measure)
+
+
+@contextlib.contextmanager
+def open_mocap(
+    url: str | None, description: RobotDescription, console: Console
+) -> Iterator[PoseStream | None]:
+    """The motion-capture stream at ``url``, checked before anything moves: the
+    URL's form and the description's pose_sigma (exit 2), then a connection
+    that delivers a pose within :data:`MOCAP_FIRST_POSE_S` (exit 1: nothing
+    moved). None when ``url`` is None. Closed on exit."""
+    if url is None:
+        yield None
+        return
+    stream = PoseStream(url)  # ParameterError on a bad URL
+    pose_sigma_of(description, url)
+    try:
+        stream.open()
+        require_pose(stream, MOCAP_FIRST_POSE_S)
+    except (InitError, MeasurementError) as exc:
+        stream.close()
+        console.print(f"[red]error[/]: {escape(str(exc))}; nothing moved", soft_wrap=True)
+        raise typer.Exit(EXIT_ERROR) from None
+    console.print(f"motion capture {url}: poses arriving", soft_wrap=True)
+    with stream:
+        yield stream
+
+
 class ProgressObserver:
     """A rich progress bar of completed trials, on stderr, with notes."""
 
@@ -163,7 +229,7 @@ class ProgressObserver:
         console: Console,
         state: SessionState,
         system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
-        measurer: str = "the tape",
+        measurer: str = "the simulated operator",
     ) -> None:
         assert state.plan is not None
         self.console = console
@@ -247,7 +313,7 @@ def execute(
     start_check: StartCheck | None = None,
     exclude: frozenset[int] = frozenset(),
     system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
-    measurer: str = "the tape",
+    measurer: str = "the simulated operator",
 ) -> Outcome:
     """Run the engine with a progress bar; map failures to exit codes (3 when
     the final estimate's verdict is not trusted). ``exclude``: trial numbers
@@ -478,10 +544,11 @@ def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[Non
         console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
     except (ParameterError, RobotDescriptionError, TrialFileError, JournalError) as exc:
-        console.print(f"[red]error[/]: {exc}", soft_wrap=True)  # found before anything moved
+        # found before anything moved
+        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     except (OdohilError, OSError) as exc:
-        console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_ERROR) from None
 
 
@@ -536,7 +603,9 @@ def run(
     measure: Annotated[
         str,
         typer.Option(
-            "--measure", help="`fake` (the fake robot's true pose) or a trial file (CSV)."
+            "--measure",
+            help="`fake` (the fake robot's true pose), a trial file (CSV), or "
+            "tcp://HOST:PORT (a motion-capture stream, docs/motion-capture.md).",
         ),
     ],
     session: Annotated[
@@ -584,14 +653,16 @@ def run(
         checked = check_new_session(plan_text, robot_file, folder)  # before anything moves
         plan, description, toml = checked.plan, checked.description, checked.toml
         exclude = checked_exclude(exclude_text, plan.n_trials, console)
-        refuse_unredundant(description, plan, console)
+        option = parse_measure(measure)
+        kind, trial_file = option.kind, option.trial_file
+        if kind != "tcp":  # the tape's cross distances must tell the designs apart
+            refuse_unredundant(description, plan, console)
         try:
             check_floor(plan, description)
         except ParameterError as exc:
             console.print(f"[red]error[/]: {exc}; nothing moved")
             raise typer.Exit(EXIT_BAD_INPUT) from None
         line = resolve_line(description, port, baud, str(robot_file))
-        kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
         if trial_file:
             check_trial_file(trial_file, description, plan)
         settings = {
@@ -600,23 +671,26 @@ def run(
             "seed": seed,
             "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
         }
+        if option.mocap_url:
+            settings["mocap_url"] = option.mocap_url
         if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
             try:
                 make_source(kind, description, None, seed, trial_file)  # says what is missing
             except OdohilError as exc:
                 console.print(f"[red]error[/]: {exc}", soft_wrap=True)  # bad input: nothing moved
                 raise typer.Exit(EXIT_BAD_INPUT) from None
-        with session_input(console):
-            journal, state = start_session(
-                folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)
-            )
-        console.print(f"session {folder}")
-        console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
-        with journal, connect(line, truth_socket) as (robot, truth):
-            source = make_source(kind, description, truth, seed, trial_file)
-            outcome = execute(
-                journal, state, robot, source, settings, console, exclude=exclude, system=system
-            )
+        with open_mocap(option.mocap_url, description, console) as mocap:
+            with session_input(console):
+                journal, state = start_session(
+                    folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)
+                )
+            console.print(f"session {folder}")
+            console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
+            with journal, connect(line, truth_socket) as (robot, truth):
+                source = make_source(kind, description, truth, seed, trial_file, mocap)
+                outcome = execute(
+                    journal, state, robot, source, settings, console, exclude=exclude, system=system
+                )
     finish(outcome, json_out, console, system=system)
 
 

@@ -91,6 +91,8 @@ RANGES: dict[str, Range] = {
     "max_designs": Range(1, 3, "designs", integer=True),
     "max_leg_m": Range(MIN_LEG_M, WIRE_MAX_LEG_M, "m"),
     "sigma_m": Range(1e-6, 1.0, "m"),
+    "pose_sigma_m": Range(1e-6, 1.0, "m"),
+    "pose_sigma_rad": Range(1e-6, 1.0, "rad"),
     "screw_m": Range(-10.0, 10.0, "m"),
     "timeout_s": Range(1e-3, 600.0, "s"),
     "target_E_R": Range(1e-9, 100.0, "deg/m"),

@@ -1,33 +1,32 @@
 """The calibration session engine: the trial loop, journaled step by step.
 
-One trial attempt:
+The engine drives a :class:`~odohil.session.robot.Robot` (any backend) and
+asks a :class:`~odohil.session.pose_source.PoseSource` for each trial's real
+pose change; it names neither a robot nor a measuring instrument. One trial
+attempt:
 
-1. the robot is brought to rest and re-zeroed in the odometry frame
-   (``dp 0 0``, ``da 0 0``);
-2. the source makes the start marks (the fake source reads the true start
-   pose); journaled as ``trial_start``;
-3. ``motion_start`` is journaled, the forth-and-back motion runs (driver);
-4. the source makes the end marks; the encoder end pose and trajectory are
+1. the robot is brought to rest and its odometry re-zeroed (``Robot.zero``);
+2. the source's ``at_start`` (the operator marks the floor; the fake's truth
+   channel reads the true start pose); journaled as ``trial_start``;
+3. ``motion_start`` is journaled, the robot drives the design (``Robot.drive``,
+   every odometry sample to ``on_sample``);
+4. the source's ``at_end``; the odometry end pose and trajectory are
    journaled as ``motion_done``;
-5. each distance is taken and journaled (``measurement``);
-6. the pose change is chosen from the floor marks by the one pose-selection
-   path (odohil/science/pose_selection.py: candidates scored against the
-   encoders and the model's predictive distribution at the current estimate,
-   or the description's priors before there is one) and journaled
-   (``solved``). Distances no rigid motion explains are rejected and taken
-   again (``measurements_rejected``); when the slip check doubts the pose, the
-   suspect distance is taken again or kept (``remeasured``; a kept value flags
-   the trial); a trial whose candidates stay ambiguous is journaled with
-   ``ambiguous`` and left out of every estimate;
-7. the live estimate is updated (``estimate``).
+5. the source's ``pose_change``, given the model's predictive distribution of
+   the pose at the current estimate (or the description's priors); a source
+   that takes several readings journals each through ``log`` (the tape:
+   ``measurement``, ``measurements_rejected``, ``remeasured``,
+   ``extra_distance``, odohil/session/sources.py); the pose is journaled
+   (``solved``); an ambiguous one is left out of every estimate;
+6. the live estimate is updated (``estimate``).
 
 Every record is on disk (fsync) before the next step starts, so after a crash
 :func:`resume_session` continues exactly where the journal stops: an attempt
 cut off before or during its motion is voided and the trial redone; one whose
 motion finished resumes at its next missing distance. On any failure, Ctrl-C
-or other signal (:mod:`odohil.session.signals`) the engine sends ``st`` and
-waits, within ``MotionSettings.stop_timeout_s``, for the robot to report that
-it stopped; it journals ``void`` for an attempt cut off before its motion
+or other signal (:mod:`odohil.session.signals`) the engine stops the robot and
+waits, within ``MotionSettings.stop_timeout_s``, for it to report that it
+stopped (``Robot.stop_and_confirm``); it journals ``void`` for an attempt cut off before its motion
 ended, then ``stopped`` (the robot reported it) or ``stop_unconfirmed`` (it did
 not: :class:`~odohil.errors.StopUnconfirmedError` is raised instead of the
 original exception). :attr:`SessionEngine.stop_outcome` says what was

@@ -94,7 +94,7 @@ class MeasuredPose:
         flagged: a reading was kept that a check doubted (the trial is
             flagged in the report).
         flag_reason: why it is flagged.
-        note: why the pose is in doubt, or how it was obtained ("" when clear).
+        note: why the pose is in doubt ("" when it is clear-cut).
         clear_cut: the source is sure of this pose among the ones it allows.
         ambiguous: several poses stayed plausible; the trial is journaled and
             left out of every estimate.

@@ -3,8 +3,9 @@
 The robot description's ``[robot] protocol`` names the backend (its default
 is :data:`odohil.science.robot_description.DEFAULT_PROTOCOL`), the way
 python-can picks a bus by its interface name; the port URL says where it is.
-A backend is a class (or any object) with a ``default_baud`` (int) and an
-``open(url, baud)`` that returns a connected ``Robot``
+A backend is a class (or any object) with a ``default_baud`` (int), optionally
+``baud_rates`` (the line speeds it accepts, checked before anything is sent),
+and an ``open(url, baud)`` that returns a connected ``Robot``
 (odohil/session/robot.py). Another package adds a robot by declaring an entry
 point in the group; nothing here names one.
 """
@@ -14,7 +15,7 @@ from __future__ import annotations
 from importlib.metadata import entry_points
 from typing import Protocol, cast
 
-from odohil.errors import InitError
+from odohil.errors import InitError, RobotDescriptionError
 from odohil.session.robot import Robot
 
 ENTRY_POINT_GROUP = "odohil.robots"
@@ -40,13 +41,14 @@ def find_backend(protocol: str) -> RobotBackend:
     """The backend registered as ``protocol``.
 
     Raises:
-        InitError: none is registered under that name (the message lists the
-            names that are), or it cannot be loaded.
+        RobotDescriptionError: none is registered under that name (the
+            message lists the names that are).
+        InitError: it is registered but cannot be loaded.
     """
     found = entry_points(group=ENTRY_POINT_GROUP, name=protocol)
     if not found:
         known = ", ".join(backend_names()) or "none"
-        raise InitError(
+        raise RobotDescriptionError(
             f"no robot backend {protocol!r} ([robot] protocol in the robot description); "
             f"installed: {known}"
         )

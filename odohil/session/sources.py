@@ -573,7 +573,7 @@ class TruthPoseSource:
         return MeasuredPose(
             pose=_pose(noisy),
             covariance=_covariance(np.diag(variances)),
-            note="the fake robot's true pose with simulated noise",
+            details={"source": "the fake robot's true pose with simulated noise"},
         )
 
 
@@ -622,7 +622,7 @@ class PoseFileSource:
             covariance=_covariance(cov),
             flagged=trial.flagged,
             flag_reason=trial.note,
-            note=f"{self.origin} line {trial.line}",
+            details={"source": f"{self.origin} line {trial.line}"},
         )
 
 

@@ -118,3 +118,38 @@ def test_no_port_anywhere_names_both_ways_to_give_one(tmp_path: Path) -> None:
     assert done.returncode == 2
     assert "--port" in done.stderr
     assert not (tmp_path / "s").exists()
+
+
+def test_an_unknown_robot_protocol_is_refused_before_anything_moves(tmp_path: Path) -> None:
+    robot = _robot_file(tmp_path, '[robot]\nprotocol = "roomba9000"\n')
+    done = subprocess.run(
+        [
+            ODOHIL,
+            "run",
+            "--port",
+            "/dev/null",
+            "--robot",
+            str(robot),
+            "--plan",
+            "k=1,l=1,n=2",
+            "--measure",
+            "fake",
+            "--truth-socket",
+            str(tmp_path / "t.sock"),
+            "--session",
+            str(tmp_path / "s"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 2, done.stderr
+    assert "'roomba9000'" in done.stderr
+    assert "nomad150" in done.stderr  # the installed backends are named
+    assert not (tmp_path / "s").exists()
+
+
+def test_a_baud_the_robot_does_not_speak_is_refused_before_the_port_opens() -> None:
+    text = ROBOT_TOML + '[serial]\nport = "/dev/odohil-no-such-port"\n'
+    with pytest.raises(ParameterError, match=r"baud 57600 \(--baud\).*4800, 9600, 19200, 38400"):
+        resolve_line(parse_robot_description(text), None, 57600)
