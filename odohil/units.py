@@ -24,7 +24,7 @@ as :func:`wrap_angle`.
 from __future__ import annotations
 
 import math
-from typing import Any, overload
+from typing import Any, Literal, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -116,6 +116,61 @@ def parameter_from_paper(name: str, value_paper: float) -> float:
     if name == "K_theta":
         return deg2_per_m_to_rad2_per_m(value_paper)
     return value_paper
+
+
+UnitSystem = Literal["paper", "si"]
+"""How parameters are shown to people: ``paper`` (E_R deg/m, K_theta deg^2/m)
+or ``si`` (rad/m, rad^2/m); E_T (no unit) and K_rho (m) are the same in both.
+JSON is always SI."""
+UNIT_SYSTEMS: tuple[UnitSystem, ...] = ("paper", "si")
+DEFAULT_UNIT_SYSTEM: UnitSystem = "paper"
+"""The one default of every command that prints parameters for people."""
+
+PARAMETER_UNIT_LABELS: dict[UnitSystem, dict[str, str]] = {
+    "paper": {"E_R": "deg/m", "E_T": "", "K_theta": "deg^2/m", "K_rho": "m"},
+    "si": {"E_R": "rad/m", "E_T": "", "K_theta": "rad^2/m", "K_rho": "m"},
+}
+"""Each parameter's unit as people read it; E_T is a plain number (no unit: empty)."""
+NO_UNIT = "(no unit)"
+"""What a unit column says for a plain number such as E_T."""
+
+
+def parameter_in(name: str, value_si: float, system: UnitSystem) -> float:
+    """A value (or standard error) of parameter ``name`` from SI to ``system``."""
+    return parameter_to_paper(name, value_si) if system == "paper" else value_si
+
+
+def parameter_unit(name: str, system: UnitSystem) -> str:
+    """The unit of parameter ``name`` in ``system`` ("" for E_T, a plain number)."""
+    return PARAMETER_UNIT_LABELS[system][name]
+
+
+def unit_column(name: str, system: UnitSystem) -> str:
+    """The unit of parameter ``name`` for a table's unit column: "(no unit)" for E_T."""
+    return parameter_unit(name, system) or NO_UNIT
+
+
+def with_unit(number_text: str, unit: str) -> str:
+    """``"0.5 deg/m"``, or the number alone when there is no unit."""
+    return f"{number_text} {unit}" if unit else number_text
+
+
+def product_unit(a: str, b: str) -> str:
+    """The unit of a product of two quantities: ``m^2`` for m times m, ``m rad``."""
+    if a == b:
+        return f"{a}^2"
+    return f"{a} {b}"
+
+
+def plural(count: int, noun: str, plural_form: str | None = None) -> str:
+    """``"1 trial"``, ``"2 trials"``, ``"0 trials"``: the count with its noun
+    agreed (``plural_form`` for nouns that do not take an s)."""
+    return f"{count} {noun if count == 1 else (plural_form or noun + 's')}"
+
+
+def plural_noun(count: int, noun: str, plural_form: str | None = None) -> str:
+    """The noun alone, agreed with ``count`` (``"trial remains"`` wording helpers)."""
+    return noun if count == 1 else (plural_form or noun + "s")
 
 
 TWO_PI = 2.0 * math.pi

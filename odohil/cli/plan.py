@@ -12,7 +12,16 @@ from rich.console import Console
 from rich.table import Table
 
 from odohil import units
-from odohil.cli.options import E_R_DEFAULT, E_T_DEFAULT, K_RHO_DEFAULT, K_THETA_DEFAULT, bounded
+from odohil.cli.options import (
+    E_R_DEFAULT,
+    E_T_DEFAULT,
+    K_RHO_DEFAULT,
+    K_THETA_DEFAULT,
+    UNITS_DEFAULT,
+    UnitsOption,
+    bounded,
+    unit_system,
+)
 from odohil.errors import OdohilError
 from odohil.science.fisher import default_description
 from odohil.science.limits import RANGES
@@ -116,7 +125,12 @@ def _document(
 
 
 def _print(
-    plan: Plan, prior: ErrorParameters, measurement: str, title: str, given: set[str]
+    plan: Plan,
+    prior: ErrorParameters,
+    measurement: str,
+    title: str,
+    given: set[str],
+    system: units.UnitSystem,
 ) -> None:
     console = Console()
     designs = Table(title=title)
@@ -143,19 +157,19 @@ def _print(
         highlight=False,
     )
     errors = Table(title="Expected standard errors (Cramer-Rao)", caption=measurement)
-    for column in ("parameter", "prior (paper)", "stderr (paper)", "stderr (SI)", "target"):
-        errors.add_column(column, justify="right")
-    paper_prior = prior.to_paper_units()
+    for column in ("parameter", "prior", "stderr", "target", "unit"):
+        errors.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
+    prior_si = prior.to_si_dict()
     for name, se in zip(PARAMETER_NAMES, plan.standard_errors, strict=True):
         target = plan.targets[name]
         ratio = float(se) / target
         source = "" if name in given else " default"
         errors.add_row(
             name,
-            f"{paper_prior[name]:.4g} {PAPER_UNITS[name]}",
-            f"{units.parameter_to_paper(name, float(se)):.3g} {PAPER_UNITS[name]}",
-            f"{float(se):.3g} {SI_UNITS[name]}",
-            f"{units.parameter_to_paper(name, target):.3g}{source} ({ratio:.2f}x)",
+            f"{units.parameter_in(name, prior_si[name], system):.4g}",
+            f"{units.parameter_in(name, float(se), system):.3g}",
+            f"{units.parameter_in(name, target, system):.3g}{source} ({ratio:.2f}x)",
+            units.unit_column(name, system),
         )
     console.print(errors)
     if plan.meets_targets:
@@ -282,6 +296,7 @@ def plan(
         f"robot description's [floor] length_m, else {DEFAULT_FLOOR_M:g}).",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print the plan as JSON."),
+    units_choice: UnitsOption = UNITS_DEFAULT,
 ) -> None:
     """Recommend designs for a budget (or score one with --evaluate); print each
     parameter's expected stderr against its target, and the operator time.
@@ -325,7 +340,7 @@ def plan(
                 min_trials_per_design=min_trials_per_design,
                 operator=operator,
             )
-            title = f"Your plan: {result.distance_m:g} m, {result.n_trials} trials"
+            title = f"Your plan: {result.distance_m:g} m, {units.plural(result.n_trials, 'trial')}"
         else:
             if not math.isfinite(max_leg_m) or max_leg_m <= 0:
                 raise typer.BadParameter(f"--max-leg-m must be a positive length, got {max_leg_m}")
@@ -353,7 +368,8 @@ def plan(
             if budget_min is not None:
                 limits[1] = f"{budget_min:g} min"
             title = (
-                f"Recommended plan: {result.distance_m:g} m, {result.n_trials} trials "
+                f"Recommended plan: {result.distance_m:g} m, "
+                f"{units.plural(result.n_trials, 'trial')} "
                 f"(budget {' and '.join(x for x in limits if x)})"
             )
     except OdohilError as exc:
@@ -361,7 +377,7 @@ def plan(
     if as_json:
         typer.echo(json.dumps(_document(result, prior, measurement, set(targets)), indent=2))
     else:
-        _print(result, prior, measurement, title, set(targets))
+        _print(result, prior, measurement, title, set(targets), unit_system(units_choice))
 
 
 def register(app: typer.Typer) -> None:

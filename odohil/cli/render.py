@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -14,11 +14,10 @@ from rich.text import Text
 
 from odohil import units
 from odohil.driver.odometry import OdometrySample
-from odohil.science.estimators import EstimateResult
+from odohil.science.estimators import EstimateResult, ParameterEstimate
 from odohil.science.estimators.verdict import Verdict
 from odohil.science.grouping import by_design
 from odohil.science.observables import observables
-from odohil.science.parameters import PAPER_UNITS
 from odohil.science.paths import Design, Leg, Turn
 from odohil.session.state import CompletedTrial
 
@@ -62,22 +61,61 @@ def observables_table(trials: Sequence[CompletedTrial]) -> Table:
     return table
 
 
-def parameters_table(result: EstimateResult) -> Table:
-    """The four parameters with standard errors, paper units."""
-    table = Table(title=f"Estimate after {result.n_trials} trials", title_justify="left")
-    for column in ("parameter", "estimate", "std. error", "unit"):
+def parameters_table(
+    result: EstimateResult,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+    title: str | None = None,
+    truth: Mapping[str, float] | None = None,
+) -> Table:
+    """The four parameters with standard errors and 95 % intervals in
+    ``system``'s units; with ``truth`` (SI values by name) a truth column in
+    the same units and whether the interval holds it."""
+    table = Table(
+        title=title or f"Estimate after {units.plural(result.n_trials, 'trial')}",
+        title_justify="left",
+    )
+    columns = ["parameter", "estimate", "std. error", "95 % interval", "unit"]
+    if truth is not None:
+        columns += ["truth", "truth inside"]
+    for column in columns:
         table.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
     for p in result.parameters:
-        table.add_row(
-            p.name, _paper_text(p.name, p.value), _paper_text(p.name, p.stderr), PAPER_UNITS[p.name]
-        )
+        low, high = p.ci95
+        row = [
+            p.name,
+            number_text(p.name, p.value, system),
+            number_text(p.name, p.stderr, system, digits=2),
+            f"[{number_text(p.name, low, system)}, {number_text(p.name, high, system)}]",
+            units.unit_column(p.name, system),
+        ]
+        if truth is not None:
+            row.append(number_text(p.name, truth[p.name], system))
+            row.append("yes" if inside(p, truth[p.name]) else "[red]NO[/]")
+        table.add_row(*row)
     return table
 
 
-def _paper_text(name: str, value: float) -> str:
-    if not math.isfinite(value):
-        return "undetermined"
-    return f"{units.parameter_to_paper(name, value):.4g}"
+def number_text(name: str, value_si: float, system: units.UnitSystem, digits: int = 4) -> str:
+    """A parameter's value (SI) as text in ``system``'s units, without the unit;
+    "-" when not finite (undetermined, or an unbounded interval end)."""
+    if not math.isfinite(value_si):
+        return "-"
+    return f"{units.parameter_in(name, value_si, system):.{digits}g}"
+
+
+def parameters_line(values_si: Mapping[str, float], system: units.UnitSystem) -> str:
+    """``E_R = -1 deg/m, E_T = -0.05, K_theta = 0.3 deg^2/m, K_rho = 0.0009 m``."""
+    return ", ".join(
+        f"{name} = "
+        + units.with_unit(number_text(name, value, system), units.parameter_unit(name, system))
+        for name, value in values_si.items()
+    )
+
+
+def inside(entry: ParameterEstimate, value: float) -> bool:
+    """Whether ``value`` lies in the entry's 95 % interval (a non-finite end: unbounded)."""
+    low, high = entry.ci95
+    return (not math.isfinite(low) or low <= value) and (not math.isfinite(high) or value <= high)
 
 
 def more_trials_text(result: EstimateResult, remaining_in_plan: int) -> Text:
@@ -97,19 +135,30 @@ def more_trials_text(result: EstimateResult, remaining_in_plan: int) -> Text:
     for design, more in needed.items():
         lines.append(
             f"  {design}: "
-            + ("cannot reach it alone" if more is None else f"{more} more trials reach the target")
+            + (
+                "cannot reach it alone"
+                if more is None
+                else f"{units.plural(more, 'more trial')} "
+                f"{'reaches' if more == 1 else 'reach'} the target"
+            )
         )
-    lines.append(f"  ({remaining_in_plan} trials remain in the plan)")
+    lines.append(
+        f"  ({units.plural(remaining_in_plan, 'trial')} "
+        f"{'remains' if remaining_in_plan == 1 else 'remain'} in the plan)"
+    )
     return Text("\n".join(lines), style="yellow")
 
 
 def estimate_panel(
-    trials: Sequence[CompletedTrial], result: EstimateResult, remaining: int
+    trials: Sequence[CompletedTrial],
+    result: EstimateResult,
+    remaining: int,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
 ) -> RenderableType:
     """The live table after a trial: observables, parameters, trials still needed."""
     return Group(
         observables_table(trials),
-        parameters_table(result),
+        parameters_table(result, system),
         more_trials_text(result, remaining),
         Text(f"Model check: {result.model_check.verdict}"),
         verdict_text(result.verdict),

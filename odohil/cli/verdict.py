@@ -16,12 +16,16 @@ def verdict_line(verdict: Verdict) -> str:
     return text
 
 
-def gaussian_line(result: EstimateResult) -> str:
-    """The Gaussian joint maximum-likelihood values beside the robust ones, paper units."""
+def gaussian_line(
+    result: EstimateResult, system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
+) -> str:
+    """The Gaussian joint maximum-likelihood values beside the robust ones, in
+    ``system``'s units."""
     by_name = {p.name: p for p in result.gaussian}
     parts = []
     for name in PARAMETER_NAMES:
         if name not in by_name:
             continue
-        parts.append(f"{name} {units.parameter_to_paper(name, by_name[name].value):.4g}")
-    return "Gaussian joint ML beside (paper units): " + ", ".join(parts)
+        value = f"{units.parameter_in(name, by_name[name].value, system):.4g}"
+        parts.append(f"{name} {units.with_unit(value, units.parameter_unit(name, system))}")
+    return "Gaussian joint ML beside: " + ", ".join(parts)

@@ -297,7 +297,8 @@ def sufficiency(
         if doable:
             best = min(doable, key=lambda s: (s.more_trials or 0) * s.l_m * 2 * s.k)
             advice.append(
-                f"{PARAMETER_NAMES[p]}: about {best.more_trials} more trials of {best.design_label}"
+                f"{PARAMETER_NAMES[p]}: about "
+                f"{units.plural(best.more_trials or 0, 'more trial')} of {best.design_label}"
             )
         else:
             advice.append(f"{PARAMETER_NAMES[p]}: more trials of these designs would not do")

@@ -20,6 +20,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from odohil import units
 from odohil.science.estimators.observations import Observation
 from odohil.science.grouping import by_design
 
@@ -60,7 +61,7 @@ def degenerate_designs(observations: Sequence[Observation]) -> list[str]:
             continue
         poses = np.array([o.pose_change for o in mine])
         if np.all(np.ptp(poses, axis=0) == 0):
-            out.append(f"{design.label()} ({len(mine)} trials)")
+            out.append(f"{design.label()} ({units.plural(len(mine), 'trial')})")
     return out
 
 

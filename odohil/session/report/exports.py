@@ -14,6 +14,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from odohil import units
 from odohil.session.report.data import SessionReport
 
 
@@ -76,7 +77,8 @@ def covariance_yaml(report: SessionReport) -> str:
     lines = [
         *warning,
         "# Odometry error model estimated by odohil (Martinelli's four parameters).",
-        f"# Session: {report.folder.name}, {result.n_trials} trials, method {result.method}.",
+        f"# Session: {report.folder.name}, {units.plural(result.n_trials, 'trial')}, "
+        f"method {result.method}.",
         "odohil_verdict:",
         f"  status: {verdict.status}",
         "  reasons: [" + ", ".join(json.dumps(r) for r in verdict.reasons) + "]",
