@@ -53,6 +53,7 @@ class Replication:
     covered: np.ndarray | None
     verdict: str
     failure: str = ""
+    outside_4sigma: np.ndarray | None = None
 
 
 def tape_noise(rng: np.random.Generator, law: str, sigma: float, size: int) -> np.ndarray:
@@ -95,7 +96,14 @@ def run_chunk(args: tuple[int, str, str, int, int]) -> list[Replication]:
         values = np.array([p.value for p in result.parameters])
         low = np.array([p.ci95[0] for p in result.parameters])
         high = np.array([p.ci95[1] for p in result.parameters])
-        out.append(Replication(values, (low <= truth) & (truth <= high), result.verdict.status))
+        outside = np.array(
+            [not p.contains(t) for p, t in zip(result.parameters, truth, strict=True)]
+        )
+        out.append(
+            Replication(
+                values, (low <= truth) & (truth <= high), result.verdict.status, "", outside
+            )
+        )
     return out
 
 
@@ -111,10 +119,12 @@ def summary(reps: list[Replication]) -> str:
         cover_se = np.sqrt(cover * (1 - cover) / len(ok))
         bias = (values.mean(axis=0) / truth - 1) * 100
         bias_se = values.std(axis=0, ddof=1) / math.sqrt(len(ok)) / np.abs(truth) * 100
+        outside = np.array([r.outside_4sigma for r in ok], dtype=float).sum(axis=0)
         for i, name in enumerate(PARAMETER_NAMES):
             lines.append(
                 f"{name}: coverage {cover[i]:.3f} +- {cover_se[i]:.3f}, "
-                f"bias {bias[i]:+.2f} +- {bias_se[i]:.2f} %"
+                f"bias {bias[i]:+.2f} +- {bias_se[i]:.2f} %, "
+                f"outside the 4-sigma interval {int(outside[i])}"
             )
     verdicts = {v: sum(r.verdict == v for r in reps) for v in ("trusted", "doubtful", "failed")}
     errors = [r.failure for r in reps if r.failure]
