@@ -231,8 +231,8 @@ class _Profile:
                 return b
             if b == limit and (rb - target) * side < 0:
                 return side * math.inf
-            if not math.isfinite(rb) or (rb - ra) * side <= 0:
-                # no progress: step half-way back toward the last good point
+            if not math.isfinite(rb) or (rb - ra) * (b - a) <= 0:
+                # r must rise with psi: step half-way back toward the last good point
                 b = 0.5 * (a + b)
                 continue
             slope = (rb - ra) / (b - a)
