@@ -141,24 +141,38 @@ def main() -> None:
     parser.add_argument("--method", default="robust")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--seed", type=int, default=20261123)
+    parser.add_argument(
+        "--max-seconds",
+        type=float,
+        default=None,
+        help="stop after this wall time and report what is done (jobs run in shuffled order)",
+    )
     args = parser.parse_args()
     print(f"command: python bench/coverage.py {' '.join(sys.argv[1:])}")
     print(f"load average before: {os.getloadavg()[0]:.2f}; {args.workers} workers", flush=True)
     seeds = iter(np.random.SeedSequence(args.seed).generate_state(100_000))
     start = time.perf_counter()
+    cells = [(law, int(n)) for law in args.noise.split(",") for n in args.n.split(",")]
+    jobs = []
+    for law, n in cells:
+        left = args.replications
+        while left > 0:
+            jobs.append((n, law, args.method, min(CHUNK, left), int(next(seeds))))
+            left -= CHUNK
+    order = np.random.default_rng(args.seed).permutation(len(jobs))
+    jobs = [jobs[i] for i in order]
+    results: dict[tuple[str, int], list[Replication]] = {cell: [] for cell in cells}
     with multiprocessing.Pool(args.workers) as pool:
-        for law in args.noise.split(","):
-            for n in (int(v) for v in args.n.split(",")):
-                jobs = []
-                left = args.replications
-                while left > 0:
-                    jobs.append((n, law, args.method, min(CHUNK, left), int(next(seeds))))
-                    left -= CHUNK
-                reps: list[Replication] = []
-                for chunk in pool.imap_unordered(run_chunk, jobs):
-                    reps.extend(chunk)
-                print(f"\n## {law} tape noise, n = {n} per design ({len(reps)} replications)")
-                print(summary(reps), flush=True)
+        for job, chunk in zip(jobs, pool.imap(run_chunk, jobs), strict=False):
+            results[(job[1], job[0])].extend(chunk)
+            if args.max_seconds is not None and time.perf_counter() - start > args.max_seconds:
+                print(f"stopped at --max-seconds {args.max_seconds:g}", flush=True)
+                pool.terminate()
+                break
+    for law, n in cells:
+        reps = results[(law, n)]
+        print(f"\n## {law} tape noise, n = {n} per design ({len(reps)} replications)")
+        print(summary(reps), flush=True)
     elapsed = time.perf_counter() - start
     print(f"\nwall clock {elapsed:.0f} s, load average after: {os.getloadavg()[0]:.2f}")
 

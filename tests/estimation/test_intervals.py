@@ -27,7 +27,7 @@ TRUTH = NOMAD150.as_tuple()
 def exact(n: int, seed: int) -> list[Observation]:
     """n exact trials of each paper design."""
     rng = np.random.default_rng(seed)
-    out = []
+    out: list[Observation] = []
     for design in (A, B):
         for pose in simulate(design.path(), NOMAD150, n, seed=rng, segment_m=0.05).pose_change:
             out.append(Observation(design, pose, trial=len(out) + 1))

@@ -8,7 +8,7 @@ from dataclasses import replace
 from typing import Literal
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import special, stats
 
 from odohil.errors import MeasurementError
 from odohil.science.estimators.checks import Criteria, model_check, sufficiency
@@ -24,7 +24,6 @@ from odohil.science.estimators.observations import (
 )
 from odohil.science.estimators.paper import PaperEstimate, paper_estimate
 from odohil.science.estimators.result import (
-    Z95,
     EstimateResult,
     ParameterEstimate,
     TrialDiagnostic,
@@ -67,46 +66,42 @@ def joint_start(paper: PaperEstimate) -> FloatArray:
 
 def interval_quantile(n_trials: int) -> float:
     """The 97.5 % Student-t quantile with 3 n - 4 degrees of freedom (at
-    least 1): the intervals' multiplier in place of 1.96 at small n (K_theta
-    and K_rho may get a larger one, see :func:`_quantile`)."""
-    return float(stats.t.ppf(0.975, max(1, 3 * n_trials - 4)))
+    least 1): the Wald intervals' multiplier in place of 1.96 at small n
+    (K_theta and K_rho may get a larger one, see :func:`_quantile`)."""
+    return float(stats.t.ppf(0.975, interval_dof(n_trials)))
+
+
+def interval_dof(n_trials: int) -> int:
+    """3 n - 4 (at least 1): the Wald intervals' t degrees of freedom."""
+    return max(1, 3 * n_trials - 4)
 
 
 def _estimates(
-    params: ErrorParameters, cov: FloatArray, quantile: float
+    params: ErrorParameters, cov: FloatArray, n_trials: int
 ) -> tuple[tuple[ParameterEstimate, ...], FloatArray]:
-    """The Wald intervals (the cheap rule of the live estimate and the paper
-    method): ``quantile`` is the t(3 n - 4) one."""
+    """The Wald intervals (the cheap rule of the live estimate, of the paper
+    method and of the Gaussian fit reported beside the robust one)."""
     diag = np.diag(cov)
     stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
+    base = interval_dof(n_trials)
     estimates = []
     for name, value, se in zip(PARAMETER_NAMES, params.as_tuple(), stderr, strict=True):
-        q, dof = _quantile(name, value, float(se), quantile)
+        dof = _dof(name, value, float(se), base)
+        q = float(special.stdtrit(dof, 0.975))  # the t quantile (50x faster than stats)
         estimates.append(ParameterEstimate.build(name, value, float(se), q, dof))
     return tuple(estimates), stderr
 
 
-def _quantile(name: str, value: float, stderr: float, base: float) -> tuple[float, float]:
-    """(multiplier, t degrees of freedom): ``base`` (the t(3 n - 4) quantile)
-    for E_R and E_T; for a variance rate the Student-t quantile with the
-    Satterthwaite degrees of freedom of its own precision, 2 (K / stderr)^2
-    (a variance estimated from nu squares has relative standard error
-    sqrt(2 / nu)), when that is the larger."""
-    base_dof = _dof_of(base)
+def _dof(name: str, value: float, stderr: float, base: float) -> float:
+    """The t degrees of freedom of a Wald interval: ``base`` (3 n - 4) for E_R
+    and E_T; for a variance rate the Satterthwaite degrees of freedom of its
+    own precision, 2 (K / stderr)^2 (a variance estimated from nu squares has
+    relative standard error sqrt(2 / nu)), when that is the smaller."""
     if name not in ("K_theta", "K_rho") or not (value > 0 and math.isfinite(stderr)):
-        return base, base_dof
+        return base
     if stderr <= 0:
-        return base, base_dof
-    dof = max(2.0 * (value / stderr) ** 2, 1.0)
-    q = float(stats.t.ppf(0.975, dof))
-    return (q, dof) if q > base else (base, base_dof)
-
-
-def _dof_of(quantile: float) -> float:
-    """The t degrees of freedom whose 97.5 % quantile is ``quantile``."""
-    if quantile <= Z95:
-        return math.inf
-    return float(optimize.brentq(lambda nu: stats.t.ppf(0.975, nu) - quantile, 0.5, 1e7))
+        return base
+    return min(base, max(2.0 * (value / stderr) ** 2, 1.0))
 
 
 def _honest_estimates(groups: Sequence[TrialGroup], fit: JointFit) -> tuple[ParameterEstimate, ...]:
@@ -168,7 +163,7 @@ def build_result(
     (else the Wald rule of :func:`_estimates`).
     """
     cov = np.array(covariance, dtype=np.float64)
-    estimates, stderr = _estimates(params, cov, interval_quantile(len(observations)))
+    estimates, stderr = _estimates(params, cov, len(observations))
     if intervals:
         estimates = intervals
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -189,6 +184,12 @@ def build_result(
         check.verdict,
         ambiguous,
     )
+    if ambiguous:
+        notes = (
+            *notes,
+            f"{len(ambiguous)} ambiguous trial(s) left out (the floor marks fit two poses): "
+            + ", ".join(str(t) for t in ambiguous),
+        )
     return EstimateResult(
         method=method,
         n_trials=len(observations),
@@ -311,7 +312,7 @@ def estimate(
         )
     rob = robust_fit(observations, groups, ml)
     named = [int(i) for i in np.flatnonzero(rob.clean_probability < OUTLIER_WEIGHT)]
-    gaussian, _ = _estimates(ml.params, ml.covariance, interval_quantile(len(observations)))
+    gaussian, _ = _estimates(ml.params, ml.covariance, len(observations))
     diagnostics = tuple(
         TrialDiagnostic(
             trial_number(o, i),

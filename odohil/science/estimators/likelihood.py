@@ -94,7 +94,7 @@ def with_moments(point: ModelPoint, moved: ModelPoint) -> ModelPoint:
 
 
 @lru_cache(maxsize=64)
-def _path(design: Design) -> EncoderPath:
+def design_path(design: Design) -> EncoderPath:
     """The design's encoder path (immutable; building it costs as much as the moments)."""
     return design.path()
 
@@ -109,12 +109,12 @@ def model_point(phi: FloatArray, designs: Iterable[Design], derivatives: bool) -
     d_covs: dict[Design, FloatArray] = {}
     for design in designs:
         if derivatives:
-            d = moment_derivatives(_path(design), params)
+            d = moment_derivatives(design_path(design), params)
             means[design], covs[design] = d.mean, d.cov
             d_means[design] = d.d_mean * scale[:, None]
             d_covs[design] = d.d_cov * scale[:, None, None]
         else:
-            m = pose_moments(_path(design), params)
+            m = pose_moments(design_path(design), params)
             means[design], covs[design] = m.mean, m.cov
     here = np.array(phi, dtype=np.float64)
     return ModelPoint(

@@ -6,12 +6,13 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from scipy import stats
+from scipy import special
 
 from odohil.science.estimators.verdict import TRUSTED, Verdict
 from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
 
 Z95 = 1.959963984540054
+_FOUR_SIGMA_UPPER = float(special.ndtr(4.0))
 """The 97.5 % quantile of the standard normal."""
 
 
@@ -97,7 +98,7 @@ class ParameterEstimate:
 
 def four_sigma_quantile(dof: float) -> float:
     """The t(dof) quantile of the 4-sigma-equivalent two-sided level."""
-    return float(stats.t.isf(stats.norm.sf(4.0), max(dof, 1.0)))
+    return float(special.stdtrit(max(dof, 1.0), _FOUR_SIGMA_UPPER))
 
 
 def _wald(name: str, value: float, stderr: float, q: float) -> tuple[float, float]:
