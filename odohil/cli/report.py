@@ -29,7 +29,7 @@ def report(
     ] = False,
     exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
 ) -> None:
-    """Write index.html, SVG plots, parameters.json and odometry_covariance.yaml to --out.
+    """Write index.html (plots inline), parameters.json and odometry_covariance.yaml to --out.
 
     An estimate that is not trusted is refused (exit 3, nothing written)
     unless --force; exit 2 on a bad session or --exclude.

@@ -9,6 +9,7 @@ import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
 from odohil.driver.robot import NomadRobot
+from odohil.science.robot_description import RobotDescription
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     MotionSettings,
@@ -49,25 +50,64 @@ class BumpedSource(FakeTruthSource):
         return (x, y + dy_m, theta) if ctx.trial == trial else (x, y, theta)
 
 
+class KeptSlips(FakeTruthSource):
+    """The fake's distances, but from trial ``first`` on the operator types one
+    distance (``trial % m``) 10 mm too long on the first reading of an attempt,
+    and when the slip check doubts the trial keeps the value (a flagged trial)."""
+
+    def __init__(self, *args: Any, first: int, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        self.first = first
+
+    def distance(self, ctx: TrialContext, index: int) -> float:
+        """The fake's distance, typed 10 mm long on the chosen trials' first reading."""
+        value = super().distance(ctx, index)
+        slip = ctx.trial >= self.first and ctx.rejections == 0
+        return value + 0.01 if slip and index == ctx.trial % len(ctx.labels) else value
+
+    def remeasure(  # type: ignore[override]  # the source protocol allows None
+        self, ctx: TrialContext, index: int, reason: str
+    ) -> None:
+        """The operator keeps the value taken."""
+        return None
+
+
 def build_session(
-    folder: Path, plan_text: str, seed: int = 3, bump: tuple[int, float] | None = None
+    folder: Path,
+    plan_text: str,
+    seed: int = 3,
+    bump: tuple[int, float] | None = None,
+    kept_slips_from: int | None = None,
+    robot_toml: str = ROBOT_TOML,
 ) -> SessionState:
     """Run a whole session of ``plan_text`` against fakerobot:// (fast clock);
-    ``bump``: (trial, metres) that trial's end marks are moved across the path."""
+    ``bump``: (trial, metres) that trial's end marks are moved across the path;
+    ``kept_slips_from``: from this trial on the operator types one distance
+    10 mm long and keeps it when the slip check doubts it (see :class:`KeptSlips`)."""
     plan = parse_plan(plan_text)
-    journal, state = start_session(folder, ROBOT_TOML, plan, measure="fake", settings={})
+    journal, state = start_session(folder, robot_toml, plan, measure="fake", settings={})
     port = serial.serial_for_url(f"fakerobot://?seed={seed}&time_scale=2000", timeout=0.5)
     with journal, NomadRobot.from_port(port) as robot:
         engine = SessionEngine(
             journal,
             state,
             robot,
-            (
-                FakeTruthSource(PortTruth(port), description_of(state), seed=seed)
-                if bump is None
-                else BumpedSource(PortTruth(port), description_of(state), seed=seed, bump=bump)
-            ),
+            _source(PortTruth(port), description_of(state), seed, bump, kept_slips_from),
             estimator=IncrementalLiveEstimator(),
             motion=MotionSettings(speeds=(1.0, 3.0), accelerations=(2.0, 6.0), watchdog_s=0.0),
         )
         return engine.run()
+
+
+def _source(
+    truth: PortTruth,
+    description: RobotDescription,
+    seed: int,
+    bump: tuple[int, float] | None,
+    kept_slips_from: int | None,
+) -> FakeTruthSource:
+    if bump is not None:
+        return BumpedSource(truth, description, seed=seed, bump=bump)
+    if kept_slips_from is not None:
+        return KeptSlips(truth, description, seed=seed, first=kept_slips_from)
+    return FakeTruthSource(truth, description, seed=seed)

@@ -4,37 +4,18 @@ from __future__ import annotations
 
 import json
 import re
-import subprocess
-import sys
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
 
 from odohil.science.estimators import estimate
 from odohil.session.journal import read_journal
+from odohil.session.report import load_report
 from odohil.session.state import SessionState, replay, session_observations
 
+from .page import assert_self_contained, parse_page
+from .run import run_report
 from .session_factory import build_session
-
-PLAN = "k=1,l=2,n=6;k=4,l=0.5,n=6"
-SVG = "{http://www.w3.org/2000/svg}"
-
-
-@pytest.fixture(scope="module")
-def session(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, SessionState]:
-    folder = tmp_path_factory.mktemp("report") / "session"
-    return folder, build_session(folder, PLAN, seed=5)
-
-
-def _report(session: Path, out: Path, *more: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "odohil", "report", str(session), "--out", str(out), *more],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
 
 
 def test_report_is_self_contained_and_matches_the_estimate(
@@ -43,39 +24,24 @@ def test_report_is_self_contained_and_matches_the_estimate(
     folder, state = session
     assert state.finished
     out = tmp_path / "out"
-    run = _report(folder, out)
+    run = run_report(folder, out)
     assert run.returncode == 0, run.stderr
 
-    page = (out / "index.html").read_text()
-    refs = re.findall(r'(?:src|href)="([^"]+)"', page)
-    assert refs, "the page shows no plots"
-    for ref in refs:
-        assert "/" not in ref
-        assert ":" not in ref
-        assert (out / ref).is_file(), ref
-    lowered = page.lower()
-    for external in ("http:", "https:", "<script", "<link", "@import", "url("):
-        assert external not in lowered
-
-    svgs = sorted(out.glob("*.svg"))
-    assert {p.name for p in svgs} >= {
-        "end_points_1.svg",
-        "end_points_2.svg",
-        "phi1.svg",
-        "model_check.svg",
-        "convergence_E_R.svg",
-        "convergence_K_rho.svg",
-    }
-    for path in svgs:
-        root = ET.parse(path).getroot()
-        assert root.tag == f"{SVG}svg"
-        text = path.read_text()
-        assert "href" not in text
-        assert "http:" not in text.replace('xmlns="http://www.w3.org/2000/svg"', "")
-
-    # One dot per trial of the design on its end-point plot.
-    dots = ET.parse(out / "end_points_1.svg").getroot().iter(f"{SVG}circle")
-    assert len(list(dots)) == 6
+    assert sorted(p.name for p in out.iterdir()) == [
+        "index.html",
+        "odometry_covariance.yaml",
+        "parameters.json",
+    ]
+    page = parse_page(out / "index.html")
+    assert_self_contained(page)
+    # Every plot is there, inline.
+    assert page.figures == [
+        "end-points-1",
+        "end-points-2",
+        "phi1",
+        "convergence",
+        "model-check",
+    ]
 
     expected = estimate(session_observations(state)).to_json_dict()
     assert expected["verdict"]["status"] == "trusted"
@@ -92,8 +58,6 @@ def test_report_is_self_contained_and_matches_the_estimate(
 
 
 def test_report_converges_over_trials(session: tuple[Path, SessionState], tmp_path: Path) -> None:
-    from odohil.session.report import load_report
-
     folder, _ = session
     report = load_report(folder)
     assert report.result is not None
@@ -110,7 +74,7 @@ def test_report_without_an_estimate_says_why(tmp_path: Path) -> None:
     folder = tmp_path / "short"
     build_session(folder, "k=1,l=1,n=1", seed=2)
     out = tmp_path / "out"
-    run = _report(folder, out)
+    run = run_report(folder, out)
     assert run.returncode == 0, run.stderr
     assert "No estimate" in (out / "index.html").read_text()
     assert "error" in json.loads((out / "parameters.json").read_text())
@@ -118,22 +82,14 @@ def test_report_without_an_estimate_says_why(tmp_path: Path) -> None:
 
 
 def test_report_of_a_missing_session_fails_cleanly(tmp_path: Path) -> None:
-    run = _report(tmp_path / "nothing", tmp_path / "out")
+    run = run_report(tmp_path / "nothing", tmp_path / "out")
     assert run.returncode == 2
     assert "journal" in run.stderr
 
 
-@pytest.fixture(scope="module")
-def bumped(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """A session whose trial 3 was marked 5 cm across the path from the robot."""
-    folder = tmp_path_factory.mktemp("bumped") / "session"
-    build_session(folder, PLAN, seed=5, bump=(3, 0.05))
-    return folder
-
-
 def test_an_untrusted_estimate_is_refused_without_force(bumped: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
-    run = _report(bumped, out)
+    run = run_report(bumped, out)
     assert run.returncode == 3, run.stderr
     assert "--force" in run.stderr
     assert "trial 3 (k=1 l=2 m turn)" in run.stderr
@@ -142,7 +98,7 @@ def test_an_untrusted_estimate_is_refused_without_force(bumped: Path, tmp_path: 
 
 def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
-    run = _report(bumped, out, "--force")
+    run = run_report(bumped, out, "--force")
     assert run.returncode == 0, run.stderr
     written = json.loads((out / "parameters.json").read_text())
     assert written["verdict"]["status"] == "doubtful"
@@ -150,12 +106,22 @@ def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_pa
     yaml = (out / "odometry_covariance.yaml").read_text()
     assert yaml.startswith("# WARNING: this estimate is DOUBTFUL")
     assert re.search(r"^  status: doubtful$", yaml, flags=re.MULTILINE)
-    assert "Verdict: <strong>doubtful</strong>" in (out / "index.html").read_text()
+    html = (out / "index.html").read_text()
+    assert "Verdict: <strong>doubtful</strong>" in html
+    assert "written on request (--force)" in html
+    # The flagged trials (the floor marks' solution in doubt) and the trial the
+    # robust fit down-weights, listed by trial number.
+    state = replay(read_journal(bumped).records)
+    flagged = {t.trial for t in state.completed if not t.clear_cut or t.slip}
+    assert 3 in flagged
+    rows = parse_page(out / "index.html").pointed_out
+    assert {n for n, what in rows.items() if "flagged" in what} == flagged
+    assert "outlier, down-weighted" in rows[3]
 
 
 def test_report_exclude_leaves_the_trial_out(bumped: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
-    run = _report(bumped, out, "--exclude", "3")
+    run = run_report(bumped, out, "--exclude", "3")
     assert run.returncode == 0, run.stderr
     written = json.loads((out / "parameters.json").read_text())
     assert written["verdict"]["status"] == "trusted"
@@ -166,7 +132,11 @@ def test_report_exclude_leaves_the_trial_out(bumped: Path, tmp_path: Path) -> No
         (out / "odometry_covariance.yaml").read_text(),
         flags=re.MULTILINE,
     )
-    bad = _report(bumped, tmp_path / "other", "--exclude", "13")
+    rows = parse_page(out / "index.html").pointed_out
+    assert rows[3].startswith("excluded")
+    assert not any("excluded" in what for n, what in rows.items() if n != 3)
+
+    bad = run_report(bumped, tmp_path / "other", "--exclude", "13")
     assert bad.returncode == 2
     assert "--exclude" in bad.stderr
     assert "1..12" in bad.stderr
