@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 from scipy import optimize, stats
 
 from odohil.science.estimators import IncrementalEstimator, Observation, estimate
-from odohil.science.estimators.estimate import fit_joint
+from odohil.science.estimators.estimate import build_result, fit_joint
 from odohil.science.estimators.intervals import LEVEL_4SIGMA, profile_interval
 from odohil.science.estimators.joint import designs_of
 from odohil.science.estimators.likelihood import evaluate, model_point
@@ -107,3 +108,26 @@ def test_the_live_estimate_keeps_the_cheap_wald_intervals() -> None:
     k = inc.result().parameter("K_theta")
     assert k.interval.startswith("Wald")
     assert k.ci_4sigma[0] < k.ci95[0] < k.value < k.ci95[1] < k.ci_4sigma[1]
+
+
+def test_a_variance_rate_without_an_upper_bound_is_not_identified() -> None:
+    """The verdict reads the interval the user is given: a K whose 95 %
+    profile interval never closes above is 'not identified' (failed)."""
+    obs = exact(5, 3)
+    groups = group_trials(obs)
+    summaries = summarise(groups)
+    fit = fit_joint(groups, paper_estimate(summaries))
+    closed = estimate(obs, "joint").parameters
+    k_rho = closed[3]
+    open_above = replace(k_rho, ci95=(k_rho.ci95[0], math.inf))
+    result = build_result(
+        "joint",
+        obs,
+        summaries,
+        fit.params,
+        fit.covariance,
+        (),
+        intervals=(*closed[:3], open_above),
+    )
+    assert result.verdict.status == "failed"
+    assert any("not identified" in r and "K_rho" in r for r in result.verdict.reasons)
