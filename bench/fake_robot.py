@@ -11,8 +11,8 @@ import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
 from fakes.nomad.process import EmulatorProcess
-from odohil.protocol import messages as m
-from odohil.protocol.framing import Packet, PacketDecoder
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.framing import Packet, PacketDecoder
 
 GS = m.encode_request(m.Gs())
 

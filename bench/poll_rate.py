@@ -15,7 +15,7 @@ import argparse
 import time
 
 from fakes.nomad.process import EmulatorProcess
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.robot import NomadRobot
 
 BYTES_PER_POLL = 6 + 48
 BITS_PER_BYTE = 10

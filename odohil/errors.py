@@ -96,3 +96,9 @@ class SafetyError(OdohilError):
 
 class StopUnconfirmedError(SafetyError):
     """A stop was sent but the robot did not report standing still: it may still be moving."""
+
+
+class SafetyStopError(SafetyError):
+    """The robot reported a hazard (cliff, wheel drop, bump) or left the mode it
+    drives in (a drop to Passive) during a motion: it was told to stop and the
+    trial ends."""

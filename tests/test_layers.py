@@ -1,8 +1,11 @@
-"""The architecture's layering holds: each layer imports only the layers below it."""
+"""The architecture's layering holds: each layer imports only the layers below it;
+the session names no robot; protocol and driver have one subpackage per robot
+protocol, which do not import each other."""
 
 from __future__ import annotations
 
 import ast
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -48,3 +51,57 @@ def test_science_does_no_io() -> None:
         if "print(" in path.read_text() or "open(" in path.read_text():
             offenders.append(f"{path.name} prints or opens files")
     assert offenders == []
+
+
+def test_session_names_no_robot_protocol() -> None:
+    """The session owns Robot and PoseSource and names no robot (issue 10)."""
+    offenders = [
+        str(path.relative_to(ROOT))
+        for path in sorted((ROOT / "odohil" / "session").rglob("*.py"))
+        if "nomad" in path.read_text().lower()
+    ]
+    assert offenders == []
+
+
+def _subpackages(layer: str) -> set[str]:
+    return {p.parent.name for p in (ROOT / "odohil" / layer).glob("*/__init__.py")}
+
+
+SHARED_DRIVER_MODULES = {"__init__", "odometry", "port"}
+"""What the driver layer shares between its backends."""
+
+
+def test_protocol_and_driver_have_one_subpackage_per_robot_protocol() -> None:
+    protocols = _subpackages("protocol")
+    assert protocols, "odohil/protocol has no robot protocol subpackage"
+    top_protocol = {p.stem for p in (ROOT / "odohil" / "protocol").glob("*.py")}
+    assert top_protocol == {"__init__"}, "protocol code lives in its robot's subpackage"
+    assert _subpackages("driver") == protocols
+    top_driver = {p.stem for p in (ROOT / "odohil" / "driver").glob("*.py")}
+    assert top_driver <= SHARED_DRIVER_MODULES, "backend code lives in its robot's subpackage"
+
+
+@pytest.mark.parametrize("layer", ["protocol", "driver"])
+def test_robot_subpackages_do_not_import_each_other(layer: str) -> None:
+    names = _subpackages("protocol") | _subpackages("driver")
+    offenders = []
+    for path in sorted((ROOT / "odohil" / layer).rglob("*.py")):
+        rel = path.relative_to(ROOT / "odohil" / layer)
+        own = rel.parts[0] if len(rel.parts) > 1 else None  # None: shared module
+        for module in _imports(path):
+            parts = module.split(".")
+            robot_module = len(parts) >= 3 and parts[:2] in (
+                ["odohil", "protocol"],
+                ["odohil", "driver"],
+            )
+            if robot_module and parts[2] in names and parts[2] != own:
+                offenders.append(f"{path.relative_to(ROOT)} imports {module}")
+    assert offenders == []
+
+
+def test_every_driver_backend_is_registered_by_name() -> None:
+    """Backends are found by name through the odohil.robots entry points."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    entries = project["project"]["entry-points"]["odohil.robots"]
+    registered = {value.split(":")[0].split(".")[2] for value in entries.values()}
+    assert registered == _subpackages("driver")

@@ -4,8 +4,9 @@ Wire units inside (0.1 inch, 0.1 degree and their rates), simulated seconds.
 The encoder pose is the ideal integration of the commanded motion
 (x += d cos(steer), y += d sin(steer), CHOICE C8). The true pose (metres,
 radians) is advanced by the science layer's discrete error model
-(:func:`odohil.science.simulator.drive_straight`): translation in segments of
-at most ``segment_m`` encoder metres (see below);
+(:func:`odohil.science.simulator.drive_straight`, one segment at a time by
+:func:`fakes.nomad.segment.drive_segment`, which draws what it would):
+translation in segments of at most ``segment_m`` encoder metres (see below);
 steering rotations change the true heading exactly (in-place turns are error
 free in Martinelli's model).
 
@@ -27,9 +28,10 @@ import math
 import numpy as np
 
 from fakes.nomad.profile import Profile, plan_move, plan_velocity
+from fakes.nomad.segment import drive_segment
 from odohil import units
 from odohil.science.parameters import ErrorParameters
-from odohil.science.simulator import DEFAULT_SEGMENT_M, drive_straight
+from odohil.science.simulator import DEFAULT_SEGMENT_M
 
 _LOG = logging.getLogger(__name__)
 
@@ -163,16 +165,10 @@ class RobotBody:
             self.leg_segments = 0
 
     def _drive(self, signed_segment_m: float, n: int) -> None:
+        pose = (float(self.true_x[0]), float(self.true_y[0]), float(self.true_theta[0]))
         for _ in range(n):
-            drive_straight(
-                self.true_x,
-                self.true_y,
-                self.true_theta,
-                signed_segment_m,
-                1,
-                self.params,
-                self.rng,
-            )
+            pose = drive_segment(pose, signed_segment_m, self.params, self.rng)
+        self.true_x[0], self.true_y[0], self.true_theta[0] = pose
 
     def _set_encoder_xy(self, x: float, y: float) -> None:
         cx = min(max(x, -WIRE_LIMIT), WIRE_LIMIT)

@@ -28,10 +28,10 @@ from fakes.nomad.config import EmulatorConfig
 from fakes.nomad.faults import FaultPlan
 from fakes.nomad.truth import MotionRecord, TruthSnapshot
 from odohil.errors import FramingError, UnexpectedReplyError
-from odohil.protocol import messages as m
-from odohil.protocol.codes import Code
-from odohil.protocol.framing import DecodeFault, Packet, PacketDecoder, encode_packet
-from odohil.protocol.replies import (
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.codes import Code
+from odohil.protocol.nomad.framing import DecodeFault, Packet, PacketDecoder, encode_packet
+from odohil.protocol.nomad.replies import (
     NAK_BYTES,
     BpReply,
     RaReply,
@@ -45,7 +45,7 @@ from odohil.protocol.replies import (
     encode_sn_reply,
     encode_state_reply,
 )
-from odohil.protocol.state import N150_MASK, RobotState, StateMask
+from odohil.protocol.nomad.state import N150_MASK, RobotState, StateMask
 from odohil.science.simulator import make_rng
 
 _LOG = logging.getLogger(__name__)

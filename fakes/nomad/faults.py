@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from odohil.errors import ParameterError
-from odohil.protocol.codes import Code
+from odohil.protocol.nomad.codes import Code
 
 REPLY_FAULTS = ("corrupt", "drop", "late", "split", "merge", "garbage", "nak", "wrong-type")
 MOTION_FAULTS = ("stuck", "disconnect", "watchdog")

@@ -22,8 +22,10 @@ COMMAND_MODULES: tuple[str, ...] = (
     "resume",
     "demo",
     "report",
+    "export",
     "estimate",
     "wizard",
+    "validate",
 )
 
 app = typer.Typer(

@@ -15,6 +15,7 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from odohil.cli.line import resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.run import (
     SnapshotTruth,
@@ -28,7 +29,7 @@ from odohil.science.parameters import SI_UNITS, ErrorParameters
 from odohil.science.robot_description import parse_robot_description
 from odohil.session.engine import start_session
 from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource
+from odohil.session.sources import FakeTruthSource, TapeSource
 
 DEMO_TRUTH = ErrorParameters.from_paper_units(-1.0, -0.05, 0.3, 9e-4)
 """The fake robot's true parameters: the Nomad 150's (-0.202 deg/m, -0.02,
@@ -61,8 +62,19 @@ def demo(
         Path | None,
         typer.Option("--session", help="Keep the session folder here (default: a temp folder)."),
     ] = None,
+    robot_name: Annotated[
+        str,
+        typer.Option("--robot", help="Which fake robot: nomad150 or create2 (docs/create2.md)."),
+    ] = "nomad150",
 ) -> None:
     """Calibrate the fake robot unattended and compare with its true parameters."""
+    if robot_name == "create2":
+        _demo_create2(seed, json_out, session)
+        return
+    if robot_name != "nomad150":
+        raise typer.BadParameter(
+            f"one of nomad150, create2; got {robot_name!r}", param_hint="--robot"
+        )
     console = Console(stderr=True)
     truth = DEMO_TRUTH.to_si_dict()
     paper = DEMO_TRUTH.to_paper_units()
@@ -98,12 +110,57 @@ def demo(
                         measure="fake",
                         settings=settings,
                     )
-                with (
-                    journal,
-                    connect(emulator.device, 38400, emulator.truth_socket) as (robot, reader),
-                ):
-                    source = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+                line = resolve_line(description, emulator.device, 38400)
+                with journal, connect(line, emulator.truth_socket) as (robot, reader):
+                    tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+                    source = TapeSource(tape, description)
                     outcome = execute(journal, state, robot, source, settings, console)
+    extra = {
+        "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
+    }
+    finish(outcome, json_out, console, extra=extra, truth=truth)
+
+
+CREATE2_PLAN = "k=1,l=2,n=18,variant=reverse;k=0.5,l=2,n=18,variant=reverse"
+"""Turn-free designs (docs/create2.md): closed 4 m runs and one-way 2 m runs."""
+CREATE2_TIME_SCALE = 10.0
+"""The fake Create 2's time scale: its legs end on 15 ms readings of the
+encoders and a stop sent by the host, so on a faster clock a late reading
+ends a leg centimetres long."""
+
+
+def _demo_create2(seed: int, json_out: bool, session: Path | None) -> None:
+    """``--robot create2``: the same job on the fake Create 2 (in process, through
+    ``fakecreate2://`` and the real driver), reverse designs only.
+
+    In process rather than on a pty: a Create 2 leg ends when the host's stop
+    command arrives, so a fake in another process that a busy machine
+    deschedules for 20 ms drives a time-scaled leg centimetres long; in process
+    the fake reads each command the moment the driver writes it.
+    """
+    console = Console(stderr=True)
+    truth = DEMO_TRUTH.to_si_dict()
+    paper = DEMO_TRUTH.to_paper_units()
+    toml = DEMO_ROBOT_TOML + '[robot]\nprotocol = "create2"\n'
+    query = "&".join(
+        [f"seed={seed}", f"time_scale={CREATE2_TIME_SCALE!r}"]
+        + [f"{name}={paper[name]!r}" for name in ("E_R", "E_T", "K_theta", "K_rho")]
+    )
+    port = f"fakecreate2://?{query}"
+    with session_exit_codes(console), tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
+        folder = session or Path(tmp) / "session"
+        console.print(f"fake Create 2 at {port}; true parameters (SI) {truth}")
+        description = parse_robot_description(toml, "demo robot")
+        line = resolve_line(description, port, None)
+        settings = {"port": port, "baud": line.baud, "seed": seed, "truth": truth}
+        with session_input(console):
+            journal, state = start_session(
+                folder, toml, parse_plan(CREATE2_PLAN), measure="fake", settings=settings
+            )
+        with journal, connect(line, None) as (robot, reader):
+            tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+            source = TapeSource(tape, description)
+            outcome = execute(journal, state, robot, source, settings, console)
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
     }

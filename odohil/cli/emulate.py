@@ -1,4 +1,8 @@
-"""``odohil emulate``: serve a fake Nomad 150 on a pseudo-terminal."""
+"""``odohil emulate``: serve a fake Nomad 150 on a pseudo-terminal.
+
+The fake (fakes/nomad/) is imported only when the command runs, so that no
+other ``odohil`` command loads it.
+"""
 
 from __future__ import annotations
 
@@ -9,10 +13,6 @@ from typing import Annotated
 
 import typer
 
-from fakes.nomad.config import build_config
-from fakes.nomad.faults import FAULT_NAMES
-from fakes.nomad.pacing import DEFAULT_BAUD
-from fakes.nomad.run import run_emulator
 from odohil.cli.options import (
     E_R_DEFAULT,
     E_T_DEFAULT,
@@ -24,15 +24,21 @@ from odohil.cli.options import (
     KThetaDeg2PerM,
     bounded,
 )
+from odohil.driver.nomad.link import DEFAULT_BAUD
 from odohil.errors import OdohilError
 
 _FAULT_HELP = (
     "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
-    f"repeatable; NAME one of {', '.join(FAULT_NAMES)}. See docs/fake-robot.md."
+    "repeatable; NAME as listed in docs/fake-robot.md (a wrong one is refused with the list)."
 )
 
 
 def emulate(
+    robot: str = typer.Option(
+        "nomad150",
+        "--robot",
+        help="Which fake: nomad150 or create2 (docs/create2.md; default line rate 115200).",
+    ),
     seed: int | None = typer.Option(
         None, "--seed", callback=bounded("seed"), help="Seed of the odometry noise."
     ),
@@ -65,9 +71,19 @@ def emulate(
 
     Prints the device path (first line) and the truth socket path (second line).
     """
+    from fakes.nomad.config import build_config
+    from fakes.nomad.run import run_emulator
+
     if truth_socket is not None:
         _check_socket_path(truth_socket)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
+    if robot == "create2":
+        _emulate_create2(
+            seed, (e_r, e_t, k_theta, k_rho), time_scale, baud, pacing, fault, truth_socket
+        )
+        return
+    if robot != "nomad150":
+        raise typer.BadParameter(f"one of nomad150, create2; got {robot!r}", param_hint="--robot")
     try:
         config = build_config(
             seed=seed,
@@ -81,6 +97,35 @@ def emulate(
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
     run_emulator(config, baud=baud, pacing=pacing, truth_socket=truth_socket)
+
+
+def _emulate_create2(
+    seed: int | None,
+    paper: tuple[float, float, float, float],
+    time_scale: float,
+    baud: int,
+    pacing: bool,
+    fault: list[str] | None,
+    truth_socket: str | None,
+) -> None:
+    """``--robot create2``: the fake Create 2 (fakes/create2/), same two lines
+    and truth socket; the Nomad's default line rate means the Create 2's 115200."""
+    from fakes.create2.config import build_config as build_create2
+    from fakes.create2.run import run_emulator as run_create2
+    from odohil.protocol.create2.opcodes import DEFAULT_BAUD as CREATE2_BAUD
+    from odohil.science.parameters import ErrorParameters
+
+    try:
+        config = build_create2(
+            seed=seed,
+            params=ErrorParameters.from_paper_units(*paper),
+            time_scale=time_scale,
+            baud=CREATE2_BAUD if baud == DEFAULT_BAUD else baud,
+            faults=fault or [],
+        )
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    run_create2(config, pacing=pacing, truth_socket=truth_socket)
 
 
 SOCKET_PATH_MAX = 107

@@ -14,7 +14,7 @@ from rich.table import Table
 from rich.text import Text
 
 from odohil import units
-from odohil.driver.sample import EncoderSample
+from odohil.driver.odometry import OdometrySample
 from odohil.science.observables import observables
 from odohil.science.parameters import PAPER_UNITS, PARAMETER_NAMES
 from odohil.science.paths import Design, Leg, Turn
@@ -177,7 +177,7 @@ class MotionProgress:
         self._task = self._progress.add_task(design.label(), total=len(self._steps), pose="")
         self._progress.start()
 
-    def update(self, step: int, start: EncoderSample | None, sample: EncoderSample) -> None:
+    def update(self, step: int, start: OdometrySample | None, sample: OdometrySample) -> None:
         """A new encoder sample in step ``step`` (0-based) that began at ``start``."""
         if self._progress is None or self._task is None or step >= len(self._steps):
             return
@@ -188,11 +188,11 @@ class MotionProgress:
                 moved = math.hypot(sample.x_m - start.x_m, sample.y_m - start.y_m)
                 fraction = moved / abs(item.length_m)
             elif isinstance(item, Turn) and item.angle_rad != 0:
-                turned = abs(units.wrap_angle(sample.steer_rad - start.steer_rad))
+                turned = abs(units.wrap_angle(sample.theta_rad - start.theta_rad))
                 fraction = turned / min(abs(item.angle_rad), math.pi)
         pose = (
             f"x={sample.x_m:+.3f} m y={sample.y_m:+.3f} m "
-            f"heading={math.degrees(sample.steer_rad):6.1f} deg"
+            f"heading={math.degrees(sample.theta_rad):6.1f} deg"
         )
         self._progress.update(self._task, completed=step + min(1.0, fraction), pose=pose)
 

@@ -9,6 +9,7 @@ import typer
 from rich.console import Console
 
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
+from odohil.cli.line import resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.run import (
     Outcome,
@@ -16,10 +17,11 @@ from odohil.cli.run import (
     execute,
     finish,
     make_source,
+    open_mocap,
+    parse_measure,
     session_exit_codes,
     session_input,
 )
-from odohil.driver.link import DEFAULT_BAUD
 from odohil.errors import InitError
 from odohil.session.engine import description_of, resume_session
 from odohil.session.floor_space import check_floor
@@ -51,7 +53,8 @@ def resume(
         str | None,
         typer.Option(
             "--measure",
-            help="`fake` or a trial file (CSV) for the remaining trials (default: the session's).",
+            help="`fake`, a trial file (CSV) or tcp://HOST:PORT (motion capture) for the "
+            "remaining trials (default: the session's).",
         ),
     ] = None,
     json_out: Annotated[
@@ -89,17 +92,18 @@ def resume(
                     f"with `odohil wizard --port PORT --session {session}`"
                 )
             settings = dict(state.header.get("settings", {}))
-            port_url = port or settings.get("port")
-            if not port_url:
-                raise InitError("the session does not say which port; give --port")
-            line_baud = baud or int(settings.get("baud") or DEFAULT_BAUD)
-            socket_path = truth_socket or settings.get("truth_socket")
             description = description_of(state)  # before the port opens
+            robot_path = str(state.header.get("robot_path") or "robot.toml")
+            line = resolve_line(description, port, baud, robot_path, journaled=settings)
+            socket_path = truth_socket or settings.get("truth_socket")
             kind = str(state.header.get("measure"))
             trial_file = settings.get("trial_file")
+            mocap_url = settings.get("mocap_url") if kind == "tcp" else None
             if measure is not None:
-                kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
+                option = parse_measure(measure)
+                kind, trial_file, mocap_url = option.kind, option.trial_file, option.mocap_url
                 settings["trial_file"] = str(Path(measure).resolve()) if trial_file else None
+                settings["mocap_url"] = mocap_url
             done = len(state.completed)
             assert state.plan is not None
             check_floor(state.plan, description_of(state))
@@ -109,15 +113,20 @@ def resume(
                 f"resuming {session}: {done} of {state.plan.n_trials} trials done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
             )
-            with connect(str(port_url), line_baud, socket_path) as (robot, truth):
+            console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
+            with (
+                open_mocap(mocap_url, description, console) as mocap,  # before the port opens
+                connect(line, socket_path) as (robot, truth),
+            ):
                 source = make_source(
                     kind,
                     description,
                     truth,
                     int(settings.get("seed") or 0),
                     trial_file,
+                    mocap,
                 )
-                connection = {**settings, "port": port_url, "baud": line_baud}
+                connection = {**settings, **line.to_json()}
                 connection["truth_socket"] = socket_path
                 refused: list[StartPose] = []
 

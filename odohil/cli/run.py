@@ -33,13 +33,13 @@ from odohil.cli.exit_codes import (
     EXIT_UNTRUSTED,
     exit_for_signal,
 )
+from odohil.cli.line import Line, register_fake_urls, resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.verdict import verdict_line
-from odohil.driver.link import DEFAULT_BAUD, open_port
-from odohil.driver.robot import NomadRobot
 from odohil.errors import (
     InitError,
     JournalError,
+    MeasurementError,
     OdohilError,
     ParameterError,
     RobotDescriptionError,
@@ -62,10 +62,14 @@ from odohil.session.engine import (
 )
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
+from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
 from odohil.session.plan import Plan
+from odohil.session.pose_source import PoseSource
 from odohil.session.preflight import check_new_session, check_trial_file
+from odohil.session.robot import Robot
+from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
-from odohil.session.sources import FakeTruthSource, MeasurementSource, TruthReader
+from odohil.session.sources import FakeTruthSource, TapeSource, TruthReader
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState, ambiguous_trials, session_observations
 
@@ -91,16 +95,17 @@ class SnapshotTruth:
 
 
 @contextlib.contextmanager
-def connect(port: str, baud: int, truth_socket: str | None) -> Iterator[tuple[NomadRobot, Any]]:
-    """The robot on ``port`` and its truth side channel (None when there is none).
+def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]:
+    """The robot on ``line`` (through the backend its protocol names) and its
+    truth side channel (None when there is none).
 
-    ``fakerobot://`` ports carry their own truth; a pty fake robot needs
-    ``truth_socket``. The robot is closed (``st`` sent) on exit.
+    ``fakerobot://`` ports carry their own truth (on the backend's
+    ``transport``, the open port); a pty fake robot needs ``truth_socket``.
+    The robot is closed (stopped) on exit.
     """
-    if port.startswith("fakerobot:"):
-        import fakes  # noqa: F401  (registers the fakerobot:// URL handler)
-    raw = open_port(port, baud)
-    robot = NomadRobot.from_port(raw)
+    register_fake_urls(line.port)
+    robot = open_robot(line.protocol, line.port, line.baud)
+    transport = getattr(robot, "transport", None)
     truth: Any = None
     try:
         if truth_socket:
@@ -109,14 +114,14 @@ def connect(port: str, baud: int, truth_socket: str | None) -> Iterator[tuple[No
             client = TruthClient(truth_socket)
             client.open()
             truth = client
-        elif hasattr(raw, "truth"):
-            truth = raw
+        elif hasattr(transport, "truth"):
+            truth = transport
         yield robot, truth
     finally:
         try:
             robot.close()
         finally:
-            if truth is not None and hasattr(truth, "close") and truth is not raw:
+            if truth is not None and hasattr(truth, "close") and truth is not transport:
                 truth.close()
 
 
@@ -126,8 +131,19 @@ def make_source(
     truth: Any,
     seed: int,
     trial_file: str | None,
-) -> MeasurementSource:
-    """The measurement source named by ``measure`` (``fake`` or ``file``)."""
+    mocap: PoseStream | None = None,
+) -> PoseSource:
+    """The pose source named by ``measure``: ``fake`` (the fake's truth as a
+    tape with simulated noise, through the floor-marks solver), ``file`` (a
+    trial file: poses read as poses, raw distances through the solver) or
+    ``tcp`` (motion capture on the open ``mocap`` stream)."""
+    if measure == "tcp":
+        if mocap is None:
+            raise InitError(
+                "the session measures by motion capture but names no stream: give "
+                "--measure tcp://HOST:PORT"
+            )
+        return MotionCaptureSource(mocap, pose_sigma_of(description, mocap.url))
     if measure == "fake":
         if truth is None:
             raise InitError(
@@ -135,12 +151,67 @@ def make_source(
                 "--truth-socket PATH (the path `odohil emulate` printed) or a fakerobot:// port"
             )
         reader: TruthReader = SnapshotTruth(truth)
-        return FakeTruthSource(reader, description, seed=seed)
+        return TapeSource(FakeTruthSource(reader, description, seed=seed), description)
     if measure == "file" and trial_file:
-        from odohil.session.sources import recorded_source_from_file
+        from odohil.session.sources import pose_source_from_file
 
-        return recorded_source_from_file(trial_file, description)
+        return pose_source_from_file(trial_file, description)
     raise ParameterError(f"unknown measurement source {measure!r}")
+
+
+MOCAP_SCHEME = "tcp://"
+"""``--measure`` values starting so name a motion-capture stream."""
+MOCAP_FIRST_POSE_S = 3.0
+"""How long a motion-capture stream may take to deliver its first pose, s."""
+
+
+@dataclass(frozen=True)
+class MeasureOption:
+    """What ``--measure`` names.
+
+    Attributes:
+        kind: ``fake``, ``file`` or ``tcp`` (as journaled in the header).
+        trial_file: the trial file of ``file``.
+        mocap_url: the stream of ``tcp``.
+    """
+
+    kind: str
+    trial_file: str | None = None
+    mocap_url: str | None = None
+
+
+def parse_measure(measure: str) -> MeasureOption:
+    """``--measure``: ``fake``, ``tcp://HOST:PORT`` or a trial file's path."""
+    if measure == "fake":
+        return MeasureOption("fake")
+    if measure.startswith(MOCAP_SCHEME) or "://" in measure:
+        return MeasureOption("tcp", mocap_url=measure)
+    return MeasureOption("file", trial_file=measure)
+
+
+@contextlib.contextmanager
+def open_mocap(
+    url: str | None, description: RobotDescription, console: Console
+) -> Iterator[PoseStream | None]:
+    """The motion-capture stream at ``url``, checked before anything moves: the
+    URL's form and the description's pose_sigma (exit 2), then a connection
+    that delivers a pose within :data:`MOCAP_FIRST_POSE_S` (exit 1: nothing
+    moved). None when ``url`` is None. Closed on exit."""
+    if url is None:
+        yield None
+        return
+    stream = PoseStream(url)  # ParameterError on a bad URL
+    pose_sigma_of(description, url)
+    try:
+        stream.open()
+        require_pose(stream, MOCAP_FIRST_POSE_S)
+    except (InitError, MeasurementError) as exc:
+        stream.close()
+        console.print(f"[red]error[/]: {escape(str(exc))}; nothing moved", soft_wrap=True)
+        raise typer.Exit(EXIT_ERROR) from None
+    console.print(f"motion capture {url}: poses arriving", soft_wrap=True)
+    with stream:
+        yield stream
 
 
 class ProgressObserver:
@@ -194,8 +265,8 @@ class Outcome:
 def execute(
     journal: Journal,
     state: SessionState,
-    robot: NomadRobot,
-    source: MeasurementSource,
+    robot: Robot,
+    source: PoseSource,
     connection: Mapping[str, Any],
     console: Console,
     motion: MotionSettings | None = None,
@@ -366,10 +437,11 @@ def session_exit_codes(console: Console) -> Iterator[None]:
         console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
     except (ParameterError, RobotDescriptionError, TrialFileError, JournalError) as exc:
-        console.print(f"[red]error[/]: {exc}", soft_wrap=True)  # found before anything moved
+        # found before anything moved
+        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     except (OdohilError, OSError) as exc:
-        console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_ERROR) from None
 
 
@@ -411,13 +483,22 @@ def default_session_folder() -> Path:
 
 
 def run(
-    port: Annotated[str, typer.Option("--port", help="Serial device, pty path or pyserial URL.")],
+    port: Annotated[
+        str | None,
+        typer.Option(
+            "--port",
+            help="Serial device, pty path or pyserial URL (default: robot.toml [serial] port).",
+        ),
+    ] = None,
+    *,
     robot_file: Annotated[Path, typer.Option("--robot", help="Robot description (TOML).")],
     plan_text: Annotated[str, typer.Option("--plan", help=_PLAN_HELP)],
     measure: Annotated[
         str,
         typer.Option(
-            "--measure", help="`fake` (the fake robot's true pose) or a trial file (CSV)."
+            "--measure",
+            help="`fake` (the fake robot's true pose), a trial file (CSV), or "
+            "tcp://HOST:PORT (a motion-capture stream, docs/motion-capture.md).",
         ),
     ],
     session: Annotated[
@@ -435,8 +516,13 @@ def run(
         ),
     ] = 0,
     baud: Annotated[
-        int, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
-    ] = DEFAULT_BAUD,
+        int | None,
+        typer.Option(
+            "--baud",
+            callback=bounded("baud"),
+            help="Line speed (default: robot.toml [serial] baud, else the robot's default).",
+        ),
+    ] = None,
     json_out: Annotated[
         bool,
         typer.Option("--json", help="Print the final estimate as JSON (as estimate --json)."),
@@ -453,36 +539,42 @@ def run(
         checked = check_new_session(plan_text, robot_file, folder)  # before anything moves
         plan, description, toml = checked.plan, checked.description, checked.toml
         exclude = checked_exclude(exclude_text, plan.n_trials, console)
-        refuse_unredundant(description, plan, console)
+        option = parse_measure(measure)
+        kind, trial_file = option.kind, option.trial_file
+        if kind != "tcp":  # the tape's cross distances must tell the designs apart
+            refuse_unredundant(description, plan, console)
         try:
             check_floor(plan, description)
         except ParameterError as exc:
             console.print(f"[red]error[/]: {exc}; nothing moved")
             raise typer.Exit(EXIT_BAD_INPUT) from None
-        kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
+        line = resolve_line(description, port, baud, str(robot_file))
         if trial_file:
             check_trial_file(trial_file, description, plan)
         settings = {
-            "port": port,
-            "baud": baud,
+            **line.to_json(),
             "truth_socket": truth_socket,
             "seed": seed,
             "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
         }
-        if kind == "fake" and not truth_socket and not port.startswith("fakerobot:"):
+        if option.mocap_url:
+            settings["mocap_url"] = option.mocap_url
+        if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
             try:
                 make_source(kind, description, None, seed, trial_file)  # says what is missing
             except OdohilError as exc:
                 console.print(f"[red]error[/]: {exc}", soft_wrap=True)  # bad input: nothing moved
                 raise typer.Exit(EXIT_BAD_INPUT) from None
-        with session_input(console):
-            journal, state = start_session(
-                folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)
-            )
-        console.print(f"session {folder}")
-        with journal, connect(port, baud, truth_socket) as (robot, truth):
-            source = make_source(kind, description, truth, seed, trial_file)
-            outcome = execute(journal, state, robot, source, settings, console, exclude=exclude)
+        with open_mocap(option.mocap_url, description, console) as mocap:
+            with session_input(console):
+                journal, state = start_session(
+                    folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)
+                )
+            console.print(f"session {folder}")
+            console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
+            with journal, connect(line, truth_socket) as (robot, truth):
+                source = make_source(kind, description, truth, seed, trial_file, mocap)
+                outcome = execute(journal, state, robot, source, settings, console, exclude=exclude)
     finish(outcome, json_out, console)
 
 

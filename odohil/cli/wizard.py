@@ -20,7 +20,7 @@ import re
 import select
 import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from types import FrameType
@@ -40,13 +40,12 @@ from odohil.cli.exit_codes import (
     EXIT_UNTRUSTED,
     exit_for_signal,
 )
+from odohil.cli.line import Line, register_fake_urls, resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
 from odohil.cli.run import MAY_STILL_MOVE, default_session_folder, final_estimate, report_stop
 from odohil.cli.verdict import verdict_line
-from odohil.driver.link import DEFAULT_BAUD
-from odohil.driver.robot import NomadRobot
-from odohil.driver.sample import EncoderSample
+from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
 from odohil.science.floor_marks import marks_from_pose
 from odohil.science.moments import pose_moments
@@ -68,7 +67,9 @@ from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
 from odohil.session.preflight import check_session_folder
+from odohil.session.robot import Robot
 from odohil.session.robot_file import load_robot_description
+from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext
 from odohil.session.start_pose import StartPose, pose_text, sample_pose
@@ -166,7 +167,7 @@ class Interrupts:
         self.count = 0
         self.in_motion = False
         self.pending = False
-        self.robot: NomadRobot | None = None
+        self.robot: Robot | None = None
 
     def install(self) -> None:
         """Take over SIGINT."""
@@ -215,30 +216,6 @@ def _wait_readable(stream: TextIO, slice_s: float = 0.1) -> None:
         return
     while not select.select([fd], [], [], slice_s)[0]:
         pass
-
-
-class LiveRobot(NomadRobot):
-    """A :class:`NomadRobot` that also shows every encoder sample of a motion
-    (the engine's motion has no sample hook of its own)."""
-
-    sample_hook: Callable[[int, EncoderSample | None, EncoderSample], None] | None = None
-    polls = 0
-
-    def poll_until_stopped(
-        self, timeout_s: float, on_sample: Callable[[EncoderSample], None] | None = None
-    ) -> EncoderSample:
-        """As :meth:`NomadRobot.poll_until_stopped`, feeding :attr:`sample_hook` too."""
-        hook = self.sample_hook
-        step, start = self.polls, self.last_sample
-        self.polls += 1
-
-        def both(sample: EncoderSample) -> None:
-            if on_sample is not None:
-                on_sample(sample)
-            if hook is not None:
-                hook(step, start, sample)
-
-        return super().poll_until_stopped(timeout_s, both)
 
 
 # --- the operator's side ---------------------------------------------------
@@ -362,7 +339,7 @@ class WizardPrompts:
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
 
-    def start_check(self, robot: NomadRobot) -> StartCheck:
+    def start_check(self, robot: Robot) -> StartCheck:
         """Before the session goes on: show where the robot stands; if it is not
         at the next trial's start, ask the operator to put it back there, then
         set the encoders to that start pose."""
@@ -379,9 +356,7 @@ class WizardPrompts:
             if answer.strip().lower() == "here":
                 self.console.print("The trial starts where the robot stands.")
                 return
-            x, y, heading = start.expected
-            robot.define_pose(x, y)
-            robot.define_angles(heading, 0.0)
+            robot.zero(start.expected)
             self.console.print("Encoders set to the trial's start.")
 
         return check
@@ -403,17 +378,24 @@ class WizardObserver:
         prompts: WizardPrompts,
         interrupts: Interrupts,
         progress: MotionProgress,
-        robot: LiveRobot,
     ) -> None:
         self.console = console
         self.prompts = prompts
         self.interrupts = interrupts
         self.progress = progress
-        self.robot = robot
-        robot.sample_hook = self._sample
+        self._step = 0
+        self._step_start: OdometrySample | None = None
 
-    def _sample(self, step: int, start: EncoderSample | None, sample: EncoderSample) -> None:
-        self.progress.update(step, start, sample)
+    def on_sample(self, sample: OdometrySample) -> None:
+        """Every odometry sample of a motion: the first is taken before the
+        first step; a step ends at the first sample that shows the robot at rest."""
+        if self._step_start is None:
+            self._step_start = sample
+        else:
+            self.progress.update(self._step, self._step_start, sample)
+            if not sample.moving:
+                self._step += 1
+                self._step_start = sample
         self.interrupts.check()
 
     def record(self, record: Record, state: SessionState) -> None:
@@ -423,7 +405,7 @@ class WizardObserver:
             opened = state.open_trial
             assert opened is not None
             assert state.plan is not None
-            self.robot.polls = 0
+            self._step, self._step_start = 0, None
             self.interrupts.in_motion = True
             self.progress.start(state.plan.design_of(opened.trial))
         elif kind == ev.SOLVED:
@@ -514,7 +496,7 @@ class Opened:
     state: SessionState
 
 
-def _resume(console: Console, folder: Path, max_leg_m: float, port: str) -> Opened:
+def _resume(console: Console, folder: Path, max_leg_m: float, port: str | None) -> Opened:
     try:
         resumed = resume_session(folder, {"by": "wizard", "port": port})
     except OdohilError as exc:
@@ -569,7 +551,7 @@ def _check_redundancy(console: Console, robot_file: Path, plan: Plan) -> None:
 
 
 def _start(
-    console: Console, folder: Path, text: str, plan: Plan, robot_file: Path, port: str, baud: int
+    console: Console, folder: Path, text: str, plan: Plan, robot_file: Path, line: Line
 ) -> Opened:
     try:
         journal, state = start_session(
@@ -577,7 +559,7 @@ def _start(
             text,
             plan,
             measure="operator",
-            settings={"port": port, "baud": baud},
+            settings=line.to_json(),
             robot_path=str(robot_file),
         )
     except OdohilError as exc:
@@ -586,19 +568,38 @@ def _start(
     return Opened(journal, state)
 
 
-def _connect(console: Console, port: str, baud: int) -> LiveRobot:
+def _line(
+    console: Console,
+    description: RobotDescription,
+    port: str | None,
+    baud: int | None,
+    robot_path: str,
+    journaled: Mapping[str, Any] | None = None,
+) -> Line:
+    """The connection in force (command line, journal, robot.toml [serial])."""
     try:
-        robot = LiveRobot.connect(port, baud)
+        return resolve_line(description, port, baud, robot_path, journaled)
     except OdohilError as exc:
-        _fail(console, Check("robot answers", False, f"{port}: {exc}"))
-    assert isinstance(robot, LiveRobot)
-    sample = robot.state()
+        _fail(console, Check("port", False, str(exc)))
+
+
+def _connect(console: Console, line: Line) -> Robot:
+    try:
+        register_fake_urls(line.port)
+        robot = open_robot(line.protocol, line.port, line.baud)
+    except OdohilError as exc:
+        _fail(console, Check("robot answers", False, f"{line.describe()}: {exc}"))
+    try:
+        sample = robot.odometry()
+    except BaseException:
+        robot.close()
+        raise
     console.print(
         check_line(
             Check(
                 "robot answers",
                 True,
-                f"{port} at {baud} baud; encoders {pose_text(sample_pose(sample))}, "
+                f"{line.describe()}; encoders {pose_text(sample_pose(sample))}, "
                 + ("MOVING (it will be stopped first)" if sample.moving else "standing still"),
             )
         )
@@ -608,8 +609,13 @@ def _connect(console: Console, port: str, baud: int) -> LiveRobot:
 
 def wizard(
     port: Annotated[
-        str, typer.Option("--port", help="Serial port (or pyserial URL) of the robot.")
-    ],
+        str | None,
+        typer.Option(
+            "--port",
+            help="Serial port (or pyserial URL) of the robot "
+            "(default: the session's, else robot.toml [serial] port).",
+        ),
+    ] = None,
     robot_file: Annotated[
         Path | None,
         typer.Option("--robot", help="Robot description TOML (new sessions)."),
@@ -623,8 +629,14 @@ def wizard(
         typer.Option("--session", help="Session folder; an existing one is resumed."),
     ] = None,
     baud: Annotated[
-        int, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
-    ] = DEFAULT_BAUD,
+        int | None,
+        typer.Option(
+            "--baud",
+            callback=bounded("baud"),
+            help="Line speed (default: the session's, else robot.toml [serial] baud, "
+            "else the robot's default).",
+        ),
+    ] = None,
     max_leg_m: Annotated[
         float,
         typer.Option(
@@ -656,8 +668,8 @@ def _guided(
     console: Console,
     folder: Path,
     interrupts: Interrupts,
-    port: str,
-    baud: int,
+    port: str | None,
+    baud: int | None,
     robot_file: Path | None,
     plan_text: str | None,
     max_leg_m: float,
@@ -666,26 +678,39 @@ def _guided(
     try:
         if journal_path(folder).exists():
             opened = _resume(console, folder, max_leg_m, port)
+            header = opened.state.header
+            try:
+                line = _line(
+                    console,
+                    description_of(opened.state),
+                    port,
+                    baud,
+                    str(header.get("robot_path") or "robot.toml"),
+                    header.get("settings"),
+                )
+            except BaseException:
+                opened.journal.close()
+                raise
         else:
             text, plan = _prepare(console, robot_file, plan_text, max_leg_m)
             assert robot_file is not None
-            opened = _start(console, folder, text, plan, robot_file, port, baud)
+            description = load_robot_description(robot_file)
+            line = _line(console, description, port, baud, str(robot_file))
+            opened = _start(console, folder, text, plan, robot_file, line)
         with opened.journal:
-            robot = _connect(console, port, baud)
+            robot = _connect(console, line)
             interrupts.robot = robot
             with robot:
-                return _run(console, opened, robot, interrupts, port, baud)
+                return _run(console, opened, robot, interrupts, line)
     except KeyboardInterrupt as exc:
         return exit_for_signal(signal_of(exc))
 
 
-def _run(
-    console: Console, opened: Opened, robot: LiveRobot, interrupts: Interrupts, port: str, baud: int
-) -> int:
+def _run(console: Console, opened: Opened, robot: Robot, interrupts: Interrupts, line: Line) -> int:
     description = description_of(opened.state)
     progress = MotionProgress(console)
     prompts = WizardPrompts(console, description, interrupts, progress)
-    observer = WizardObserver(console, prompts, interrupts, progress, robot)
+    observer = WizardObserver(console, prompts, interrupts, progress)
     if opened.state.last_estimate is not None:
         prompts.estimate = _params_of(opened.state.last_estimate.get("result"))
     engine = SessionEngine(
@@ -695,7 +720,8 @@ def _run(
         OperatorSource(prompts),
         estimator=IncrementalLiveEstimator(),
         observer=observer,
-        connection={"port": port, "baud": baud},
+        connection=line.to_json(),
+        on_sample=observer.on_sample,
         start_check=prompts.start_check(robot),
     )
     try:

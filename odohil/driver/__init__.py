@@ -1,5 +1,8 @@
-"""The serial driver: one Nomad 150 over pyserial, in SI units.
+"""Robot drivers: one backend subpackage per robot protocol, each behind the
+session's ``Robot`` protocol (odohil/session/robot.py).
 
-``link`` (one request, one reply, Ndirect's timing), ``robot`` (the
-``NomadRobot`` connection with SI methods), ``motion`` (forth-and-back runs).
+Shared by every backend: ``port`` (a serial URL opened with
+``serial.serial_for_url``, so a real port, ``socket://``, ``rfc2217://`` and
+the fakes share one code path) and ``odometry`` (the robot-neutral SI values
+a backend hands up). ``nomad`` drives a Nomad 150.
 """

@@ -13,14 +13,23 @@ triples are allocated integer trial counts within the budget, and the plan
 with the smallest criterion wins. Pairs and triples are drawn from a pool of
 the most promising designs (best single designs overall and per parameter).
 
-Criterion (smaller is better), from the expected standard errors se_a:
+Targets: every parameter has one (SI standard errors). Those not given
+default to a stated fraction of the prior value (:func:`odohil.science.targets.default_targets`:
+25 % of |E_R| and |E_T|, 50 % of K_theta and K_rho, with floors); math.inf
+means "no target". A plan "meets the targets" only when every standard error
+is at most its target.
 
-- with targets (any subset of E_R, E_T, K_theta, K_rho, SI standard errors):
-  max_a se_a / target_a, so a value <= 1 meets every target;
-- without targets: sum_a (se_a / r_a)^2, the sum of relative variances, with
-  r_a = max(|prior_a|, scale_a) and scales 1e-3 rad/m, 1e-2, 1e-6 rad^2/m,
-  1e-5 m (E_R, E_T, K_theta, K_rho), so a parameter guessed near zero is
-  judged against a typical magnitude instead.
+Criterion (smaller is better): max_a se_a / target_a, so a value <= 1 meets
+every target (ties broken by the root mean square of the ratios).
+
+Honest intervals need trials: every design of a plan gets at least
+``min_trials_per_design`` (default :data:`DEFAULT_MIN_TRIALS_PER_DESIGN`;
+the estimators' 95 % intervals cover from about 10 trials per design, 5 is
+marginal: BENCHMARKS.md).
+
+Operator time (:class:`OperatorTime`): seconds to mark and measure one trial
+plus the driving (distance / speed, turns / turn rate), so that plans can be
+compared in minutes; ``budget_s`` bounds it like ``budget_m`` bounds metres.
 """
 
 from __future__ import annotations
@@ -43,8 +52,9 @@ from odohil.science.fisher import (
     trial_information,
 )
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
-from odohil.science.paths import VARIANTS, Design, FloatArray, floor_choreography
+from odohil.science.paths import VARIANTS, Design, FloatArray, Turn, floor_choreography
 from odohil.science.robot_description import RobotDescription
+from odohil.science.targets import default_targets
 
 DEFAULT_K_VALUES: tuple[float, ...] = (0.5, 1.0, 1.5, 2.0, 3.0, 5.0, 10.0, 20.0)
 DEFAULT_LEG_LENGTHS_M: tuple[float, ...] = (
@@ -56,12 +66,60 @@ DEFAULT_FLOOR_M = 10.0
 leg longer, and no plan whose trials (one-way ones alternating, see
 :func:`odohil.science.paths.floor_choreography`) cover more."""
 MAX_DESIGNS = 3
+DEFAULT_MIN_TRIALS_PER_DESIGN = 10
+"""Fewest trials of any design in a plan: the estimators' 95 % intervals cover
+from about 10 trials per design (5 is marginal; BENCHMARKS.md, bench/coverage.py)."""
+DEFAULT_SECONDS_PER_TRIAL = 120.0
+"""Operator seconds to mark the start, mark the end and take the tape readings
+of one trial (an assumption: time your own and pass it)."""
+DEFAULT_SPEED_M_PER_S = 0.5
+"""Driving speed of the time model, m/s (the driver's default translation speed)."""
+DEFAULT_TURN_RATE_RAD_PER_S = math.radians(45.0)
+"""In-place turn rate of the time model, rad/s (the driver's default steering speed)."""
+_TIE_BREAK = 1e-3
+"""Weight of the RMS of the ratios beside their maximum, so that among plans
+with the same worst ratio the one better on the others wins."""
 _POOL_SIZE = 24
 _GRID_STEPS = 24
 """Trial counts tried per design in a mixture (before the last design takes
 what is left of the budget)."""
 _SEARCH_ROUNDS = 64
 """Most moves of the local search at one step size."""
+
+
+@dataclass(frozen=True)
+class OperatorTime:
+    """How long a trial takes, for comparing plans in minutes.
+
+    Attributes:
+        seconds_per_trial: marking and measuring one trial, s.
+        speed_m_per_s: driving speed, m/s.
+        turn_rate_rad_per_s: in-place turn rate, rad/s.
+    """
+
+    seconds_per_trial: float = DEFAULT_SECONDS_PER_TRIAL
+    speed_m_per_s: float = DEFAULT_SPEED_M_PER_S
+    turn_rate_rad_per_s: float = DEFAULT_TURN_RATE_RAD_PER_S
+
+    def __post_init__(self) -> None:
+        if not math.isfinite(self.seconds_per_trial) or self.seconds_per_trial < 0:
+            raise ParameterError(
+                f"seconds per trial must be a non-negative number, got {self.seconds_per_trial!r}"
+            )
+        for name in ("speed_m_per_s", "turn_rate_rad_per_s"):
+            value = getattr(self, name)
+            if not math.isfinite(value) or value <= 0:
+                raise ParameterError(f"{name} must be a positive number, got {value!r}")
+
+    def trial_seconds(self, design: Design) -> float:
+        """Seconds for one trial of ``design``: marking and measuring, driving
+        2kl metres, and its in-place turns."""
+        turns = sum(abs(s.angle_rad) for s in design.path().steps if isinstance(s, Turn))
+        return (
+            self.seconds_per_trial
+            + design.distance_m / self.speed_m_per_s
+            + turns / self.turn_rate_rad_per_s
+        )
 
 
 @dataclass(frozen=True)
@@ -79,21 +137,27 @@ class PlanItem:
 
 @dataclass(frozen=True)
 class Plan:
-    """A recommended experiment.
+    """A recommended (or evaluated) experiment.
 
     Attributes:
         items: designs and their trial counts.
         standard_errors: (4,) expected standard errors (Cramer-Rao, SI) of
             E_R rad/m, E_T, K_theta rad^2/m, K_rho m.
-        criterion: the criterion value (see module docs); <= 1 meets all targets
-            when targets were given.
-        targets: the targets used (SI), by parameter name; empty if none.
+        criterion: the largest standard error / target ratio; <= 1 meets
+            every target.
+        targets: the target of every parameter (SI; math.inf: none).
+        operator: the time model.
+        min_trials_per_design: the fewest trials of a design for honest intervals.
+        notes: what the plan should know (e.g. a design below the minimum).
     """
 
     items: tuple[PlanItem, ...]
     standard_errors: FloatArray
     criterion: float
     targets: Mapping[str, float]
+    operator: OperatorTime = OperatorTime()
+    min_trials_per_design: int = DEFAULT_MIN_TRIALS_PER_DESIGN
+    notes: tuple[str, ...] = ()
 
     @property
     def distance_m(self) -> float:
@@ -106,9 +170,28 @@ class Plan:
         return sum(item.n_trials for item in self.items)
 
     @property
+    def duration_s(self) -> float:
+        """Operator time of the whole plan, s (:class:`OperatorTime`)."""
+        return sum(i.n_trials * self.operator.trial_seconds(i.design) for i in self.items)
+
+    @property
+    def unmet(self) -> tuple[str, ...]:
+        """The parameters whose standard error exceeds its target."""
+        return tuple(
+            name
+            for name, se in zip(PARAMETER_NAMES, self.standard_errors, strict=True)
+            if not se <= self.targets.get(name, math.inf)
+        )
+
+    @property
     def meets_targets(self) -> bool:
-        """True when targets were given and every one is met."""
-        return bool(self.targets) and self.criterion <= 1.0
+        """True when every parameter's standard error is at most its target."""
+        return not self.unmet
+
+    @property
+    def honest(self) -> bool:
+        """Every design has at least ``min_trials_per_design`` trials."""
+        return all(i.n_trials >= self.min_trials_per_design for i in self.items)
 
     def designs(self) -> list[tuple[Design, int]]:
         """(design, n_trials) pairs, as :func:`fisher.fisher_information` takes them."""
@@ -125,6 +208,7 @@ class Plan:
 class _Candidate:
     design: Design
     info: FloatArray  # per trial, (4, 4)
+    seconds: float = 0.0  # operator time of one trial
 
 
 def measurement_model(
@@ -137,35 +221,41 @@ def measurement_model(
 
 
 def check_targets(targets: Mapping[str, float] | None) -> dict[str, float]:
-    """Validated targets: names among E_R, E_T, K_theta, K_rho; positive SI values."""
+    """Validated targets: names among E_R, E_T, K_theta, K_rho; positive SI
+    values (math.inf: no target)."""
     checked: dict[str, float] = {}
     for name, value in (targets or {}).items():
         if name not in PARAMETER_NAMES:
             raise ParameterError(f"unknown target {name!r}; choose from {PARAMETER_NAMES}")
-        if not math.isfinite(value) or value <= 0:
+        if math.isnan(value) or value <= 0:
             raise ParameterError(f"target for {name} must be a positive number, got {value!r}")
         checked[name] = float(value)
     return checked
 
 
-def criterion_weights(
-    prior: ErrorParameters, targets: Mapping[str, float]
-) -> tuple[FloatArray, bool]:
-    """Per-parameter divisors of the standard errors, and whether the criterion
-    is the maximum (targets) or the sum of squares (no targets)."""
-    if targets:
-        divisor = np.array([targets.get(name, math.inf) for name in PARAMETER_NAMES])
-        return divisor, True
-    magnitudes = np.abs(np.array(prior.as_tuple()))
-    return np.maximum(magnitudes, np.array(PARAMETER_SCALES)), False
+def complete_targets(
+    prior: ErrorParameters, targets: Mapping[str, float] | None = None
+) -> dict[str, float]:
+    """A target for every parameter: those given (checked), the others
+    :func:`odohil.science.targets.default_targets` at the prior."""
+    return {**default_targets(prior), **check_targets(targets)}
 
 
-def criterion_value(errors: FloatArray, divisor: FloatArray, use_max: bool) -> FloatArray | float:
-    """The criterion of standard errors (..., 4); see the module docs."""
+def _divisor(targets: Mapping[str, float]) -> FloatArray:
+    return np.array([targets[name] for name in PARAMETER_NAMES], dtype=np.float64)
+
+
+def criterion_value(errors: FloatArray, divisor: FloatArray) -> FloatArray:
+    """The search criterion of standard errors (..., 4): the largest ratio to
+    the target, plus :data:`_TIE_BREAK` times the RMS of the ratios."""
     ratios = errors / divisor
-    if use_max:
-        return np.max(ratios, axis=-1)  # type: ignore[no-any-return]
-    return np.sum(ratios**2, axis=-1)  # type: ignore[no-any-return]
+    worst = np.max(ratios, axis=-1)
+    return worst + _TIE_BREAK * np.sqrt(np.mean(ratios**2, axis=-1))  # type: ignore[no-any-return]
+
+
+def max_ratio(errors: FloatArray, targets: Mapping[str, float]) -> float:
+    """The largest standard error / target ratio (the plan's criterion)."""
+    return float(np.max(np.asarray(errors) / _divisor(targets)))
 
 
 def design_grid(
@@ -184,6 +274,31 @@ def design_grid(
     return designs
 
 
+@dataclass(frozen=True)
+class _Budget:
+    """The limits of a plan: metres, trials, operator seconds, and the fewest
+    trials of a design."""
+
+    metres: float
+    trials: int
+    seconds: float
+    min_n: int
+
+    def most(self, candidate: _Candidate) -> int:
+        """Most trials of one design alone."""
+        by_time = self.seconds / candidate.seconds if candidate.seconds > 0 else math.inf
+        high = min(float(self.trials), self.metres / candidate.design.distance_m + 1e-9, by_time)
+        return int(min(math.floor(high + 1e-9), 10**9))
+
+    def fits(self, group: Sequence[_Candidate]) -> bool:
+        """Whether every design of ``group`` can have ``min_n`` trials."""
+        return (
+            self.min_n * len(group) <= self.trials
+            and self.min_n * sum(c.design.distance_m for c in group) <= self.metres * (1 + 1e-12)
+            and self.min_n * sum(c.seconds for c in group) <= self.seconds * (1 + 1e-12)
+        )
+
+
 def plan_experiment(
     prior: ErrorParameters,
     budget_m: float,
@@ -195,21 +310,28 @@ def plan_experiment(
     designs: Sequence[Design] | None = None,
     max_leg_m: float = DEFAULT_MAX_LEG_M,
     floor_m: float | None = None,
+    min_trials_per_design: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
+    operator: OperatorTime | None = None,
+    budget_s: float | None = None,
 ) -> Plan:
     """Recommend designs and trial counts within a budget.
 
     Args:
         prior: guessed parameter values (SI); the information is evaluated there.
-        budget_m: most metres driven in all.
+        budget_m: most metres driven in all (math.inf with a ``budget_s``).
         max_trials: most trials in all (each must be marked and measured).
         description: floor-mark measurement (None: exact pose changes).
-        targets: wanted standard errors (SI) by parameter name; see module docs.
+        targets: wanted standard errors (SI) by parameter name; the others
+            default to :func:`complete_targets`.
         max_designs: mixtures of at most this many designs (1 to 3).
         designs: the candidate designs (default: :func:`design_grid`).
         max_leg_m: longest leg allowed, metres (for the default grid).
         floor_m: free floor, metres: no plan covers more (see
             :attr:`Plan.excursion_m`). None: :data:`DEFAULT_FLOOR_M` for the
             default grid, no limit for given ``designs``.
+        min_trials_per_design: fewest trials of each design of the plan.
+        operator: the time model (default :class:`OperatorTime`).
+        budget_s: most operator seconds in all (None: no limit).
 
     Raises:
         ParameterError: bad budget, no design fits it, or bad targets.
@@ -217,28 +339,51 @@ def plan_experiment(
     if floor_m is not None and (not math.isfinite(floor_m) or floor_m <= 0):
         raise ParameterError(f"the floor must be a positive number of metres, got {floor_m!r}")
     floor = floor_m if floor_m is not None else (DEFAULT_FLOOR_M if designs is None else math.inf)
-    if not math.isfinite(budget_m) or budget_m <= 0:
+    seconds = math.inf if budget_s is None else budget_s
+    if math.isnan(seconds) or seconds <= 0:
+        raise ParameterError(
+            f"the time budget must be a positive number of seconds, got {budget_s!r}"
+        )
+    if math.isnan(budget_m) or budget_m <= 0 or (math.isinf(budget_m) and math.isinf(seconds)):
         raise ParameterError(f"the budget must be a positive number of metres, got {budget_m!r}")
     if max_trials is not None and max_trials < 1:
         raise ParameterError(f"max_trials must be at least 1, got {max_trials}")
     if not 1 <= max_designs <= MAX_DESIGNS:
         raise ParameterError(f"max_designs must be 1 to {MAX_DESIGNS}, got {max_designs}")
-    checked = check_targets(targets)
-    pool = list(designs) if designs is not None else design_grid(max_leg_m=max_leg_m)
-    pool = [d for d in pool if d.distance_m <= budget_m and d.l_m <= floor]
-    if not pool:
+    if min_trials_per_design < 1:
         raise ParameterError(
-            f"no candidate design fits in a budget of {budget_m:g} m and {floor:g} m of floor"
+            f"the fewest trials per design must be at least 1, got {min_trials_per_design}"
         )
-    trial_cap = max_trials if max_trials is not None else 10**6
+    if max_trials is not None and max_trials < min_trials_per_design:
+        raise ParameterError(
+            f"max_trials {max_trials} is below the {min_trials_per_design} trials a design "
+            "needs for honest intervals"
+        )
+    operator = operator or OperatorTime()
+    checked = complete_targets(prior, targets)
+    budget = _Budget(
+        budget_m, max_trials if max_trials is not None else 10**6, seconds, min_trials_per_design
+    )
+    pool = list(designs) if designs is not None else design_grid(max_leg_m=max_leg_m)
+    pool = [d for d in pool if d.l_m <= floor]
+    fitting = [
+        d for d in pool if budget.fits([_Candidate(d, np.zeros((4, 4)), operator.trial_seconds(d))])
+    ]
+    if not fitting:
+        raise ParameterError(
+            f"no candidate design fits {min_trials_per_design} trials (the fewest per design "
+            f"for honest intervals) in a budget of {budget_m:g} m"
+            + ("" if budget_s is None else f" and {budget_s / 60:g} min")
+            + f" and {floor:g} m of floor"
+        )
     model = measurement_model(description, prior)
-    candidates = [_candidate(design, prior, model) for design in pool]
-    divisor, use_max = criterion_weights(prior, checked)
+    candidates = [_candidate(design, prior, model, operator) for design in fitting]
+    divisor = _divisor(checked)
 
     best: tuple[float, tuple[PlanItem, ...], FloatArray] | None = None
     for size in range(1, max_designs + 1):
-        for group in _groups(candidates, size, budget_m, trial_cap, divisor, use_max):
-            result = _allocate(group, budget_m, trial_cap, divisor, use_max)
+        for group in _groups(candidates, size, budget, divisor):
+            result = _allocate(group, budget, divisor)
             if result is None or (best is not None and result[0] >= best[0]):
                 continue
             if floor_choreography([(i.design, i.n_trials) for i in result[1]]).excursion_m > floor:
@@ -246,8 +391,55 @@ def plan_experiment(
             best = result
     if best is None:
         raise ParameterError("no plan within the budget identifies all four parameters")
-    value, items, errors = best
-    return Plan(items=items, standard_errors=errors, criterion=float(value), targets=checked)
+    _, items, errors = best
+    return Plan(
+        items=items,
+        standard_errors=errors,
+        criterion=max_ratio(errors, checked),
+        targets=checked,
+        operator=operator,
+        min_trials_per_design=min_trials_per_design,
+    )
+
+
+def evaluate_plan(
+    designs: Sequence[tuple[Design, int]],
+    prior: ErrorParameters,
+    *,
+    description: RobotDescription | None = None,
+    targets: Mapping[str, float] | None = None,
+    min_trials_per_design: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
+    operator: OperatorTime | None = None,
+) -> Plan:
+    """Score a plan one wrote: its expected standard errors (the same
+    measurement model as the planner), targets, time, and a note for each
+    design below ``min_trials_per_design``.
+
+    Raises:
+        ParameterError: an empty plan, a count below 1, or bad targets.
+    """
+    if not designs:
+        raise ParameterError("the plan to evaluate has no design")
+    for design, n in designs:
+        if n < 1:
+            raise ParameterError(f"{design.label()}: n must be at least 1, got {n}")
+    checked = complete_targets(prior, targets)
+    errors = expected_standard_errors(designs, prior, description)
+    notes = tuple(
+        f"{design.label()}: {n} trials, below the {min_trials_per_design} a design needs for "
+        "honest 95 % intervals"
+        for design, n in designs
+        if n < min_trials_per_design
+    )
+    return Plan(
+        items=tuple(PlanItem(design, n) for design, n in designs),
+        standard_errors=errors,
+        criterion=max_ratio(errors, checked),
+        targets=checked,
+        operator=operator or OperatorTime(),
+        min_trials_per_design=min_trials_per_design,
+        notes=notes,
+    )
 
 
 def minimum_budget(
@@ -260,11 +452,12 @@ def minimum_budget(
     designs: Sequence[Design] | None = None,
     max_leg_m: float = DEFAULT_MAX_LEG_M,
     floor_m: float | None = None,
+    min_trials_per_design: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
     upper_m: float = 20000.0,
     tolerance: float = 0.02,
 ) -> Plan:
-    """The plan meeting every target with the fewest metres (bisection on the
-    budget to a relative ``tolerance``).
+    """The plan meeting every target (those given, the others by default)
+    with the fewest metres (bisection on the budget to a relative ``tolerance``).
 
     Raises:
         ParameterError: no targets, or even ``upper_m`` metres cannot meet them.
@@ -283,6 +476,7 @@ def minimum_budget(
             designs=designs,
             max_leg_m=max_leg_m,
             floor_m=floor_m,
+            min_trials_per_design=min_trials_per_design,
         )
 
     high = plan(upper_m)
@@ -319,7 +513,12 @@ def expected_standard_errors(
     return standard_errors(info)
 
 
-def _candidate(design: Design, prior: ErrorParameters, model: MeasurementModel) -> _Candidate:
+def _candidate(
+    design: Design,
+    prior: ErrorParameters,
+    model: MeasurementModel,
+    operator: OperatorTime | None = None,
+) -> _Candidate:
     derivatives = moment_derivatives(design.path(), prior)
     if model is None:
         meas = np.zeros((3, 3))
@@ -327,7 +526,8 @@ def _candidate(design: Design, prior: ErrorParameters, model: MeasurementModel) 
         meas = model(design)
     else:
         meas = np.asarray(model)
-    return _Candidate(design, trial_information(derivatives, meas))
+    seconds = operator.trial_seconds(design) if operator is not None else 0.0
+    return _Candidate(design, trial_information(derivatives, meas), seconds)
 
 
 def _batch_errors(info: FloatArray) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
@@ -344,37 +544,22 @@ def _batch_errors(info: FloatArray) -> tuple[FloatArray, npt.NDArray[np.bool_]]:
 
 
 def _groups(
-    candidates: list[_Candidate],
-    size: int,
-    budget_m: float,
-    trial_cap: int,
-    divisor: FloatArray,
-    use_max: bool,
+    candidates: list[_Candidate], size: int, budget: _Budget, divisor: FloatArray
 ) -> list[tuple[_Candidate, ...]]:
     if size == 1:
         return [(c,) for c in candidates]
-    pool = _pool(candidates, budget_m, trial_cap, divisor, use_max)
-    return [g for g in itertools.combinations(pool, size) if _fits(g, budget_m, trial_cap)]
+    pool = _pool(candidates, budget, divisor)
+    return [g for g in itertools.combinations(pool, size) if budget.fits(g)]
 
 
-def _fits(group: Sequence[_Candidate], budget_m: float, trial_cap: int) -> bool:
-    return len(group) <= trial_cap and sum(c.design.distance_m for c in group) <= budget_m
-
-
-def _pool(
-    candidates: list[_Candidate],
-    budget_m: float,
-    trial_cap: int,
-    divisor: FloatArray,
-    use_max: bool,
-) -> list[_Candidate]:
+def _pool(candidates: list[_Candidate], budget: _Budget, divisor: FloatArray) -> list[_Candidate]:
     """The designs worth mixing: best alone, and best per metre for each
     parameter's own information (the diagonal of the per-metre information
     after removing the other parameters, i.e. 1 / (I^-1)_aa per metre)."""
-    n_alone = np.array([_max_trials(c.design, budget_m, trial_cap) for c in candidates])
+    n_alone = np.array([budget.most(c) for c in candidates])
     infos = np.array([c.info for c in candidates])
     errors, ok = _batch_errors(infos * np.maximum(n_alone, 1)[:, None, None])
-    value = np.where(ok, criterion_value(errors, divisor, use_max), np.inf)
+    value = np.where(ok, criterion_value(errors, divisor), np.inf)
     chosen = set(np.argsort(value, kind="stable")[: _POOL_SIZE // 2].tolist())
     # marginal information per metre for each parameter alone (the others known)
     per_metre = (
@@ -387,38 +572,29 @@ def _pool(
     return [candidates[i] for i in sorted(chosen)]
 
 
-def _max_trials(design: Design, budget_m: float, trial_cap: int) -> int:
-    return min(trial_cap, math.floor(budget_m / design.distance_m + 1e-9))
-
-
-def _count_grid(high: int) -> FloatArray:
-    if high <= _GRID_STEPS:
-        return np.arange(1, high + 1, dtype=np.float64)
-    grid = np.unique(np.round(np.geomspace(1, high, _GRID_STEPS)))
+def _count_grid(low: int, high: int) -> FloatArray:
+    if high - low + 1 <= _GRID_STEPS:
+        return np.arange(low, high + 1, dtype=np.float64)
+    grid = np.unique(np.round(np.geomspace(low, high, _GRID_STEPS)))
     return grid.astype(np.float64)
 
 
 def _allocate(
-    group: Sequence[_Candidate],
-    budget_m: float,
-    trial_cap: int,
-    divisor: FloatArray,
-    use_max: bool,
+    group: Sequence[_Candidate], budget: _Budget, divisor: FloatArray
 ) -> tuple[float, tuple[PlanItem, ...], FloatArray] | None:
-    """Best integer trial counts (each at least 1) for a group of designs: the
-    first designs' counts from a grid, the last takes what budget is left;
-    then a local search of +-1 steps."""
-    lengths = np.array([c.design.distance_m for c in group])
+    """Best integer trial counts (each at least ``budget.min_n``) for a group
+    of designs: the first designs' counts from a grid, the last takes what
+    budget is left; then a local search of +-1 steps."""
     infos = np.array([c.info for c in group])
     head = range(len(group) - 1)
-    grids = [_count_grid(_max_trials(group[i].design, budget_m, trial_cap)) for i in head]
+    grids = [_count_grid(budget.min_n, budget.most(group[i])) for i in head]
     counts = (
         np.array(list(itertools.product(*grids)), dtype=np.float64) if head else np.zeros((1, 0))
     )
-    counts = _complete(counts, lengths, budget_m, trial_cap)
+    counts = _complete(counts, group, budget)
     if counts.size == 0:
         return None
-    best_counts, best_value = _best(counts, infos, divisor, use_max)
+    best_counts, best_value = _best(counts, infos, divisor)
     if best_counts is None:
         return None
     if head:
@@ -434,13 +610,13 @@ def _allocate(
         while step >= 1.0:
             for _ in range(_SEARCH_ROUNDS):
                 around = np.array([best_counts[:-1] + step * s for s in moves])
-                around = around[np.all(around >= 1, axis=1)]
+                around = around[np.all(around >= budget.min_n, axis=1)]
                 if around.size == 0:
                     break
-                trial = _complete(around, lengths, budget_m, trial_cap)
+                trial = _complete(around, group, budget)
                 if trial.size == 0:
                     break
-                counts_new, value_new = _best(trial, infos, divisor, use_max)
+                counts_new, value_new = _best(trial, infos, divisor)
                 if counts_new is None or value_new >= best_value - 1e-15:
                     break
                 best_counts, best_value = counts_new, value_new
@@ -453,24 +629,31 @@ def _allocate(
     return best_value, items, errors
 
 
-def _complete(
-    head_counts: FloatArray, lengths: FloatArray, budget_m: float, trial_cap: int
-) -> FloatArray:
-    """Append the last design's count: as many trials as the budget leaves
-    (rows where it would be below 1 are dropped)."""
+def _complete(head_counts: FloatArray, group: Sequence[_Candidate], budget: _Budget) -> FloatArray:
+    """Append the last design's count: as many trials as the budget (metres,
+    trials, seconds) leaves; rows where it would be below ``budget.min_n``
+    are dropped."""
+    lengths = np.array([c.design.distance_m for c in group])
+    seconds = np.array([c.seconds for c in group])
     used_m = head_counts @ lengths[:-1]
     used_n = head_counts.sum(axis=1)
-    last = np.minimum(np.floor((budget_m - used_m) / lengths[-1] + 1e-9), trial_cap - used_n)
-    keep = last >= 1
+    used_s = head_counts @ seconds[:-1]
+    last = np.minimum(
+        np.floor((budget.metres - used_m) / lengths[-1] + 1e-9), budget.trials - used_n
+    )
+    if math.isfinite(budget.seconds) and seconds[-1] > 0:
+        last = np.minimum(last, np.floor((budget.seconds - used_s) / seconds[-1] + 1e-9))
+    last = np.minimum(last, 10**9)
+    keep = last >= budget.min_n
     return np.column_stack([head_counts[keep], last[keep]])
 
 
 def _best(
-    counts: FloatArray, infos: FloatArray, divisor: FloatArray, use_max: bool
+    counts: FloatArray, infos: FloatArray, divisor: FloatArray
 ) -> tuple[FloatArray | None, float]:
     total = np.einsum("bd,dij->bij", counts, infos)
     errors, ok = _batch_errors(total)
-    values = np.where(ok, criterion_value(errors, divisor, use_max), np.inf)
+    values = np.where(ok, criterion_value(errors, divisor), np.inf)
     index = int(np.argmin(values))
     if not np.isfinite(values[index]):
         return None, math.inf

@@ -10,9 +10,16 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
     [measurement]
     sigma_m = 0.001          # standard deviation of one tape reading, metres
     cross = [["A", "B"], ["B", "C"]]  # start mark of A to end mark of B, B to C
+    pose_sigma = [0.0005, 0.0005, 0.001]  # optional, motion capture: one still pose's
+                             # standard deviations (x m, y m, theta rad), world axes
+    [robot]                  # optional: which driver backend speaks to it
+    protocol = "nomad150"    # an odohil.robots entry point (default nomad150)
+    # create2 only (defaults: the Create 2's; docs/create2.md):
+    # counts_per_rev = 508.8, wheel_diameter_m = 0.072, wheel_base_m = 0.235,
+    # full_mode = false
     [serial]                 # optional, for the driver
     port = "/dev/ttyUSB0"    # or any pyserial URL
-    baud = 38400             # 4800, 9600, 19200 or 38400
+    baud = 38400             # nomad150: 4800, 9600, 19200 or 38400
     timeout_s = 1.0
     [priors]                 # optional: belief in the four parameters before any trial
     E_R_deg_per_m = -0.202   # (paper units; defaults: the paper's Nomad 150 values)
@@ -41,6 +48,7 @@ import numpy.typing as npt
 
 from odohil import units
 from odohil.errors import ParameterError, RobotDescriptionError
+from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, ErrorParameters
 
@@ -59,7 +67,19 @@ MIN_SPREAD_RATIO = 0.1
 is less than this fraction of their spread along it (ratio of the singular
 values of the centred positions); the pose from such marks is ill-conditioned."""
 
-_TOP_KEYS = ("screws", "measurement", "serial", "priors", "floor")
+_TOP_KEYS = ("robot", "screws", "measurement", "serial", "priors", "floor")
+DEFAULT_PROTOCOL = "nomad150"
+"""The robot protocol (driver backend) when ``[robot] protocol`` is absent."""
+_ROBOT_KEYS = ("protocol", "counts_per_rev", "wheel_diameter_m", "wheel_base_m", "full_mode")
+_DRIVE_RANGES = {
+    "counts_per_rev": (1.0, 1e6),
+    "wheel_diameter_m": (0.005, 2.0),
+    "wheel_base_m": (0.02, 5.0),
+}
+"""Accepted ranges of a differential drive's kinematic constants (``[robot]``)."""
+PROTOCOL_BAUD_RATES: dict[str, tuple[int, ...]] = {"nomad150": BAUD_RATES}
+"""Line speeds a protocol accepts, checked when the description is read; a
+protocol not listed takes any positive integer (its backend checks it)."""
 _FLOOR_KEYS = ("length_m",)
 _PRIOR_KEYS = (
     "E_R_deg_per_m",
@@ -75,7 +95,7 @@ DEFAULT_PRIOR_SD_PAPER: tuple[float, float, float, float] = (0.5, 0.05, 0.05, 2e
 """Default prior spreads (deg/m, 1, deg^2/m, m): 2.5 times |E_R|, 5 % on the
 distance scale, 4 times K_theta and 5 times K_rho of the Nomad 150, so that a
 robot several times worse than the paper's still lies within two of them."""
-_MEASUREMENT_KEYS = ("sigma_m", "cross")
+_MEASUREMENT_KEYS = ("sigma_m", "cross", "pose_sigma")
 _SERIAL_KEYS = ("port", "baud", "timeout_s")
 
 
@@ -95,18 +115,39 @@ class Screw:
 
 
 @dataclass(frozen=True)
+class RobotSettings:
+    """Which robot this is (``[robot]``).
+
+    Attributes:
+        protocol: the driver backend's name in the ``odohil.robots``
+            entry-point group (odohil/session/robots.py).
+    """
+
+    protocol: str = DEFAULT_PROTOCOL
+    drive: DiffDriveGeometry = field(default_factory=DiffDriveGeometry)
+    """A differential drive's counts per revolution, wheel diameter and wheel
+    base (``counts_per_rev``, ``wheel_diameter_m``, ``wheel_base_m``; defaults:
+    the iRobot Create 2's); backends of other drives ignore them."""
+    full_mode: bool = False
+    """``full_mode``: the Create 2 drives in the OI's Full mode (no safety stops)."""
+
+
+@dataclass(frozen=True)
 class SerialSettings:
     """How the driver reaches the robot.
 
     Attributes:
         port: device path or any pyserial URL; None when not configured.
-        baud: line speed in baud, one of :data:`BAUD_RATES`.
+        baud: line speed in baud (for nomad150 one of :data:`BAUD_RATES`).
         timeout_s: reply timeout in seconds.
+        given: the keys the file gave (the others are defaults), so that a
+            command can say where each value in force came from.
     """
 
     port: str | None = None
     baud: int = DEFAULT_BAUD
     timeout_s: float = DEFAULT_TIMEOUT_S
+    given: frozenset[str] = field(default=frozenset(), compare=False)
 
 
 def _paper_to_si(values: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
@@ -155,6 +196,11 @@ class RobotDescription:
         priors: belief in the parameters before any trial (``[priors]``).
         floor_length_m: free floor along the robot's line of travel, metres
             (``[floor] length_m``); None when not given. No plan may need more.
+        pose_sigma: standard deviations of one still pose taken by motion
+            capture (``[measurement] pose_sigma``): x m, y m along the capture
+            system's world axes, theta rad; None when not given (motion
+            capture then refuses to start).
+        robot: which robot this is (``[robot]``).
     """
 
     screws: tuple[Screw, ...]
@@ -163,6 +209,8 @@ class RobotDescription:
     serial: SerialSettings = field(default_factory=SerialSettings)
     priors: ParameterPriors = field(default_factory=ParameterPriors)
     floor_length_m: float | None = None
+    pose_sigma: tuple[float, float, float] | None = None
+    robot: RobotSettings = field(default_factory=RobotSettings)
 
     def __post_init__(self) -> None:
         _check_screws(self.screws)
@@ -172,7 +220,9 @@ class RobotDescription:
             )
         _in_range("sigma_m", "measurement.sigma_m", self.sigma_m)
         _check_cross_pairs(self.cross_pairs, tuple(s.name for s in self.screws))
-        _check_serial(self.serial)
+        _check_serial(self.serial, self.robot.protocol)
+        if self.pose_sigma is not None:
+            _check_pose_sigma(self.pose_sigma)
         floor = self.floor_length_m
         if floor is not None and (not math.isfinite(floor) or not 0 < floor <= MAX_FLOOR_M):
             raise RobotDescriptionError(
@@ -214,6 +264,7 @@ def parse_robot_description(text: str, source: str = "robot description") -> Rob
 
 def _from_mapping(data: dict[str, Any]) -> RobotDescription:
     _reject_unknown(data, _TOP_KEYS, "")
+    robot = _robot(_table(data, "robot", required=False))
     screws_table = _table(data, "screws", required=True)
     screws = tuple(_screw(name, value, f"screws.{name}") for name, value in screws_table.items())
     measurement = _table(data, "measurement", required=True)
@@ -222,6 +273,7 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
         raise RobotDescriptionError("measurement.sigma_m is missing")
     sigma_m = _number(measurement["sigma_m"], "measurement.sigma_m")
     cross_pairs = _cross_pairs(measurement.get("cross", []))
+    pose_sigma = _pose_sigma(measurement["pose_sigma"]) if "pose_sigma" in measurement else None
     serial_table = _table(data, "serial", required=False)
     _reject_unknown(serial_table, _SERIAL_KEYS, "serial.")
     serial = _serial(serial_table)
@@ -236,6 +288,32 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
         serial=serial,
         priors=_priors(_table(data, "priors", required=False)),
         floor_length_m=floor_m,
+        pose_sigma=pose_sigma,
+        robot=robot,
+    )
+
+
+def _robot(table: dict[str, Any]) -> RobotSettings:
+    _reject_unknown(table, _ROBOT_KEYS, "robot.")
+    protocol = table.get("protocol", DEFAULT_PROTOCOL)
+    if not isinstance(protocol, str) or not protocol.strip():
+        raise RobotDescriptionError(
+            f"robot.protocol must be a backend name like {DEFAULT_PROTOCOL!r}, got {protocol!r}"
+        )
+    nominal = DiffDriveGeometry()
+    constants = {}
+    for key, (low, high) in _DRIVE_RANGES.items():
+        value = _number(table.get(key, getattr(nominal, key)), f"robot.{key}")
+        if not low <= value <= high:
+            raise RobotDescriptionError(
+                f"robot.{key} must be in [{low:g}, {high:g}], got {value!r}"
+            )
+        constants[key] = value
+    full_mode = table.get("full_mode", False)
+    if not isinstance(full_mode, bool):
+        raise RobotDescriptionError(f"robot.full_mode must be true or false, got {full_mode!r}")
+    return RobotSettings(
+        protocol=protocol.strip(), drive=DiffDriveGeometry(**constants), full_mode=full_mode
     )
 
 
@@ -314,6 +392,23 @@ def _cross_pairs(value: Any) -> tuple[tuple[str, str], ...]:
     return tuple(pairs)
 
 
+def _pose_sigma(value: Any) -> tuple[float, float, float]:
+    key = "measurement.pose_sigma"
+    if not isinstance(value, list) or len(value) != 3:
+        raise RobotDescriptionError(
+            f"{key} must be [sigma_x_m, sigma_y_m, sigma_theta_rad], got {value!r}"
+        )
+    x, y, theta = (_number(v, f"{key}[{i}]") for i, v in enumerate(value))
+    return (x, y, theta)
+
+
+def _check_pose_sigma(sigma: tuple[float, float, float]) -> None:
+    key = "measurement.pose_sigma"
+    _in_range("pose_sigma_m", f"{key}[0] (sigma_x_m)", sigma[0])
+    _in_range("pose_sigma_m", f"{key}[1] (sigma_y_m)", sigma[1])
+    _in_range("pose_sigma_rad", f"{key}[2] (sigma_theta_rad)", sigma[2])
+
+
 def _serial(table: dict[str, Any]) -> SerialSettings:
     port = table.get("port")
     if port is not None and (not isinstance(port, str) or not port):
@@ -322,7 +417,7 @@ def _serial(table: dict[str, Any]) -> SerialSettings:
     if isinstance(baud_value, bool) or not isinstance(baud_value, int):
         raise RobotDescriptionError(f"serial.baud must be an integer, got {baud_value!r}")
     timeout_s = _number(table.get("timeout_s", DEFAULT_TIMEOUT_S), "serial.timeout_s")
-    return SerialSettings(port=port, baud=baud_value, timeout_s=timeout_s)
+    return SerialSettings(port=port, baud=baud_value, timeout_s=timeout_s, given=frozenset(table))
 
 
 def _check_screws(screws: tuple[Screw, ...]) -> None:
@@ -379,11 +474,14 @@ def _check_cross_pairs(pairs: tuple[tuple[str, str], ...], names: tuple[str, ...
         raise RobotDescriptionError(f"{key}: the same pair is listed twice: {list(pairs)}")
 
 
-def _check_serial(serial: SerialSettings) -> None:
-    if serial.baud not in BAUD_RATES:
+def _check_serial(serial: SerialSettings, protocol: str) -> None:
+    rates = PROTOCOL_BAUD_RATES.get(protocol)
+    if rates is not None and serial.baud not in rates:
         raise RobotDescriptionError(
-            f"serial.baud must be one of {list(BAUD_RATES)}, got {serial.baud!r}"
+            f"serial.baud must be one of {list(rates)} for {protocol}, got {serial.baud!r}"
         )
+    if serial.baud <= 0:
+        raise RobotDescriptionError(f"serial.baud must be a positive integer, got {serial.baud!r}")
     if not math.isfinite(serial.timeout_s) or serial.timeout_s <= 0:
         raise RobotDescriptionError(
             f"serial.timeout_s must be a positive number of seconds, got {serial.timeout_s!r}"

@@ -107,11 +107,12 @@ def drive_straight(
 
     Updates the real poses ``x``, ``y`` (m) and ``theta`` (rad) of every trial
     in place (float64 arrays of one shape (n,)). This is the one
-    implementation of the discrete model: the batch simulator and the fake
-    robot's physics both call it. With ``trajectory=True`` it draws the
-    translation noise segment by segment and returns the poses after each
-    segment, shape (n, n_segments, 3); otherwise it draws the translation
-    noise of the whole call at once (exact, see the module docstring).
+    implementation of the discrete model (the fake robot's one-segment steps,
+    fakes/nomad/segment.py, are tested draw for draw against it). With
+    ``trajectory=True`` it draws the translation noise segment by segment and
+    returns the poses after each segment, shape (n, n_segments, 3); otherwise
+    it draws the translation noise of the whole call at once (exact, see the
+    module docstring).
     """
     if not math.isfinite(signed_segment_m) or signed_segment_m == 0.0:
         raise ParameterError(f"a segment needs a finite non-zero length, got {signed_segment_m!r}")
@@ -125,10 +126,7 @@ def drive_straight(
         return np.empty((x.shape[0], 0, 3)) if trajectory else None
     if trajectory:
         return _drive_literal(x, y, theta, signed_segment_m, n_segments, params, rng)
-    if x.shape[0] == 1 and n_segments <= _SEGMENT_BLOCK:
-        _drive_one(x, y, theta, signed_segment_m, n_segments, params, rng)
-    else:
-        _drive_blocks(x, y, theta, signed_segment_m, n_segments, params, rng)
+    _drive_blocks(x, y, theta, signed_segment_m, n_segments, params, rng)
     return None
 
 
@@ -284,69 +282,6 @@ def _heading_sums(
         theta += heading_sd * walk_end + count * drift
         done += count
     return sums
-
-
-def _drive_one(
-    x: FloatArray,
-    y: FloatArray,
-    theta: FloatArray,
-    signed_segment_m: float,
-    n_segments: int,
-    params: ErrorParameters,
-    rng: np.random.Generator,
-) -> None:
-    """:func:`_drive_blocks` for one trial and one block, in Python floats.
-
-    The fake robot drives its one trial a segment at a time, where the fast
-    path's fixed cost (some fifty numpy calls, about 100 µs) would dominate.
-    This draws exactly the same random numbers in the same order (float32
-    uniforms for Box-Muller, then two normals for the translation noise) and
-    does the same arithmetic in float64, so both give the same poses to
-    float32 rounding.
-    """
-    delta = abs(signed_segment_m)
-    heading_sd = math.sqrt(params.k_theta * delta)
-    rho_sd = math.sqrt(params.k_rho * delta)
-    drift = params.e_r * signed_segment_m
-    half = (n_segments + 1) // 2
-    u = rng.random(half, dtype=np.float32).tolist()
-    v = rng.random(half, dtype=np.float32).tolist()
-    radius = [math.sqrt(-2.0 * math.log(1.0 - value)) for value in u]
-    angle = [2.0 * math.pi * value for value in v]
-    normals = [r * math.cos(a) for r, a in zip(radius, angle, strict=True)]
-    normals += [r * math.sin(a) for r, a in zip(radius, angle, strict=True)]
-    start = float(theta[0])
-    walk = sum_cos = sum_sin = sum_cos2 = sum_sin2 = 0.0
-    for i in range(n_segments):
-        walk += normals[i]
-        heading = start + heading_sd * walk + (i + 1) * drift
-        sum_cos += math.cos(heading)
-        sum_sin += math.sin(heading)
-        sum_cos2 += math.cos(2.0 * heading)
-        sum_sin2 += math.sin(2.0 * heading)
-    theta[0] = start + heading_sd * walk + n_segments * drift
-    step = (1.0 + params.e_t) * signed_segment_m
-    x[0] += step * sum_cos
-    y[0] += step * sum_sin
-    if rho_sd > 0.0:
-        z0, z1 = rng.standard_normal(2).tolist()
-        if n_segments == 1:
-            # One segment: the noise lies along its heading (what the factor below
-            # gives exactly); the general factor would take the square root of the
-            # rounding left in n - c2 - l21^2, ~1e-8, which makes poses that differ
-            # by 1e-16 rad in heading differ by ~1e-11 m (the fake robot drives
-            # one segment per call and must be reproducible). z1 is drawn all the
-            # same, so that the stream of draws matches the blocks path.
-            along = rho_sd * z0 * math.copysign(1.0, sum_cos)
-            x[0] += along * sum_cos
-            y[0] += along * sum_sin
-            return
-        c2 = 0.5 * (n_segments + sum_cos2)
-        l11 = math.sqrt(max(c2, 0.0))
-        l21 = 0.5 * sum_sin2 / l11 if l11 > 0.0 else 0.0
-        l22 = math.sqrt(max(n_segments - c2 - l21 * l21, 0.0))
-        x[0] += rho_sd * l11 * z0
-        y[0] += rho_sd * (l21 * z0 + l22 * z1)
 
 
 def _add_translation_noise(

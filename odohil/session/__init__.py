@@ -1,1 +1,3 @@
-"""Layer 4: trials, journal, measurement sources, live estimates."""
+"""Layer 4: trials, journal, live estimates, and the two protocols the session
+owns: ``Robot`` (robot.py, backends by name in robots.py) and ``PoseSource``
+(pose_source.py, sources in sources.py)."""

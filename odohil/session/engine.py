@@ -1,33 +1,32 @@
 """The calibration session engine: the trial loop, journaled step by step.
 
-One trial attempt:
+The engine drives a :class:`~odohil.session.robot.Robot` (any backend) and
+asks a :class:`~odohil.session.pose_source.PoseSource` for each trial's real
+pose change; it names neither a robot nor a measuring instrument. One trial
+attempt:
 
-1. the robot is brought to rest and re-zeroed in the odometry frame
-   (``dp 0 0``, ``da 0 0``);
-2. the source makes the start marks (the fake source reads the true start
-   pose); journaled as ``trial_start``;
-3. ``motion_start`` is journaled, the forth-and-back motion runs (driver);
-4. the source makes the end marks; the encoder end pose and trajectory are
+1. the robot is brought to rest and its odometry re-zeroed (``Robot.zero``);
+2. the source's ``at_start`` (the operator marks the floor; the fake's truth
+   channel reads the true start pose); journaled as ``trial_start``;
+3. ``motion_start`` is journaled, the robot drives the design (``Robot.drive``,
+   every odometry sample to ``on_sample``);
+4. the source's ``at_end``; the odometry end pose and trajectory are
    journaled as ``motion_done``;
-5. each distance is taken and journaled (``measurement``);
-6. the pose change is chosen from the floor marks by the one pose-selection
-   path (odohil/science/pose_selection.py: candidates scored against the
-   encoders and the model's predictive distribution at the current estimate,
-   or the description's priors before there is one) and journaled
-   (``solved``). Distances no rigid motion explains are rejected and taken
-   again (``measurements_rejected``); when the slip check doubts the pose, the
-   suspect distance is taken again or kept (``remeasured``; a kept value flags
-   the trial); a trial whose candidates stay ambiguous is journaled with
-   ``ambiguous`` and left out of every estimate;
-7. the live estimate is updated (``estimate``).
+5. the source's ``pose_change``, given the model's predictive distribution of
+   the pose at the current estimate (or the description's priors); a source
+   that takes several readings journals each through ``log`` (the tape:
+   ``measurement``, ``measurements_rejected``, ``remeasured``,
+   ``extra_distance``, odohil/session/sources.py); the pose is journaled
+   (``solved``); an ambiguous one is left out of every estimate;
+6. the live estimate is updated (``estimate``).
 
 Every record is on disk (fsync) before the next step starts, so after a crash
 :func:`resume_session` continues exactly where the journal stops: an attempt
 cut off before or during its motion is voided and the trial redone; one whose
 motion finished resumes at its next missing distance. On any failure, Ctrl-C
-or other signal (:mod:`odohil.session.signals`) the engine sends ``st`` and
-waits, within ``MotionSettings.stop_timeout_s``, for the robot to report that
-it stopped; it journals ``void`` for an attempt cut off before its motion
+or other signal (:mod:`odohil.session.signals`) the engine stops the robot and
+waits, within ``MotionSettings.stop_timeout_s``, for it to report that it
+stopped (``Robot.stop_and_confirm``); it journals ``void`` for an attempt cut off before its motion
 ended, then ``stopped`` (the robot reported it) or ``stop_unconfirmed`` (it did
 not: :class:`~odohil.errors.StopUnconfirmedError` is raised instead of the
 original exception). :attr:`SessionEngine.stop_outcome` says what was
@@ -51,39 +50,24 @@ from typing import Any, Protocol
 import numpy as np
 
 from odohil import __version__
-from odohil.driver.motion import (
-    DEFAULT_ACCELERATIONS,
-    DEFAULT_SPEEDS,
-    DEFAULT_STEP_TIMEOUT_S,
-    DEFAULT_TOLERANCE_WIRE,
-    MotionRecord,
-    forth_and_back,
-)
-from odohil.driver.robot import STOP_CONFIRM_TIMEOUT_S, NomadRobot
-from odohil.driver.sample import EncoderSample
+from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
 from odohil.errors import (
-    InconsistentMeasurementError,
     JournalError,
-    MeasurementError,
     OdohilError,
     StopUnconfirmedError,
 )
 from odohil.science.estimators import IncrementalEstimator, Observation
-from odohil.science.floor_marks import MarkDistances, distance_labels
+from odohil.science.floor_marks import PosePrior, distance_labels
 from odohil.science.parameters import PARAMETER_NAMES
-from odohil.science.pose_selection import (
-    ParameterBelief,
-    predictive_pose,
-    resolve_with_extra,
-    select_pose,
-    unmeasured_pair,
-)
+from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session import state as ev
 from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
+from odohil.session.pose_source import MeasuredPose, PoseSource, TrialContext
+from odohil.session.robot import Robot, SampleCallback
 from odohil.session.signals import SignalReceived, signals_held
-from odohil.session.sources import MeasurementSource, TrialContext, check_distance
+from odohil.session.sources import MeasurementSource, as_pose_source
 from odohil.session.start_pose import StartPose, check_start
 from odohil.session.state import (
     CompletedTrial,
@@ -99,11 +83,8 @@ StartCheck = Callable[[StartPose], None]
 """Judges where the robot stands before the session goes on: returns to go on
 (after putting the robot back, say), raises to refuse."""
 
-MAX_REJECTIONS = 3
-"""How many times one attempt's distances may be rejected before giving up."""
-MAX_REMEASURES = 2
-"""How many times the slip check may ask for a suspect distance again; a
-trial it still doubts after that is journaled flagged."""
+STOP_CONFIRM_TIMEOUT_S = 2.0
+"""How long the engine waits, on the way out, for the robot to report it stopped, s."""
 
 
 class SessionObserver(Protocol):
@@ -128,31 +109,42 @@ class MotionSettings:
     """How the robot drives each trial.
 
     Attributes:
-        speeds: translation m/s, steering rad/s.
-        accelerations: translation m/s^2, steering rad/s^2.
-        tolerance_wire: how far (0.1 in / 0.1 deg) a step may end off its command.
-        step_timeout_s: longest wall time of one step, s.
-        watchdog_s: the robot's watchdog (``conf_tm``), s; it stops the robot
-            when the host dies mid-motion; 0 leaves it off.
+        speeds: translation m/s, turning rad/s.
+        accelerations: translation m/s^2, turning rad/s^2.
+        step_timeout_s: longest wall time of one leg or turn, s.
+        watchdog_s: the robot's own watchdog, s; it stops the robot when the
+            host dies mid-motion; 0 leaves it off.
         settle_timeout_s: how long to wait for a robot found moving to stop, s.
         stop_timeout_s: on the way out, how long to wait for the robot to
-            report that it stopped after ``st``, s.
+            report that it stopped, s.
     """
 
-    speeds: tuple[float, float] = DEFAULT_SPEEDS
-    accelerations: tuple[float, float] = DEFAULT_ACCELERATIONS
-    tolerance_wire: int = DEFAULT_TOLERANCE_WIRE
-    step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S
-    watchdog_s: float = 2.0
+    speeds: tuple[float, float] = (DriveSettings.speed_m_s, DriveSettings.turn_rate_rad_s)
+    accelerations: tuple[float, float] = (
+        DriveSettings.acceleration_m_s2,
+        DriveSettings.turn_acceleration_rad_s2,
+    )
+    step_timeout_s: float = DriveSettings.step_timeout_s
+    watchdog_s: float = DriveSettings.watchdog_s
     settle_timeout_s: float = 60.0
     stop_timeout_s: float = STOP_CONFIRM_TIMEOUT_S
+
+    def drive_settings(self) -> DriveSettings:
+        """What the robot backend is told."""
+        return DriveSettings(
+            speed_m_s=self.speeds[0],
+            turn_rate_rad_s=self.speeds[1],
+            acceleration_m_s2=self.accelerations[0],
+            turn_acceleration_rad_s2=self.accelerations[1],
+            step_timeout_s=self.step_timeout_s,
+            watchdog_s=self.watchdog_s,
+        )
 
     def to_json(self) -> dict[str, Any]:
         """The settings as a JSON object (SI units)."""
         return {
             "speeds": list(self.speeds),
             "accelerations": list(self.accelerations),
-            "tolerance_wire": self.tolerance_wire,
             "step_timeout_s": self.step_timeout_s,
             "watchdog_s": self.watchdog_s,
         }
@@ -305,27 +297,30 @@ class SessionEngine:
     Args:
         journal: the session's open journal.
         state: its state (from :func:`start_session` or :func:`resume_session`).
-        robot: the connected robot.
-        source: where the distances come from.
+        robot: the connected robot (any backend behind the ``Robot`` protocol).
+        source: where each trial's real pose change comes from; a distance
+            source (:class:`~odohil.session.sources.MeasurementSource`) is put
+            behind the tape and the floor-marks solver.
         estimator: the live estimator, or None.
         observer: sees every record, or None.
         motion: how the robot drives.
         connection: what to journal about the connection (port, baud...).
+        on_sample: sees every odometry sample of a motion (live read-outs).
+        start_check: judges where the robot stands before the session goes on.
     """
 
     def __init__(
         self,
         journal: Journal,
         state: SessionState,
-        robot: NomadRobot,
-        source: MeasurementSource,
+        robot: Robot,
+        source: PoseSource | MeasurementSource,
         *,
         estimator: LiveEstimator | None = None,
         observer: SessionObserver | None = None,
         motion: MotionSettings | None = None,
         connection: Mapping[str, Any] | None = None,
-        max_rejections: int = MAX_REJECTIONS,
-        max_remeasures: int = MAX_REMEASURES,
+        on_sample: SampleCallback | None = None,
         start_check: StartCheck | None = None,
     ) -> None:
         if state.plan is None:
@@ -334,18 +329,18 @@ class SessionEngine:
         self.state = state
         self.plan: Plan = state.plan
         self.robot = robot
-        self.source = source
+        self.description = description_of(state)
+        self.source = as_pose_source(source, self.description)
         self.estimator = estimator
         self.observer = observer
         self.motion = motion or MotionSettings()
         self.connection = dict(connection or {})
-        self.max_rejections = max_rejections
-        self.max_remeasures = max_remeasures
+        self.on_sample = on_sample
         self.start_check = start_check
-        self.description = description_of(state)
         self.labels = distance_labels(self.description)
         self.latest_estimate: Mapping[str, Any] | None = None
         self.stop_outcome: StopOutcome | None = None
+        self._predicted: PosePrior | None = None
         self._estimated = 0
 
     # -- journal ---------------------------------------------------------
@@ -448,9 +443,7 @@ class SessionEngine:
         self._estimated = len(self.state.completed)
 
     def _connect(self) -> None:
-        sample = self.robot.state()
-        if self.motion.watchdog_s > 0:
-            self.robot.set_watchdog(self.motion.watchdog_s)
+        sample = self.robot.arm(self.motion.drive_settings())
         self._log(
             ev.ROBOT,
             {
@@ -482,7 +475,7 @@ class SessionEngine:
         if opened is None:
             return
         if opened.phase is Phase.MEASURING:
-            self._measure_and_solve()
+            self._measure()
             return
         where = "before its motion" if opened.phase is Phase.MARKED else "during its motion"
         self._log(
@@ -494,7 +487,7 @@ class SessionEngine:
             },
         )
 
-    def _context(self, opened: OpenTrial) -> TrialContext:
+    def _context(self, opened: OpenTrial, predicted: PosePrior | None = None) -> TrialContext:
         return TrialContext(
             trial=opened.trial,
             attempt=opened.attempt,
@@ -507,23 +500,20 @@ class SessionEngine:
             measurements=opened.measurements,
             rejections=opened.rejections,
             remeasures=opened.remeasures,
+            slip=opened.slip,
+            extra=opened.extra,
+            predicted=predicted,
         )
 
-    def _settle(self) -> EncoderSample:
-        sample = self.robot.state()
-        if sample.moving:
-            self.robot.stop()
-            sample = self.robot.poll_until_stopped(self.motion.settle_timeout_s)
-        return sample
+    def _settle(self) -> OdometrySample:
+        return self.robot.settle(self.motion.settle_timeout_s)
 
     def _run_trial(self, trial: int) -> None:
         attempt = self.state.next_attempt(trial)
         design_index = self.plan.design_index(trial)
         design = self.plan.design_of(trial)  # as driven: one-way trials alternate
         self._settle()
-        self.robot.define_pose(0.0, 0.0)
-        self.robot.define_angles(0.0, 0.0)
-        zeroed = self.robot.state()
+        zeroed = self.robot.zero()
         ctx = TrialContext(
             trial=trial,
             attempt=attempt,
@@ -531,7 +521,7 @@ class SessionEngine:
             design=design,
             labels=self.labels,
         )
-        start = dict(self.source.mark_start(ctx))
+        start = dict(self.source.at_start(ctx))
         ids = {"trial": trial, "attempt": attempt}
         self._log(
             ev.TRIAL_START,
@@ -544,18 +534,11 @@ class SessionEngine:
             },
         )
         self._log(ev.MOTION_START, ids)
-        record = forth_and_back(
-            self.robot,
-            design,
-            tolerance_wire=self.motion.tolerance_wire,
-            step_timeout_s=self.motion.step_timeout_s,
-            speeds=self.motion.speeds,
-            accelerations=self.motion.accelerations,
-        )
+        record = self.robot.drive(design, self.motion.drive_settings(), self.on_sample)
         opened = self.state.open_trial
         assert opened is not None
         ctx = replace(self._context(opened), encoder_end_pose=record.end_pose)
-        end = dict(self.source.mark_end(ctx))
+        end = dict(self.source.at_end(ctx))
         self._log(
             ev.MOTION_DONE,
             {
@@ -566,7 +549,7 @@ class SessionEngine:
                 "end": end,
             },
         )
-        self._measure_and_solve()
+        self._measure()
 
     def _belief(self) -> ParameterBelief:
         """The current estimate as a belief, or the description's priors."""
@@ -582,103 +565,27 @@ class SessionEngine:
         except (KeyError, TypeError, ValueError, OdohilError):
             return ParameterBelief.from_priors(priors)
 
-    def _measure_missing(self) -> OpenTrial:
+    def _source_log(self, kind: str, data: Mapping[str, Any]) -> TrialContext:
+        """The :class:`~odohil.session.pose_source.MeasurementLog` given to the source."""
+        self._log(kind, data)
         opened = self.state.open_trial
         assert opened is not None
-        ids = {"trial": opened.trial, "attempt": opened.attempt}
-        for index in range(len(opened.measurements), len(self.labels)):
-            ctx = self._context(opened)
-            value = check_distance(self.source.distance(ctx, index), self.labels[index])
-            self._log(
-                ev.MEASUREMENT,
-                {**ids, "index": index, "label": self.labels[index], "value_m": value},
-            )
-            opened = self.state.open_trial
-            assert opened is not None
-        return opened
+        return self._context(opened, self._predicted)
 
-    def _measure_and_solve(self) -> None:
-        while True:
-            opened = self._measure_missing()
-            ids = {"trial": opened.trial, "attempt": opened.attempt}
-            n_same = len(self.description.screws)
-            marks = MarkDistances(
-                same_m=opened.measurements[:n_same], cross_m=opened.measurements[n_same:]
-            )
-            end_pose = opened.encoder_end_pose
-            assert end_pose is not None
-            design = self.plan.items[opened.design_index].design
-            predicted = predictive_pose(design, self._belief(), end_pose)
-            try:
-                selection = select_pose(self.description, marks, end_pose, predicted)
-            except InconsistentMeasurementError as exc:
-                if opened.rejections >= self.max_rejections:
-                    raise MeasurementError(
-                        f"trial {opened.trial}: the distances were rejected "
-                        f"{opened.rejections + 1} times; last: {exc}"
-                    ) from exc
-                self.source.rejected(self._context(opened), str(exc))
-                self._log(ev.MEASUREMENTS_REJECTED, {**ids, "reason": str(exc)})
-                continue
-            selection = resolve_with_extra(self.description, marks, selection, opened.extra)
-            if selection.ambiguous and not opened.extra:
-                start, end = unmeasured_pair(self.description)
-                label = f"{start} start to {end} end"
-                value = self.source.extra_distance(
-                    self._context(opened), (start, end), label, selection.solution.reason
-                )
-                if value is not None:
-                    self._log(
-                        ev.EXTRA_DISTANCE,
-                        {
-                            **ids,
-                            "start": start,
-                            "end": end,
-                            "label": label,
-                            "value_m": check_distance(value, label),
-                        },
-                    )
-                    continue
-            slip = selection.slip
-            if slip.tripped and not opened.slip and opened.remeasures < self.max_remeasures:
-                reason = slip.message()
-                previous = opened.measurements[slip.suspect]
-                value = self.source.remeasure(self._context(opened), slip.suspect, reason)
-                if value is not None:
-                    value = check_distance(value, self.labels[slip.suspect])
-                self._log(
-                    ev.REMEASURED,
-                    {
-                        **ids,
-                        "index": slip.suspect,
-                        "label": self.labels[slip.suspect],
-                        "reason": reason,
-                        "previous_m": previous,
-                        "value_m": value,
-                        "kept": value is None,
-                    },
-                )
-                if value is not None:
-                    continue
-            break
-        final = self.state.open_trial
-        assert final is not None
-        solution = selection.solution
-        slip_note = final.slip or (selection.slip.message() if selection.slip.tripped else "")
-        data: dict[str, Any] = {
-            **ids,
-            "pose_change": [float(v) for v in solution.pose_change],
-            "cov": [[float(v) for v in row] for row in solution.cov],
-            "chi2": float(solution.chi2),
-            "clear_cut": bool(solution.clear_cut),
-            "reason": solution.reason,
-        }
-        if slip_note:
-            data["slip"] = slip_note
-        if selection.ambiguous:
-            data["ambiguous"] = True
-            data["candidates"] = [[float(v) for v in c.pose] for c in selection.plausible]
-        self._log(ev.SOLVED, data)
+    def _measure(self) -> None:
+        """Ask the source for the pose change (it journals its readings), journal
+        it (``solved``) and update the live estimate (``estimate``)."""
+        opened = self.state.open_trial
+        assert opened is not None
+        assert opened.encoder_end_pose is not None
+        design = self.plan.items[opened.design_index].design
+        self._predicted = predictive_pose(design, self._belief(), opened.encoder_end_pose)
+        try:
+            ctx = self._context(opened, self._predicted)
+            measured = self.source.pose_change(ctx, self._source_log)
+        finally:
+            self._predicted = None
+        self._log(ev.SOLVED, _solved_json(opened, measured))
         if self.state.completed[-1].ambiguous:
             self._estimated = len(self.state.completed)
             return
@@ -699,21 +606,40 @@ class SessionEngine:
                 self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": result})
 
 
-def _sample_json(sample: EncoderSample) -> dict[str, Any]:
+def _solved_json(opened: OpenTrial, measured: MeasuredPose) -> dict[str, Any]:
+    """The ``solved`` record of a measured pose (the format replay reads)."""
+    data: dict[str, Any] = {
+        "trial": opened.trial,
+        "attempt": opened.attempt,
+        "pose_change": [float(v) for v in measured.pose],
+        "cov": [[float(v) for v in row] for row in measured.covariance],
+        **dict(measured.details),
+        "clear_cut": bool(measured.clear_cut),
+        "reason": measured.note,
+    }
+    if measured.flagged:
+        data["slip"] = measured.flag_reason or "flagged by the measurement source"
+    if measured.ambiguous:
+        data["ambiguous"] = True
+        data["candidates"] = [[float(v) for v in c] for c in measured.candidates]
+    return data
+
+
+def _sample_json(sample: OdometrySample) -> dict[str, Any]:
     return {
         "x_m": sample.x_m,
         "y_m": sample.y_m,
-        "steer_rad": sample.steer_rad,
+        "theta_rad": sample.theta_rad,
         "robot_time_s": sample.robot_time_s,
-        "motor_status": sample.motor_status,
+        "moving": sample.moving,
     }
 
 
-def _trajectory(record: MotionRecord) -> list[list[float]]:
-    """Rows (t s since the run's first sample, x m, y m, steering rad)."""
+def _trajectory(record: TrialMotion) -> list[list[float]]:
+    """Rows (t s since the run's first sample, x m, y m, heading rad)."""
     t0 = record.samples[0].robot_time_s if record.samples else 0.0
     return [
-        [round(s.robot_time_s - t0, 3), s.x_m, s.y_m, s.steer_rad]
+        [round(s.robot_time_s - t0, 3), s.x_m, s.y_m, s.theta_rad]
         for s in record.samples
         if math.isfinite(s.robot_time_s)
     ]

@@ -14,24 +14,73 @@ What ``at_start`` and ``at_end`` return is journaled with the trial and handed
 back in the context (``TrialContext.start`` / ``.end``), so a resumed session
 gives a source the same data. A source that takes several readings (the tape:
 one distance at a time, re-measures) journals each through ``log`` before it
-goes on, so nothing the operator typed is lost.
+goes on, so nothing the operator typed is lost; ``log`` hands back the context
+as the journal now stands.
+
+The engine journals what ``pose_change`` returns as the trial's ``solved``
+record; an ``ambiguous`` pose is journaled and left out of every estimate.
 
 Sources: the tape with the floor-marks solver, the fake robot's truth
-channel, a trial file of poses, motion capture over tcp.
+channel, a trial file of poses (odohil/session/sources.py); motion capture
+over tcp.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from odohil.session.sources import TrialContext
+from odohil.science.floor_marks import PosePrior
+from odohil.science.paths import Design
+
+Pose = tuple[float, float, float]
+"""(x m, y m, theta rad)."""
 
 Covariance3 = tuple[
     tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]
 ]
 """A 3x3 covariance of (x m, y m, theta rad): m^2, m^2, rad^2 on the diagonal."""
+
+
+@dataclass(frozen=True)
+class TrialContext:
+    """What a source may know about the trial attempt it measures.
+
+    Attributes:
+        trial: trial number in the plan (1-based).
+        attempt: attempt number (1-based).
+        n_trials: trials in the plan.
+        design: the design driven.
+        labels: names of the tape distances, in the order they are asked for.
+        start: the data ``at_start`` returned (journaled).
+        end: the data ``at_end`` returned (journaled; empty before).
+        encoder_end_pose: (x m, y m, theta rad) the odometry reported, once
+            the motion is done.
+        measurements: the tape distances already taken, metres.
+        rejections: how many times this attempt's distances were rejected.
+        remeasures: how many suspect distances were taken again.
+        slip: why the slip check doubts the trial, once a suspect value was kept.
+        extra: extra cross distances taken (start screw, end screw, metres).
+        predicted: the model's predictive distribution of the pose change,
+            given the odometry, at the current estimate (or the description's
+            priors); None before the motion is done.
+    """
+
+    trial: int
+    attempt: int
+    n_trials: int
+    design: Design
+    labels: tuple[str, ...]
+    start: Mapping[str, Any] = field(default_factory=dict)
+    end: Mapping[str, Any] = field(default_factory=dict)
+    encoder_end_pose: Pose | None = None
+    measurements: tuple[float, ...] = ()
+    rejections: int = 0
+    remeasures: int = 0
+    slip: str = ""
+    extra: tuple[tuple[str, str, float], ...] = ()
+    predicted: PosePrior | None = None
 
 
 @dataclass(frozen=True)
@@ -42,20 +91,33 @@ class MeasuredPose:
         pose: (x m, y m, theta rad in (-pi, pi]) of the end pose in the start
             pose's frame.
         covariance: its measurement covariance (see :data:`Covariance3`).
-        flagged: the operator kept a value the slip check doubted.
-        note: how it was obtained (for the journal and the report).
+        flagged: a reading was kept that a check doubted (the trial is
+            flagged in the report).
+        flag_reason: why it is flagged.
+        note: why the pose is in doubt ("" when it is clear-cut).
+        clear_cut: the source is sure of this pose among the ones it allows.
+        ambiguous: several poses stayed plausible; the trial is journaled and
+            left out of every estimate.
+        candidates: the plausible poses of an ambiguous trial.
+        details: more JSON for the ``solved`` record (e.g. the solver's chi2).
     """
 
-    pose: tuple[float, float, float]
+    pose: Pose
     covariance: Covariance3
     flagged: bool = False
+    flag_reason: str = ""
     note: str = ""
+    clear_cut: bool = True
+    ambiguous: bool = False
+    candidates: tuple[Pose, ...] = ()
+    details: Mapping[str, Any] = field(default_factory=dict)
 
 
 class MeasurementLog(Protocol):
-    """Journals a source's intermediate readings (fsync before it returns)."""
+    """Journals a source's intermediate readings (fsync before it returns) and
+    hands back the trial's context as the journal now stands."""
 
-    def __call__(self, kind: str, data: Mapping[str, Any]) -> None: ...
+    def __call__(self, kind: str, data: Mapping[str, Any]) -> TrialContext: ...
 
 
 class PoseSource(Protocol):
@@ -69,8 +131,9 @@ class PoseSource(Protocol):
         """The robot rests at the trial's end; JSON data to journal."""
         ...
 
-    def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose | None:
-        """The trial's real pose change, or None when it stays ambiguous.
+    def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
+        """The trial's real pose change (``ambiguous`` when it cannot be told
+        from another one).
 
         Raises MeasurementError when it cannot be had at all."""
         ...

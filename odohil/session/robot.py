@@ -51,8 +51,10 @@ class Robot(Protocol):
         """Bring the robot to rest (stop it if it moves), within ``timeout_s``."""
         ...
 
-    def zero(self) -> OdometrySample:
-        """Make the current pose the odometry frame's origin; the reading after."""
+    def zero(self, pose: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> OdometrySample:
+        """Make the odometry read ``pose`` (x m, y m, heading rad) where the
+        robot stands: the origin by default (before each trial), or a trial's
+        start pose (the wizard, once the robot is put back); the reading after."""
         ...
 
     def drive(

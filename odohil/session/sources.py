@@ -1,6 +1,17 @@
-"""Measurement sources: where a trial's floor-mark distances come from.
+"""Pose sources (odohil/session/pose_source.py) and the tape's distance sources.
 
-The engine asks a :class:`MeasurementSource` three things per trial attempt:
+Pose sources here:
+
+- :class:`TapeSource`: floor-mark distances from a :class:`MeasurementSource`
+  (below), turned into the pose change by the one pose-selection path
+  (odohil/science/pose_selection.py) with rejections, the slip check,
+  re-measures and an extra distance for ambiguous trials, every reading
+  journaled through ``log``;
+- :class:`TruthPoseSource`: the fake robot's true pose change from its truth
+  channel, with seeded Gaussian pose noise;
+- :class:`PoseFileSource`: a trial file of poses, read as poses.
+
+A :class:`MeasurementSource` is asked three things per trial attempt:
 ``mark_start`` once the robot is re-zeroed (the operator marks the floor under
 every screw), ``mark_end`` once the motion is done (the end marks), then one
 ``distance`` per tape reading, in the robot description's order (same-screw
@@ -23,48 +34,61 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Protocol, cast
 
 import numpy as np
 
-from odohil.errors import MeasurementError
-from odohil.science.floor_marks import distance_labels, marks_from_pose
+from odohil.errors import InconsistentMeasurementError, MeasurementError
+from odohil.science.floor_marks import (
+    MarkDistances,
+    distance_labels,
+    marks_from_pose,
+    pose_covariance,
+)
 from odohil.science.paths import Design
+from odohil.science.pose_selection import (
+    ParameterBelief,
+    predictive_pose,
+    resolve_with_extra,
+    select_pose,
+    unmeasured_pair,
+)
 from odohil.science.robot_description import RobotDescription
-from odohil.session.trial_files import read_trials
+from odohil.session import state as ev
+from odohil.session.pose_source import (
+    Covariance3,
+    MeasuredPose,
+    MeasurementLog,
+    Pose,
+    PoseSource,
+    TrialContext,
+)
+from odohil.session.trial_files import Trial, read_trials
 
+__all__ = [
+    "FakeTruthSource",
+    "MeasurementSource",
+    "OperatorPrompts",
+    "OperatorSource",
+    "PoseFileSource",
+    "RecordedSource",
+    "TapeSource",
+    "TrialContext",
+    "TruthPoseSource",
+    "TruthReader",
+    "as_pose_source",
+    "check_distance",
+    "pose_source_from_file",
+    "recorded_source_from_file",
+    "relative_true_pose",
+]
 
-@dataclass(frozen=True)
-class TrialContext:
-    """What a source may know about the trial attempt it measures.
-
-    Attributes:
-        trial: trial number in the plan (1-based).
-        attempt: attempt number (1-based).
-        n_trials: trials in the plan.
-        design: the design driven.
-        labels: names of the distances, in the order they are asked for.
-        start: the data ``mark_start`` returned (journaled).
-        end: the data ``mark_end`` returned (journaled; empty before).
-        encoder_end_pose: (x m, y m, theta rad) once the motion is done.
-        measurements: the distances already taken, metres.
-        rejections: how many times this attempt's distances were rejected.
-        remeasures: how many suspect distances were taken again.
-    """
-
-    trial: int
-    attempt: int
-    n_trials: int
-    design: Design
-    labels: tuple[str, ...]
-    start: Mapping[str, Any] = field(default_factory=dict)
-    end: Mapping[str, Any] = field(default_factory=dict)
-    encoder_end_pose: tuple[float, float, float] | None = None
-    measurements: tuple[float, ...] = ()
-    rejections: int = 0
-    remeasures: int = 0
+MAX_REJECTIONS = 3
+"""How many times one attempt's distances may be rejected before giving up."""
+MAX_REMEASURES = 2
+"""How many times the slip check may ask for a suspect distance again; a
+trial it still doubts after that is journaled flagged."""
 
 
 class MeasurementSource(Protocol):
@@ -267,13 +291,7 @@ class FakeTruthSource:
 
     def true_pose_change(self, ctx: TrialContext) -> tuple[float, float, float]:
         """The attempt's true (dx m, dy m, dtheta rad), dtheta minus the winding."""
-        try:
-            start, end = ctx.start["true_pose"], ctx.end["true_pose"]
-        except KeyError:
-            raise MeasurementError(
-                f"trial {ctx.trial}: no true start and end pose were journaled"
-            ) from None
-        return relative_true_pose(start, end, ctx.design.path().winding_rad)
+        return true_pose_change(ctx)
 
     def distance(self, ctx: TrialContext, index: int) -> float:
         """The noisy forward-model distance number ``index``, metres."""
@@ -392,3 +410,284 @@ def recorded_source_from_file(path: str | Path, description: RobotDescription) -
     return RecordedSource(
         rows, description, origin=str(path), designs=[t.design for t in trials.trials]
     )
+
+
+# --- pose sources --------------------------------------------------------------
+
+
+def _covariance(matrix: Any) -> Covariance3:
+    rows = [tuple(float(v) for v in row) for row in matrix]
+    return (
+        (rows[0][0], rows[0][1], rows[0][2]),
+        (rows[1][0], rows[1][1], rows[1][2]),
+        (rows[2][0], rows[2][1], rows[2][2]),
+    )
+
+
+def _pose(values: Any) -> Pose:
+    x, y, theta = (float(v) for v in values)
+    return (x, y, theta)
+
+
+class TapeSource:
+    """The tape with the floor-marks solver: a :class:`PoseSource` over a
+    :class:`MeasurementSource` of distances.
+
+    Each distance is journaled (``measurement``) as it is taken; the pose is
+    chosen among those the marks allow by the one pose-selection path, scored
+    against the odometry and ``ctx.predicted`` (the description's priors when
+    absent). Distances no rigid motion explains are rejected and taken again
+    (``measurements_rejected``, at most ``max_rejections`` times); when the
+    slip check doubts the pose the suspect distance is taken again or kept
+    (``remeasured``, at most ``max_remeasures`` times; a kept value flags the
+    trial); an ambiguous trial asks for one extra cross distance
+    (``extra_distance``) and is left out when it cannot be had.
+    """
+
+    def __init__(
+        self,
+        distances: MeasurementSource,
+        description: RobotDescription,
+        *,
+        max_rejections: int = MAX_REJECTIONS,
+        max_remeasures: int = MAX_REMEASURES,
+    ) -> None:
+        self.distances = distances
+        self.description = description
+        self.labels = distance_labels(description)
+        self.max_rejections = max_rejections
+        self.max_remeasures = max_remeasures
+
+    def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """The start marks (the distance source's journal data)."""
+        return self.distances.mark_start(ctx)
+
+    def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """The end marks (the distance source's journal data)."""
+        return self.distances.mark_end(ctx)
+
+    def _measure_missing(self, ctx: TrialContext, log: MeasurementLog) -> TrialContext:
+        ids = {"trial": ctx.trial, "attempt": ctx.attempt}
+        for index in range(len(ctx.measurements), len(self.labels)):
+            value = check_distance(self.distances.distance(ctx, index), self.labels[index])
+            ctx = log(
+                ev.MEASUREMENT,
+                {**ids, "index": index, "label": self.labels[index], "value_m": value},
+            )
+        return ctx
+
+    def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
+        """Take the missing distances and choose the pose (see the class docstring).
+
+        Raises:
+            MeasurementError: the distances were rejected more than
+                ``max_rejections`` times, or the distance source gave up.
+        """
+        ids = {"trial": ctx.trial, "attempt": ctx.attempt}
+        n_same = len(self.description.screws)
+        while True:
+            ctx = self._measure_missing(ctx, log)
+            marks = MarkDistances(
+                same_m=ctx.measurements[:n_same], cross_m=ctx.measurements[n_same:]
+            )
+            end_pose = ctx.encoder_end_pose
+            if end_pose is None:
+                raise MeasurementError(f"trial {ctx.trial}: no odometry end pose to solve against")
+            predicted = ctx.predicted
+            if predicted is None:
+                belief = ParameterBelief.from_priors(self.description.priors)
+                predicted = predictive_pose(ctx.design, belief, end_pose)
+            try:
+                selection = select_pose(self.description, marks, end_pose, predicted)
+            except InconsistentMeasurementError as exc:
+                if ctx.rejections >= self.max_rejections:
+                    raise MeasurementError(
+                        f"trial {ctx.trial}: the distances were rejected "
+                        f"{ctx.rejections + 1} times; last: {exc}"
+                    ) from exc
+                self.distances.rejected(ctx, str(exc))
+                ctx = log(ev.MEASUREMENTS_REJECTED, {**ids, "reason": str(exc)})
+                continue
+            selection = resolve_with_extra(self.description, marks, selection, ctx.extra)
+            if selection.ambiguous and not ctx.extra:
+                start, end = unmeasured_pair(self.description)
+                label = f"{start} start to {end} end"
+                value = self.distances.extra_distance(
+                    ctx, (start, end), label, selection.solution.reason
+                )
+                if value is not None:
+                    ctx = log(
+                        ev.EXTRA_DISTANCE,
+                        {
+                            **ids,
+                            "start": start,
+                            "end": end,
+                            "label": label,
+                            "value_m": check_distance(value, label),
+                        },
+                    )
+                    continue
+            slip = selection.slip
+            if slip.tripped and not ctx.slip and ctx.remeasures < self.max_remeasures:
+                reason = slip.message()
+                previous = ctx.measurements[slip.suspect]
+                value = self.distances.remeasure(ctx, slip.suspect, reason)
+                if value is not None:
+                    value = check_distance(value, self.labels[slip.suspect])
+                ctx = log(
+                    ev.REMEASURED,
+                    {
+                        **ids,
+                        "index": slip.suspect,
+                        "label": self.labels[slip.suspect],
+                        "reason": reason,
+                        "previous_m": previous,
+                        "value_m": value,
+                        "kept": value is None,
+                    },
+                )
+                if value is not None:
+                    continue
+            break
+        solution = selection.solution
+        slip_note = ctx.slip or (selection.slip.message() if selection.slip.tripped else "")
+        return MeasuredPose(
+            pose=_pose(solution.pose_change),
+            covariance=_covariance(solution.cov),
+            flagged=bool(slip_note),
+            flag_reason=slip_note,
+            note=solution.reason,
+            clear_cut=bool(solution.clear_cut),
+            ambiguous=selection.ambiguous,
+            candidates=tuple(_pose(c.pose) for c in selection.plausible)
+            if selection.ambiguous
+            else (),
+            details={"chi2": float(solution.chi2)},
+        )
+
+
+class TruthPoseSource:
+    """The fake robot's truth channel as a :class:`PoseSource`: the true pose
+    change (journaled true start and end poses, minus the design's winding)
+    plus independent Gaussian noise of standard deviations ``sigma`` (x m,
+    y m, theta rad), drawn from a generator seeded by (seed, trial, attempt),
+    so a resumed session measures what the interrupted one would have."""
+
+    def __init__(
+        self, truth: TruthReader, sigma: tuple[float, float, float], seed: int = 0
+    ) -> None:
+        if not all(math.isfinite(v) and v > 0 for v in sigma):
+            raise MeasurementError(f"pose noise sigmas must be positive, got {sigma!r}")
+        self.truth = truth
+        self.sigma = sigma
+        self.seed = seed
+
+    def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Journal the true start pose."""
+        return {"true_pose": list(self.truth.true_pose())}
+
+    def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Journal the true end pose."""
+        return {"true_pose": list(self.truth.true_pose())}
+
+    def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
+        """The noisy true pose change of the attempt."""
+        exact = np.array(true_pose_change(ctx))
+        rng = np.random.default_rng([self.seed, ctx.trial, ctx.attempt])
+        sigma = np.array(self.sigma)
+        noisy = exact + rng.normal(0.0, 1.0, 3) * sigma
+        variances = sigma**2
+        return MeasuredPose(
+            pose=_pose(noisy),
+            covariance=_covariance(np.diag(variances)),
+            details={"source": "the fake robot's true pose with simulated noise"},
+        )
+
+
+class PoseFileSource:
+    """A trial file of poses, read as poses: row k serves trial k of the plan
+    (every attempt at it) and must be of its design. A row's covariance is the
+    file's, else what the description's floor marks would give at that pose
+    (:func:`~odohil.science.floor_marks.pose_covariance`)."""
+
+    def __init__(self, trials: Sequence[Trial], origin: str, description: RobotDescription) -> None:
+        self.trials = tuple(trials)
+        self.origin = origin
+        self.description = description
+
+    def _row(self, ctx: TrialContext) -> Trial:
+        row = ctx.trial - 1
+        if row >= len(self.trials):
+            raise MeasurementError(
+                f"{self.origin}: trial {ctx.trial} needs row {row + 1}, "
+                f"the file has {len(self.trials)}"
+            )
+        trial = self.trials[row]
+        if trial.design != ctx.design:
+            raise MeasurementError(
+                f"{self.origin}: row {row + 1} is design {trial.design.label()}, "
+                f"trial {ctx.trial} runs {ctx.design.label()}"
+            )
+        return trial
+
+    def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Nothing to mark; journal which row serves the trial."""
+        return {"row": ctx.trial, "origin": self.origin}
+
+    def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Nothing to mark."""
+        return {}
+
+    def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
+        """The trial's row as it stands in the file."""
+        trial = self._row(ctx)
+        cov = trial.pose_cov
+        if cov is None:
+            cov = pose_covariance(self.description, trial.pose_change)
+        return MeasuredPose(
+            pose=_pose(trial.pose_change),
+            covariance=_covariance(cov),
+            flagged=trial.flagged,
+            flag_reason=trial.note,
+            details={"source": f"{self.origin} line {trial.line}"},
+        )
+
+
+def true_pose_change(ctx: TrialContext) -> Pose:
+    """The attempt's true (dx m, dy m, dtheta rad) from the journaled true start
+    and end poses, dtheta minus the design's winding.
+
+    Raises:
+        MeasurementError: no true start and end pose were journaled.
+    """
+    try:
+        start, end = ctx.start["true_pose"], ctx.end["true_pose"]
+    except KeyError:
+        raise MeasurementError(
+            f"trial {ctx.trial}: no true start and end pose were journaled"
+        ) from None
+    return relative_true_pose(start, end, ctx.design.path().winding_rad)
+
+
+def pose_source_from_file(path: str | Path, description: RobotDescription) -> PoseSource:
+    """The pose source for a trial file: a file of poses is read as poses
+    (:class:`PoseFileSource`); a file of raw distances goes through the tape
+    and the floor-marks solver (:class:`TapeSource` over a :class:`RecordedSource`).
+
+    Raises:
+        TrialFileError: bad rows (all listed).
+    """
+    trials = read_trials(path, description)
+    if trials.kind == "pose":
+        return PoseFileSource(trials.trials, str(path), description)
+    return TapeSource(recorded_source_from_file(path, description), description)
+
+
+def as_pose_source(
+    source: PoseSource | MeasurementSource, description: RobotDescription
+) -> PoseSource:
+    """``source`` as a :class:`PoseSource`: a distance source is put behind the
+    tape and the floor-marks solver (:class:`TapeSource`)."""
+    if hasattr(source, "pose_change"):
+        return cast(PoseSource, source)
+    return TapeSource(source, description)

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from odohil.driver.sample import EncoderSample
+from odohil.driver.odometry import OdometrySample
 from odohil.errors import SafetyError
 from odohil.session.state import Phase, SessionState
 from odohil.units import wrap_angle
@@ -41,9 +41,9 @@ def pose_text(pose: Pose) -> str:
     return f"x={x:+.3f} m y={y:+.3f} m heading={math.degrees(wrap_angle(theta)):+.1f} deg"
 
 
-def sample_pose(sample: EncoderSample) -> Pose:
-    """An encoder sample's pose (x m, y m, heading rad)."""
-    return (sample.x_m, sample.y_m, sample.steer_rad)
+def sample_pose(sample: OdometrySample) -> Pose:
+    """An odometry sample's pose (x m, y m, heading rad)."""
+    return (sample.x_m, sample.y_m, sample.theta_rad)
 
 
 @dataclass(frozen=True)
@@ -117,7 +117,7 @@ def expected_start(state: SessionState) -> tuple[int, Pose] | None:
     return trial, tuple(last.encoder_end_pose)  # type: ignore[return-value]
 
 
-def check_start(state: SessionState, sample: EncoderSample) -> StartPose:
+def check_start(state: SessionState, sample: OdometrySample) -> StartPose:
     """Compare the encoders with where the next trial starts."""
     where = expected_start(state)
     if where is None:

@@ -66,6 +66,7 @@ from odohil.science.limits import RANGES
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.journal import Record, TornRecord, read_journal
+from odohil.session.mocap.stream import parse_tcp_url
 from odohil.session.plan import Plan, check_session_plan
 from odohil.session.trial_files import Trial, TrialSet
 
@@ -263,7 +264,7 @@ def replay(records: Iterable[Record]) -> SessionState:
     return state
 
 
-MEASURES = ("fake", "file", "operator")
+MEASURES = ("fake", "file", "operator", "tcp")
 """The measurement sources a session header may name."""
 _SETTING_TYPES: dict[str, tuple[type, ...]] = {
     "port": (str,),
@@ -271,6 +272,7 @@ _SETTING_TYPES: dict[str, tuple[type, ...]] = {
     "trial_file": (str,),
     "baud": (int,),
     "seed": (int,),
+    "mocap_url": (str,),
 }
 
 
@@ -318,6 +320,11 @@ def validate_header(data: Mapping[str, Any], where: str = "session record") -> N
             continue
         if isinstance(value, bool) or not isinstance(value, types):
             raise bad(f"settings.{key}", types[0].__name__, value)
+        if key == "mocap_url":
+            try:
+                parse_tcp_url(cast(str, value))
+            except ParameterError as exc:
+                raise JournalError(f"{where}: settings.mocap_url: {exc}") from None
         if key in ("baud", "seed"):
             try:
                 RANGES[key].check(f"settings.{key}", cast(int, value))
@@ -522,9 +529,9 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
             design=t.design,
             pose_change=np.array(t.pose_change, dtype=np.float64),
             pose_cov=np.array(t.cov, dtype=np.float64),
-            marks=MarkDistances(
-                same_m=t.measurements[:n_screws], cross_m=t.measurements[n_screws:]
-            ),
+            marks=MarkDistances(same_m=t.measurements[:n_screws], cross_m=t.measurements[n_screws:])
+            if t.measurements
+            else None,  # measured as a pose (a trial file of poses, motion capture)
             odometry_end_pose=np.array(t.encoder_end_pose, dtype=np.float64),
             flagged=not t.clear_cut or bool(t.slip),
             note="; ".join(part for part in (t.note, t.slip) if part),

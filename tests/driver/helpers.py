@@ -9,8 +9,8 @@ from typing import Any
 
 import fakes  # noqa: F401  (registers the fakerobot:// URL handler)
 from fakes.nomad.truth import TruthSnapshot
-from odohil.driver.link import open_port
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.link import open_port
+from odohil.driver.nomad.robot import NomadRobot
 
 
 class FakeLine:

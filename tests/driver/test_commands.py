@@ -8,9 +8,9 @@ import time
 
 import pytest
 
-from odohil.driver.link import open_port
-from odohil.driver.robot import NomadRobot
-from odohil.driver.sample import EncoderSample
+from odohil.driver.nomad.link import open_port
+from odohil.driver.nomad.robot import NomadRobot
+from odohil.driver.nomad.sample import EncoderSample
 from odohil.errors import ConnectionFailedError, ParameterError
 from odohil.units import metres_to_wire
 

@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from odohil.driver.motion import forth_and_back
+from odohil.driver.nomad.motion import forth_and_back
 from odohil.errors import (
     ChecksumError,
     DisconnectedError,

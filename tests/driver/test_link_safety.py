@@ -12,11 +12,11 @@ from typing import Any
 
 import pytest
 
-from odohil.driver.link import open_port
-from odohil.driver.motion import forth_and_back
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.link import open_port
+from odohil.driver.nomad.motion import forth_and_back
+from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import ConnectionFailedError, OdohilTimeoutError, ParameterError
-from odohil.protocol.limits import (
+from odohil.protocol.nomad.limits import (
     MAX_LEG_M,
     MIN_LEG_M,
     WIRE_LENGTH_M,

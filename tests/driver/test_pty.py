@@ -10,8 +10,8 @@ import pytest
 
 from fakes.nomad.process import EmulatorProcess
 from odohil import units
-from odohil.driver.motion import forth_and_back
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.motion import forth_and_back
+from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import DisconnectedError, OdohilTimeoutError
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import ErrorParameters

@@ -168,3 +168,29 @@ def test_the_dataclass_validates_when_built_directly() -> None:
         RobotDescription(screws, sigma_m=float("nan"))
     with pytest.raises(RobotDescriptionError, match="unique"):
         RobotDescription((*screws[:2], Screw("A", 0.0, 1.0)), sigma_m=0.001)
+
+
+def test_pose_sigma_for_motion_capture_is_optional_and_parsed() -> None:
+    assert parse_robot_description(MINIMAL).pose_sigma is None
+    text = MINIMAL + "pose_sigma = [0.0005, 0.0007, 0.001]\n"
+    assert parse_robot_description(text).pose_sigma == (0.0005, 0.0007, 0.001)
+
+
+@pytest.mark.parametrize(
+    ("value", "message"),
+    [
+        ("0.001", r"measurement\.pose_sigma must be \[sigma_x_m, sigma_y_m, sigma_theta_rad\]"),
+        ("[0.001, 0.001]", r"pose_sigma must be \[sigma_x_m"),
+        ("[0.001, '1 mm', 0.001]", r"measurement\.pose_sigma\[1\] must be a number"),
+        ("[0.001, 0.001, nan]", r"measurement\.pose_sigma\[2\] must be a finite"),
+        (
+            "[0, 0.001, 0.001]",
+            r"pose_sigma\[0\] \(sigma_x_m\) must be at least 1e-06 and at most 1 m",
+        ),
+        ("[0.001, -1, 0.001]", r"pose_sigma\[1\] \(sigma_y_m\) must be at least 1e-06"),
+        ("[0.001, 0.001, 2.0]", r"pose_sigma\[2\] \(sigma_theta_rad\) must be .* at most 1 rad"),
+    ],
+)
+def test_bad_pose_sigma_names_the_key_and_the_range(value: str, message: str) -> None:
+    with pytest.raises(RobotDescriptionError, match=message):
+        parse_robot_description(MINIMAL + f"pose_sigma = {value}\n")

@@ -12,7 +12,7 @@ import serial
 import fakes  # noqa: F401  (registers fakerobot://)
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthSnapshot
-from odohil.protocol.messages import Lp, St, encode_request
+from odohil.protocol.nomad.messages import Lp, St, encode_request
 
 from .link import RawLink
 

@@ -9,8 +9,8 @@ from typing import Any
 
 import serial
 
-from odohil.protocol.framing import DecodeFault, Packet, PacketDecoder
-from odohil.protocol.messages import Request, encode_request
+from odohil.protocol.nomad.framing import DecodeFault, Packet, PacketDecoder
+from odohil.protocol.nomad.messages import Request, encode_request
 
 
 class RawLink:

@@ -9,7 +9,7 @@ import numpy as np
 
 from fakes.nomad.body import RobotBody
 from odohil import units
-from odohil.protocol import messages as m
+from odohil.protocol.nomad import messages as m
 from odohil.science.parameters import ErrorParameters
 
 from .link import RawLink

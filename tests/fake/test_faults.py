@@ -19,12 +19,12 @@ from fakes.nomad.engine import (
 )
 from fakes.nomad.faults import parse_fault
 from odohil.errors import ChecksumError, ParameterError, UnexpectedReplyError
-from odohil.protocol import messages as m
-from odohil.protocol.codes import Code
-from odohil.protocol.framing import DecodeFault, Packet, PacketDecoder, parse_packet
-from odohil.protocol.numbers import decode_s16
-from odohil.protocol.replies import NAK_BYTES, decode_reply
-from odohil.protocol.state import N150_MASK
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.codes import Code
+from odohil.protocol.nomad.framing import DecodeFault, Packet, PacketDecoder, parse_packet
+from odohil.protocol.nomad.numbers import decode_s16
+from odohil.protocol.nomad.replies import NAK_BYTES, decode_reply
+from odohil.protocol.nomad.state import N150_MASK
 
 GS = m.encode_request(m.Gs())
 GS_REPLY_LEN = 48

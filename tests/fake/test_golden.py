@@ -5,11 +5,11 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from odohil.protocol import messages as m
-from odohil.protocol.codes import STATE_REPLY_CODES, Code
-from odohil.protocol.framing import Packet, encode_packet, parse_packet
-from odohil.protocol.replies import NAK_BYTES, decode_reply
-from odohil.protocol.state import N150_MASK
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.codes import STATE_REPLY_CODES, Code
+from odohil.protocol.nomad.framing import Packet, encode_packet, parse_packet
+from odohil.protocol.nomad.replies import NAK_BYTES, decode_reply
+from odohil.protocol.nomad.state import N150_MASK
 
 from .link import golden
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from odohil.protocol import messages as m
-from odohil.protocol.codes import Code
-from odohil.protocol.framing import encode_packet
-from odohil.protocol.replies import NAK_BYTES
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.codes import Code
+from odohil.protocol.nomad.framing import encode_packet
+from odohil.protocol.nomad.replies import NAK_BYTES
 
 
 def test_requests_in_any_chunking_and_after_garbage_are_answered(pty_robot: Any) -> None:

@@ -10,11 +10,11 @@ from typing import Any
 import pytest
 
 from odohil import units
-from odohil.protocol import messages as m
-from odohil.protocol.codes import Code
-from odohil.protocol.numbers import decode_s16, decode_u16
-from odohil.protocol.replies import decode_reply
-from odohil.protocol.state import N150_MASK, RobotState
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.codes import Code
+from odohil.protocol.nomad.numbers import decode_s16, decode_u16
+from odohil.protocol.nomad.replies import decode_reply
+from odohil.protocol.nomad.state import N150_MASK, RobotState
 from odohil.science.parameters import NOMAD150
 
 

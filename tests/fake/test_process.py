@@ -7,8 +7,8 @@ import time
 import serial
 
 from fakes.nomad.process import EmulatorProcess
-from odohil.protocol import messages as m
-from odohil.protocol.codes import Code
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.codes import Code
 
 from .link import RawLink
 

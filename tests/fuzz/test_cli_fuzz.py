@@ -168,7 +168,9 @@ PLAN_OPTIONS = {
     "--budget-m": "budget_m", "--max-trials": "max_trials", "--sigma-m": "sigma_m",
     "--target-E-R": "target_E_R", "--target-E-T": "target_E_T",
     "--target-K-theta": "target_K_theta", "--target-K-rho": "target_K_rho",
-    "--max-designs": "max_designs", "--max-leg-m": "max_leg_m", **PARAMETERS,
+    "--max-designs": "max_designs", "--max-leg-m": "max_leg_m",
+    "--min-trials-per-design": "min_trials_per_design", "--measure-s": "measure_s",
+    "--budget-min": "budget_min", "--speed": "speed", **PARAMETERS,
 }  # fmt: skip
 
 
@@ -181,6 +183,22 @@ def test_plan_refuses_every_bad_number(data: st.DataObject) -> None:
     option = data.draw(st.sampled_from(sorted(PLAN_OPTIONS)))
     bad = data.draw(NUMBER_TEXT.filter(lambda t: not in_range(PLAN_OPTIONS[option], t)))
     args = ["plan", "--budget-m", "100", *args, option, bad]
+    check(invoke(args), {2}, NAMES)
+
+
+EXPORT_OPTIONS = {
+    "--speed": "speed", "--rate-hz": "rate_hz", "--update-min-d-m": "update_min_d_m",
+    "--update-min-a-rad": "update_min_a_rad",
+}  # fmt: skip
+
+
+@settings(SETTINGS, max_examples=60)
+@given(data=st.data())
+def test_export_refuses_every_bad_number(data: st.DataObject, tmp_path: Path) -> None:
+    args, _ = options(EXPORT_OPTIONS, data.draw)
+    option = data.draw(st.sampled_from(sorted(EXPORT_OPTIONS)))
+    bad = data.draw(NUMBER_TEXT.filter(lambda t: not in_range(EXPORT_OPTIONS[option], t)))
+    args = ["export", str(tmp_path), "--format", "amcl", *args, option, bad]
     check(invoke(args), {2}, NAMES)
 
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from hypothesis import strategies as st
 
-from odohil.protocol import messages as m
-from odohil.protocol.framing import MAX_LEN, Packet
-from odohil.protocol.state import RobotState, StateMask
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.framing import MAX_LEN, Packet
+from odohil.protocol.nomad.state import RobotState, StateMask
 
 s16 = st.integers(-0x7FFF, 0x7FFF)
 u16 = st.integers(0, 0xFFFF)

@@ -7,11 +7,11 @@ from typing import Any
 import pytest
 
 from odohil.errors import NakError
-from odohil.protocol import messages, replies
-from odohil.protocol.codes import Code
-from odohil.protocol.framing import DecodeFault, Packet, PacketDecoder, parse_packet
-from odohil.protocol.messages import decode_request, encode_request
-from odohil.protocol.state import N150_MASK, RobotState
+from odohil.protocol.nomad import messages, replies
+from odohil.protocol.nomad.codes import Code
+from odohil.protocol.nomad.framing import DecodeFault, Packet, PacketDecoder, parse_packet
+from odohil.protocol.nomad.messages import decode_request, encode_request
+from odohil.protocol.nomad.state import N150_MASK, RobotState
 
 from .golden import golden
 

@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from odohil.errors import ParameterError
-from odohil.protocol import numbers
-from odohil.protocol.framing import (
+from odohil.protocol.nomad import numbers
+from odohil.protocol.nomad.framing import (
     MAX_LEN,
     DecodeFault,
     Packet,
@@ -19,8 +19,8 @@ from odohil.protocol.framing import (
     encode_packet,
     parse_packet,
 )
-from odohil.protocol.messages import Request, decode_request, encode_request
-from odohil.protocol.state import (
+from odohil.protocol.nomad.messages import Request, decode_request, encode_request
+from odohil.protocol.nomad.state import (
     N150_MASK,
     StateMask,
     decode_state_payload,

@@ -8,7 +8,7 @@ from typing import Any
 import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.robot_description import RobotDescription
 from odohil.session.engine import (
     IncrementalLiveEstimator,
@@ -87,7 +87,7 @@ def build_session(
     plan = parse_plan(plan_text)
     journal, state = start_session(folder, robot_toml, plan, measure="fake", settings={})
     port = serial.serial_for_url(f"fakerobot://?seed={seed}&time_scale=2000", timeout=0.5)
-    with journal, NomadRobot.from_port(port) as robot:
+    with journal, NomadBackend.from_port(port) as robot:
         engine = SessionEngine(
             journal,
             state,

@@ -19,7 +19,6 @@ from odohil.errors import ParameterError
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import EncoderPath, Leg, Turn, forth_and_back, square
 from odohil.science.simulator import (
-    _drive_blocks,
     discrete_means,
     drive_straight,
     make_rng,
@@ -294,20 +293,6 @@ def test_tick_sized_calls_are_distributed_like_one_call() -> None:
     for i, label in enumerate(("x", "y", "theta")):
         assert_same_mean(whole[:, i], ticks[:, i], f"<{label}>")
     assert_same_covariance(whole, ticks, "(x, y, theta)")
-
-
-@pytest.mark.parametrize("count", [1, 2, 5, 128])
-def test_single_trial_calls_match_the_block_path_draw_for_draw(count: int) -> None:
-    """One trial (the fake robot) takes a scalar path with the same draws as the block path."""
-    for seed in range(20):
-        poses = []
-        for drive in (drive_straight, _drive_blocks):
-            rng = make_rng(seed)
-            x, y, theta = np.array([0.1]), np.array([-0.2]), np.array([2.0])
-            for _ in range(3):
-                drive(x, y, theta, -0.02, count, LOUD, rng)
-            poses.append(np.concatenate([x, y, theta, rng.random(1)]))
-        np.testing.assert_allclose(poses[0], poses[1], rtol=0, atol=1e-5)
 
 
 def test_seeds_reproduce_exactly() -> None:

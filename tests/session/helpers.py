@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 import fakes  # noqa: F401  (registers the fakerobot:// URL handler)
-from odohil.driver.link import open_port
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.backend import NomadBackend
+from odohil.driver.nomad.link import open_port
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 
 ROBOT_TOML = """\
@@ -56,10 +56,10 @@ class PortTruth:
 
 
 @contextmanager
-def fake_robot(query: str) -> Iterator[tuple[NomadRobot, PortTruth]]:
-    """A NomadRobot on fakerobot://?QUERY and its truth; closed (st) afterwards."""
+def fake_robot(query: str) -> Iterator[tuple[NomadBackend, PortTruth]]:
+    """A Nomad backend on fakerobot://?QUERY and its truth; closed (st) afterwards."""
     port: Any = open_port(f"fakerobot://?{query}", 38400)
-    robot = NomadRobot.from_port(port)
+    robot = NomadBackend.from_port(port)
     try:
         yield robot, PortTruth(port)
     finally:

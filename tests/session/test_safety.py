@@ -19,7 +19,7 @@ import pytest
 
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthSnapshot
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import JournalError, StopUnconfirmedError
 from odohil.session import state as ev
 from odohil.session.engine import start_session

@@ -18,7 +18,7 @@ from typing import Any
 import serial
 
 import fakes  # noqa: F401  (registers fakerobot://)
-from odohil.driver.robot import NomadRobot
+from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.floor_marks import marks_from_pose
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
@@ -81,7 +81,7 @@ def _run(
     plan = parse_plan(plan_text)
     journal, state = start_session(folder, toml, plan, measure="fake", settings={})
     port = serial.serial_for_url(f"fakerobot://?seed={seed}&time_scale=2000", timeout=0.5)
-    with journal, NomadRobot.from_port(port) as robot:
+    with journal, NomadBackend.from_port(port) as robot:
         description: RobotDescription = description_of(state)
         source = (make_source or FakeTruthSource)(PortTruth(port), description, seed=seed)
         engine = SessionEngine(
@@ -218,7 +218,7 @@ def test_the_operator_settles_an_ambiguous_trial_with_one_more_named_distance(
     plan = parse_plan("k=1,l=1,n=4")
     journal, state = start_session(folder, NO_CROSS_TOML, plan, measure="operator", settings={})
     port = serial.serial_for_url("fakerobot://?seed=4&time_scale=2000", timeout=0.5)
-    with journal, NomadRobot.from_port(port) as robot:
+    with journal, NomadBackend.from_port(port) as robot:
         operator = TapeOperator(port, description_of(state))
         engine = SessionEngine(
             journal,

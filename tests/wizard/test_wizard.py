@@ -301,3 +301,27 @@ def test_resume_after_ctrl_c_mid_motion_asks_to_put_the_robot_back(tmp_path: Pat
         assert child.exitstatus == 3  # one trial gives no estimate: not trusted
     kinds = [r.kind for r in read_journal(folder).records]
     assert kinds.count(ev.START_POSE) == 2
+
+
+def test_the_wizard_connects_with_robot_toml_serial_and_says_so(tmp_path: Path) -> None:
+    """No --port, no --baud: robot.toml's [serial] gives both, the banner says so."""
+    args = ["--time-scale", "20000", "--seed", "3", "--baud", "9600"]
+    with EmulatorProcess([*args, "--truth-socket", str(tmp_path / "t.sock")]) as emulator:
+        robot = tmp_path / "robot.toml"
+        serial = f'[serial]\nport = "{emulator.device}"\nbaud = 9600\n'
+        robot.write_text(ROBOT_TOML + serial, encoding="utf-8")
+        child = _spawn(
+            ["--robot", str(robot), "--plan", "k=1,l=1,n=2", "--session", str(tmp_path / "s")]
+        )
+        child.expect("press Enter to start the motion")
+        shown = re.sub(r"\x1b\[[0-9;]*m", "", child.before)  # bold names
+        shown = re.sub(r"\s*\r?\n\s*", " ", shown)  # the terminal wraps long lines
+        where = f"({robot} [serial])"
+        banner = f"robot answers: nomad150 on {emulator.device} {where} at 9600 baud {where}"
+        assert banner in shown, shown
+        child.sendintr()
+        child.expect(pexpect.EOF)
+        child.close()
+    assert child.exitstatus == 130
+    header = read_journal(tmp_path / "s").records[0].data
+    assert (header["settings"]["port"], header["settings"]["baud"]) == (emulator.device, 9600)

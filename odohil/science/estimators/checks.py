@@ -24,7 +24,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import special
 
-from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.estimators.likelihood import design_path
 from odohil.science.estimators.observations import DesignSummary, Observation, wrap
@@ -39,6 +38,7 @@ from odohil.science.fisher import fisher_information
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, FloatArray
+from odohil.science.targets import TARGET_FLOORS, TARGET_FRACTIONS
 
 OUTLIER_LEVEL = 0.01
 """Family-wise level of the outlier test (Bonferroni over the trials)."""
@@ -51,24 +51,29 @@ MAX_EXTRA_TRIALS = 100_000
 class Criteria:
     """Precision targets of the sufficiency check.
 
+    Defaults: :mod:`odohil.science.targets` (the planner's default targets).
+
     Attributes:
         e_r_relative: largest stderr / |E_R|.
         e_r_floor: stderr of E_R always accepted, rad/m (E_R may be 0).
-        e_t_absolute: largest stderr of E_T (no unit).
+        e_t_relative: largest stderr / |E_T| (a fixed +-0.05 let
+            E_T -0.017 +- 0.015 pass as known).
+        e_t_floor: stderr of E_T always accepted (E_T may be 0).
         k_relative: largest stderr / K for K_theta and K_rho.
     """
 
-    e_r_relative: float = 0.25
-    e_r_floor: float = units.deg_per_m_to_rad_per_m(0.005)
-    e_t_absolute: float = 0.05
-    k_relative: float = 0.5
+    e_r_relative: float = TARGET_FRACTIONS["E_R"]
+    e_r_floor: float = TARGET_FLOORS["E_R"]
+    e_t_relative: float = TARGET_FRACTIONS["E_T"]
+    e_t_floor: float = TARGET_FLOORS["E_T"]
+    k_relative: float = TARGET_FRACTIONS["K_theta"]
 
     def targets(self, params: ErrorParameters) -> FloatArray:
         """Largest acceptable stderr of each parameter, SI."""
         return np.array(
             [
                 max(self.e_r_relative * abs(params.e_r), self.e_r_floor),
-                self.e_t_absolute,
+                max(self.e_t_relative * abs(params.e_t), self.e_t_floor),
                 self.k_relative * params.k_theta,
                 self.k_relative * params.k_rho,
             ]
@@ -259,7 +264,8 @@ def sufficiency(
             if name == "E_T":
                 reasons.append(
                     f"E_T has standard error {stderr[p]:.2g} (target {targets[p]:.2g}); "
-                    "closed paths pin E_T only weakly, about as 1/|E_R|"
+                    "closed paths pin E_T only weakly, about as 1/|E_R|; one-way runs (k=0.5) "
+                    "pin it far better"
                 )
             else:
                 reasons.append(

@@ -25,6 +25,7 @@ from odohil.science.observables import Observables, observables
 from odohil.science.paths import Design, FloatArray
 from odohil.session.journal import read_journal
 from odohil.session.state import CompletedTrial, SessionState, replay, session_observations
+from odohil.session.validation import ValidationReport, load_validations
 
 DOWN_WEIGHT_BELOW = 0.5
 """A trial whose robust-fit probability of being clean is below this is
@@ -138,6 +139,8 @@ class SessionReport:
         problem: why there is no estimate (empty otherwise).
         designs: per design, in plan order of first appearance.
         convergence: the incremental estimate after each trial that gave one.
+        validations: the validation sessions under ``SESSION/validation/``,
+            tested against the estimate (odohil/session/validation.py).
     """
 
     folder: Path
@@ -146,6 +149,7 @@ class SessionReport:
     problem: str
     designs: tuple[DesignReport, ...]
     convergence: tuple[ConvergencePoint, ...]
+    validations: tuple[ValidationReport, ...] = ()
 
     @property
     def trials(self) -> tuple[TrialPoint, ...]:
@@ -188,7 +192,8 @@ def load_report(folder: str | Path, exclude: Collection[int] = frozenset()) -> S
         convergence.append(ConvergencePoint(n, fit.params.as_tuple(), (se[0], se[1], se[2], se[3])))
     fit_order = [o.trial for o in kept]
     designs = _designs(state.completed, set(exclude), fit_order, result)
-    return SessionReport(path, state, result, problem, designs, tuple(convergence))
+    validations = load_validations(path, result) if result is not None else ()
+    return SessionReport(path, state, result, problem, designs, tuple(convergence), validations)
 
 
 def _designs(

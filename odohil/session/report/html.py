@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import html
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from odohil import units
 from odohil.science.estimators import EstimateResult
@@ -118,11 +118,52 @@ def render_html(report: SessionReport, plots: Sequence[Plot], exports: Sequence[
                     "trials the estimate leaves out are drawn at 0.",
                 )
             )
+    if report.validations:
+        parts.append(_validations(report, by_key))
     parts.append('<h2 id="exports">Exported files</h2>')
     parts.append("<p>Written beside this page, in the same folder:</p><ul>")
     parts.extend(f"<li><code>{e(x.name)}</code>: {e(x.description)}</li>" for x in exports)
     parts.append("</ul>")
     parts.append("</body></html>\n")
+    return "\n".join(parts)
+
+
+def _validations(report: SessionReport, by_key: Mapping[str, Plot]) -> str:
+    """Each validation session: its verdict, the NEES tests and its plots."""
+    e = html.escape
+    parts = ['<h2 id="validation">Validation on paths not used for the fit</h2>']
+    for i, v in enumerate(report.validations, start=1):
+        where = e(str(v.folder.relative_to(report.folder)))
+        if v.result is None:
+            parts.append(f'<p class="bad">{e(v.path)} ({where}): {e(v.problem)}</p>')
+            continue
+        r = v.result
+        status = "PASS" if r.passed else "FAIL"
+        parts.append(
+            f'<p class="{"good" if r.passed else "bad"}">{e(v.path)} ({where}): {status}, '
+            f"{r.n_trials} trials, each test at level {r.alpha / 4:g}.</p>"
+        )
+        parts.append(
+            "<table><tr><th>test</th><th>NEES</th><th>dof</th><th>p-value</th>"
+            "<th>threshold</th><th>result</th></tr>"
+        )
+        for t in r.tests:
+            parts.append(
+                f"<tr><td>{e(t.name)}</td><td>{t.statistic:.4g}</td><td>{t.dof}</td>"
+                f"<td>{t.p_value:.3g}</td><td>{t.threshold:.4g}</td>"
+                f"<td>{'pass' if t.passed else 'FAIL'}</td></tr>"
+            )
+        parts.append("</table>")
+        keys = sorted(k for k in by_key if k.startswith(f"validation-{i}-"))
+        parts.extend(
+            _figures(
+                by_key[k],
+                "Dots: the validation trials' end points; ellipse: the calibrated model's "
+                "95 % region for the path (pose spread, measurement error and the "
+                "estimate's own uncertainty).",
+            )
+            for k in keys
+        )
     return "\n".join(parts)
 
 

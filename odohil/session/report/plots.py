@@ -32,6 +32,7 @@ from odohil.science.parameters import PAPER_UNITS, PARAMETER_NAMES
 from odohil.science.paths import FloatArray
 from odohil.session.report.data import DOWN_WEIGHT_BELOW, DesignReport, SessionReport, TrialPoint
 from odohil.session.report.data import to_paper as _to_paper
+from odohil.session.validation import ValidationPlot
 
 CHI2_95_2D = float(stats.chi2.ppf(0.95, 2))
 """Squared Mahalanobis radius of a 95 % ellipse in two dimensions."""
@@ -88,6 +89,10 @@ def report_plots(report: SessionReport) -> tuple[Plot, ...]:
         plots.append(_render("convergence", "Convergence", convergence_figure(report)))
     if report.result is not None:
         plots.append(_render("model-check", "Model check", model_check_figure(report)))
+    for i, validation in enumerate(report.validations, start=1):
+        for j, data in enumerate(validation.plots, start=1):
+            title = f"Validation, {data.label}"
+            plots.append(_render(f"validation-{i}-{j}", title, validation_figure(data)))
     return tuple(plots)
 
 
@@ -215,6 +220,37 @@ def end_points_figure(design: DesignReport) -> Figure:
         ax.autoscale_view()
         count = len(design.trials)
         ax.set_title(f"End points, {design.design.label()} ({count} trial{'s' * (count != 1)})")
+        ax.set_xlabel("x of the end point, start frame (mm)")
+        ax.set_ylabel("y of the end point, start frame (mm)")
+        _legend_outside(fig, ax, below=True)
+    return fig
+
+
+def validation_figure(data: ValidationPlot) -> Figure:
+    """A validation path's trial end points (mm, start frame) against the
+    calibrated model's predicted 95 % ellipse (pose spread, measurement error
+    and the estimate's own uncertainty)."""
+    fig = _figure(5.4, 4.6)
+    ellipse = data.ellipse
+    with mpl.rc_context(_RC):
+        ax = fig.add_subplot()
+        width, height, angle = ellipse_axes(1e6 * ellipse.cov)
+        centre = (1e3 * float(ellipse.mean[0]), 1e3 * float(ellipse.mean[1]))
+        ax.add_patch(
+            Ellipse(
+                centre, width, height, angle=angle, facecolor=RED, alpha=0.15,
+                edgecolor=RED, linewidth=1.2, label="predicted 95 % region",
+            )
+        )  # fmt: skip
+        ax.plot(*centre, marker="+", markersize=11, markeredgewidth=2, color=DARK,
+                linestyle="none", label="predicted mean")  # fmt: skip
+        points = 1e3 * ellipse.points
+        ax.plot(points[:, 0], points[:, 1], marker="o", linestyle="none", color=DARK,
+                markersize=5, label="validation trials")  # fmt: skip
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.autoscale_view()
+        count = len(data.numbers)
+        ax.set_title(f"Validation, {data.label} ({count} trial{'s' * (count != 1)})")
         ax.set_xlabel("x of the end point, start frame (mm)")
         ax.set_ylabel("y of the end point, start frame (mm)")
         _legend_outside(fig, ax, below=True)

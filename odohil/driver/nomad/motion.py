@@ -10,14 +10,15 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
-from odohil.driver.robot import NomadRobot
-from odohil.driver.sample import EncoderSample
+from odohil.driver.nomad.robot import NomadRobot
+from odohil.driver.nomad.sample import EncoderSample
 from odohil.errors import MotionError, ParameterError
-from odohil.protocol.limits import leg_to_wire
-from odohil.protocol.messages import Pr
-from odohil.protocol.numbers import S16_MAX
+from odohil.protocol.nomad.limits import leg_to_wire
+from odohil.protocol.nomad.messages import Pr
+from odohil.protocol.nomad.numbers import S16_MAX
 from odohil.science.paths import Design, Leg
 from odohil.units import (
     WIRE_ANGLES_PER_TURN,
@@ -124,6 +125,7 @@ def forth_and_back(
     step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
     speeds: tuple[float, float] = DEFAULT_SPEEDS,
     accelerations: tuple[float, float] = DEFAULT_ACCELERATIONS,
+    on_sample: Callable[[EncoderSample], None] | None = None,
 ) -> MotionRecord:
     """Drive one trial of ``design`` and record the encoders (gs polling).
 
@@ -131,10 +133,12 @@ def forth_and_back(
     ``accelerations`` (m/s^2, rad/s^2); a ``pr`` with zero speed would not move.
 
     Raises ParameterError before anything is sent when a leg is outside the
-    wire's range (:func:`odohil.protocol.limits.check_leg_length_m`: at least
+    wire's range (:func:`odohil.protocol.nomad.limits.check_leg_length_m`: at least
     25.4 mm, at most 83.2 m) or a turn rounds to no wire units; MotionError if
     a step ends off its commanded encoder pose, and whatever the robot raises
-    (after ``st``) on protocol errors or timeouts.
+    (after ``st``) on protocol errors or timeouts. ``on_sample`` sees every
+    sample taken: the one before the first step, then every poll
+    (a step ends at the first sample that shows no axis active).
     """
     if tolerance_wire < 0:
         raise ParameterError(f"tolerance must be >= 0 wire units, got {tolerance_wire}")
@@ -145,13 +149,20 @@ def forth_and_back(
     started = time.monotonic()
     robot.set_accelerations(accelerations[0], accelerations[1], accelerations[1])
     robot.set_speeds(speeds[0], speeds[1], speeds[1])
+
+    def record(sample: EncoderSample) -> None:
+        samples.append(sample)
+        if on_sample is not None:
+            on_sample(sample)
+
     start = robot.state()
-    samples.append(start)
+    record(start)
     before = start
+
     for trans, steer in wire_steps:
         cmd = robot.move_relative_wire(trans, steer, 0)
         commands.append(cmd)
-        after = robot.poll_until_stopped(step_timeout_s, samples.append)
+        after = robot.poll_until_stopped(step_timeout_s, record)
         _check_step(robot, before, after, cmd, tolerance_wire)
         step_ends.append(after)
         before = after

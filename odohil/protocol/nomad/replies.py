@@ -7,10 +7,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from odohil.errors import NakError, ParameterError, UnexpectedReplyError
-from odohil.protocol.codes import STATE_REPLY_CODES, Code
-from odohil.protocol.framing import Packet, encode_packet
-from odohil.protocol.messages import Request
-from odohil.protocol.numbers import (
+from odohil.protocol.nomad.codes import STATE_REPLY_CODES, Code
+from odohil.protocol.nomad.framing import Packet, encode_packet
+from odohil.protocol.nomad.messages import Request
+from odohil.protocol.nomad.numbers import (
     decode_s16,
     decode_u16,
     decode_u32,
@@ -18,7 +18,7 @@ from odohil.protocol.numbers import (
     encode_u16,
     encode_u32,
 )
-from odohil.protocol.state import (
+from odohil.protocol.nomad.state import (
     BUMPER_MAX,
     SONAR_COUNT,
     RobotState,

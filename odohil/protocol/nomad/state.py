@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from odohil.errors import ParameterError, UnexpectedReplyError
-from odohil.protocol.numbers import (
+from odohil.protocol.nomad.numbers import (
     S16_MAX,
     U32_MAX,
     decode_s16,

@@ -11,9 +11,9 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 from odohil.errors import FramingError, OdohilError, ParameterError, UnexpectedReplyError
-from odohil.protocol.codes import Code
-from odohil.protocol.framing import Packet, encode_packet
-from odohil.protocol.numbers import (
+from odohil.protocol.nomad.codes import Code
+from odohil.protocol.nomad.framing import Packet, encode_packet
+from odohil.protocol.nomad.numbers import (
     decode_s16,
     decode_u16,
     encode_s16,

@@ -15,34 +15,26 @@ from __future__ import annotations
 
 import contextlib
 import math
-import termios
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
 
-import serial
-
+from odohil.driver.port import IO_ERRORS, Port, open_serial_url
 from odohil.errors import (
     ChecksumError,
-    ConnectionFailedError,
     DisconnectedError,
     FramingError,
     OdohilTimeoutError,
     ParameterError,
 )
-from odohil.protocol.codes import Code
-from odohil.protocol.framing import DecodeFault, Packet, PacketDecoder
+from odohil.protocol.nomad.codes import Code
+from odohil.protocol.nomad.framing import DecodeFault, Packet, PacketDecoder
 
 BAUD_RATES = (4800, 9600, 19200, 38400)
 DEFAULT_BAUD = 38400
 NORMAL_TIMEOUT_S = 1.0
 """First-byte wait for ordinary requests, and the silence that aborts a reply."""
 ZR_TIMEOUT_S = 120.0
-_IO_ERRORS = (serial.SerialException, OSError, termios.error)
-"""What a vanished line raises: EIO from read/write, or from tcflush on a pty."""
-READ_SLICE_S = 0.05
-"""pyserial read timeout: how often the link checks its own deadlines."""
 QUIET_BYTES = 3
 """A line is quiet when no byte has come for this many byte times..."""
 QUIET_MIN_S = 0.0005
@@ -63,45 +55,16 @@ def quiet_interval_s(baud: int) -> float:
     return max(QUIET_MIN_S, QUIET_BYTES * 10.0 / baud)
 
 
-class Port(Protocol):
-    """The part of a pyserial port the link uses."""
-
-    @property
-    def in_waiting(self) -> int: ...
-
-    def read(self, size: int = 1) -> bytes: ...
-
-    def write(self, data: bytes, /) -> int | None: ...
-
-    def flush(self) -> None: ...
-
-    def reset_input_buffer(self) -> None: ...
-
-    def close(self) -> None: ...
-
-
 def open_port(url: str, baud: int = DEFAULT_BAUD) -> Port:
-    """Open a serial URL (device path, pty or ``fakerobot://``) 8N1, no flow control.
+    """Open a serial URL (device path, pty or ``fakerobot://``) for a Nomad:
+    8N1, no flow control.
 
     Raises ParameterError for a baud rate the Nomad does not support and
     ConnectionFailedError when the port does not open.
     """
     if baud not in BAUD_RATES:
         raise ParameterError(f"baud must be one of {BAUD_RATES}, got {baud}")
-    try:
-        port: Port = serial.serial_for_url(
-            url,
-            baudrate=baud,
-            bytesize=8,
-            parity="N",
-            stopbits=1,
-            rtscts=False,
-            xonxoff=False,
-            timeout=READ_SLICE_S,
-        )
-    except (serial.SerialException, OSError, ValueError) as exc:
-        raise ConnectionFailedError(f"cannot open {url!r}: {exc}") from exc
-    return port
+    return open_serial_url(url, baud)
 
 
 @dataclass
@@ -178,7 +141,7 @@ class Link:
         """Close the port (idempotent)."""
         if not self._closed:
             self._closed = True
-            with contextlib.suppress(*_IO_ERRORS):
+            with contextlib.suppress(*IO_ERRORS):
                 self._port.close()
 
     def exchange(
@@ -208,7 +171,7 @@ class Link:
             self._wait_quiet()
             self._port.write(packet)
             self._port.flush()
-        except _IO_ERRORS as exc:
+        except IO_ERRORS as exc:
             raise DisconnectedError(f"serial line {self._name} failed: {exc}") from exc
         self.stats.requests += 1
         self.stats.bytes_out += len(packet)
@@ -251,7 +214,7 @@ class Link:
         while True:
             try:
                 data = self._port.read(max(self._decoder.missing, self._port.in_waiting))
-            except _IO_ERRORS as exc:
+            except IO_ERRORS as exc:
                 raise DisconnectedError(f"serial read on {self._name} failed: {exc}") from exc
             now = time.monotonic()
             if data:

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from odohil.errors import ParameterError
-from odohil.protocol.numbers import S16_MAX
+from odohil.protocol.nomad.numbers import S16_MAX
 from odohil.units import METRES_PER_WIRE_LENGTH
 
 WIRE_LENGTH_M = METRES_PER_WIRE_LENGTH

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from odohil.protocol.state import RobotState
+from odohil.protocol.nomad.state import RobotState
 from odohil.units import WIRE_ANGLES_PER_TURN, wire_to_metres, wire_to_radians
 
 MOTOR_TRANS = 0b001

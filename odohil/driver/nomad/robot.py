@@ -20,15 +20,15 @@ import time
 from collections.abc import Callable, Iterator
 from types import TracebackType
 
-from odohil.driver.link import (
+from odohil.driver.nomad.link import (
     DEFAULT_BAUD,
     NORMAL_TIMEOUT_S,
     ZR_TIMEOUT_S,
     Link,
-    Port,
     open_port,
 )
-from odohil.driver.sample import EncoderSample
+from odohil.driver.nomad.sample import EncoderSample
+from odohil.driver.port import Port
 from odohil.errors import (
     ConnectionFailedError,
     DisconnectedError,
@@ -38,12 +38,12 @@ from odohil.errors import (
     ProtocolError,
     StopUnconfirmedError,
 )
-from odohil.protocol import messages as m
-from odohil.protocol.codes import MOTION_CODES, STATE_REPLY_CODES
-from odohil.protocol.framing import Packet
-from odohil.protocol.numbers import S16_MAX, U16_MAX
-from odohil.protocol.replies import decode_reply
-from odohil.protocol.state import N150_MASK, RobotState, StateMask, decode_state_payload
+from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad.codes import MOTION_CODES, STATE_REPLY_CODES
+from odohil.protocol.nomad.framing import Packet
+from odohil.protocol.nomad.numbers import S16_MAX, U16_MAX
+from odohil.protocol.nomad.replies import decode_reply
+from odohil.protocol.nomad.state import N150_MASK, RobotState, StateMask, decode_state_payload
 from odohil.units import WIRE_ANGLES_PER_TURN, metres_to_wire, radians_to_wire
 
 WS_MAX_S = 255

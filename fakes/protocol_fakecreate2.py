@@ -1,0 +1,84 @@
+"""pyserial URL handler ``fakecreate2://``: the fake iRobot Create 2 in process.
+
+URL: ``fakecreate2://?seed=1&time_scale=10&fault=cliff@0.5&E_R=-0.35&E_T=-0.015&K_theta=0.02&K_rho=5e-5&turn_scale=0.012&spin_k=2e-4&encoder_origin=65000&mode_offset=1&angle_bug=1&pacing=1``
+(every option optional; ``fault`` may repeat; E_R, E_T, K_theta, K_rho in the
+paper's units; pacing off unless ``pacing=1``, then at the port's baud rate).
+Opened with ``serial.serial_for_url`` once :mod:`fakes` is imported.
+
+The port is the fake Nomad's in-process port (fakes/protocol_fakerobot.py)
+carrying a :class:`~fakes.create2.engine.Create2Engine`; no thread, the robot
+runs whenever the port is used.
+"""
+
+from __future__ import annotations
+
+import urllib.parse
+from typing import Any, cast
+
+from serial.serialutil import SerialException
+
+from fakes.create2.config import CREATE2_TRUTH, build_config
+from fakes.create2.engine import Create2Engine
+from fakes.create2.truth import Create2Truth
+from fakes.nomad.engine import NomadEngine
+from fakes.protocol_fakerobot import Serial as FakeNomadSerial
+from odohil.errors import OdohilError
+from odohil.science.parameters import ErrorParameters
+
+_PAPER = ("E_R", "E_T", "K_theta", "K_rho")
+
+
+class Serial(FakeNomadSerial):
+    """A serial port with a fake Create 2 at the other end."""
+
+    def truth(self) -> Create2Truth:  # type: ignore[override]
+        """The robot's true state (a real robot has no such thing)."""
+        return self._create2().truth()
+
+    def event(self, name: str) -> Create2Truth:
+        """Test hook: inject a safety event now; the state after it."""
+        engine = self._create2()
+        engine.event(name)
+        return engine.truth()
+
+    def _create2(self) -> Create2Engine:
+        return cast(Create2Engine, self._engine(check_cut=False))
+
+    def _engine_from_url(self, url: str) -> NomadEngine:
+        parts = urllib.parse.urlsplit(url)
+        if parts.scheme != "fakecreate2":
+            raise SerialException(f"expected fakecreate2://?options, got {url!r}")
+        options = urllib.parse.parse_qs(parts.query, keep_blank_values=True)
+        paper = CREATE2_TRUTH.to_paper_units()
+        kwargs: dict[str, Any] = {}
+        faults: list[str] = []
+        self._pacing = False
+        try:
+            for key, values in options.items():
+                value = values[-1]
+                if key == "seed":
+                    kwargs["seed"] = int(value)
+                elif key in ("time_scale", "turn_scale"):
+                    kwargs[key] = float(value)
+                elif key == "spin_k":
+                    kwargs["spin_k"] = float(value)
+                elif key in ("encoder_origin", "mode_offset"):
+                    kwargs[key] = int(value)
+                elif key == "angle_bug":
+                    kwargs["angle_bug"] = value not in ("", "0", "false", "no")
+                elif key == "fault":
+                    faults.extend(values)
+                elif key == "pacing":
+                    self._pacing = value not in ("", "0", "false", "no")
+                elif key in _PAPER:
+                    paper[key] = float(value)
+                else:
+                    raise ValueError(f"unknown option {key!r}")
+            params = ErrorParameters.from_paper_units(*(paper[k] for k in _PAPER))
+            config = build_config(params=params, faults=faults, baud=self._baudrate, **kwargs)
+        except (ValueError, OdohilError) as exc:
+            raise SerialException(f"bad fakecreate2 URL {url!r}: {exc}") from exc
+        return cast(NomadEngine, Create2Engine(config))
+
+
+__all__ = ["Serial"]

@@ -1,0 +1,418 @@
+"""``odohil validate SESSION --path ...``: does the calibrated model predict a
+path it was not fitted on? (odohil/session/validation.py,
+odohil/science/validation.py)."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
+from odohil.cli.exit_codes import (
+    EXIT_BAD_INPUT,
+    EXIT_ERROR,
+    EXIT_OK,
+    EXIT_STOP_UNCONFIRMED,
+    EXIT_UNTRUSTED,
+    exit_for_signal,
+)
+from odohil.cli.line import resolve_line
+from odohil.cli.options import bounded
+from odohil.cli.run import (
+    ProgressObserver,
+    connect,
+    make_source,
+    refuse_unredundant,
+    report_stop,
+    report_unconfirmed,
+    session_exit_codes,
+    show_start,
+)
+from odohil.cli.verdict import verdict_line
+from odohil.errors import (
+    JournalError,
+    MeasurementError,
+    OdohilError,
+    ParameterError,
+    StopUnconfirmedError,
+)
+from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.validation import DEFAULT_ALPHA, ValidationResult, predict_path
+from odohil.session.engine import SessionEngine, start_session
+from odohil.session.floor_space import check_floor
+from odohil.session.plan import Plan, check_session_plan
+from odohil.session.preflight import check_trial_file
+from odohil.session.signals import signal_of
+from odohil.session.state import description_of_header, load_session
+from odohil.session.validation import (
+    PATH_SYNTAX,
+    Calibration,
+    ValidationPath,
+    ValidationTrials,
+    check_not_fitted,
+    check_trials,
+    default_folder,
+    load_calibration,
+    parameter_covariance,
+    parse_validation_path,
+    read_path_poses,
+    trials_of_file,
+    trials_of_session,
+)
+
+_HELP = (
+    f"Test the calibrated model of SESSION on a path it was not fitted on. --path is "
+    f"{PATH_SYNTAX}.\n\n"
+    "A forth-back path is driven (--trials N, --measure fake|FILE, the port from --port or "
+    "robot.toml \\[serial]) and journaled as its own validation session, by default "
+    "SESSION/validation/<path>/, never mixed into the calibration; when that folder already "
+    "holds a finished validation of the path, its trials are tested again without driving.\n\n"
+    "A square has in-place turns and the robot protocol drives forth-and-back designs only: "
+    "give the square's measured poses with --measure FILE (columns dx_m,dy_m,dtheta_rad and "
+    "optionally sigma_x_m,sigma_y_m,sigma_theta_rad). file:CSV reads a trial file (pose rows, "
+    "or raw distances solved with the session's robot description).\n\n"
+    "Each trial's predicted mean and covariance (the measurement covariance and, by the delta "
+    "method, the estimate's own covariance included) are tested by a NEES chi-square test over "
+    "all trials and per axis (x, y, theta), each at --alpha/4.\n\n"
+    "Exit 0 pass; 3 fail, or an untrusted calibration refused without --force; 2 bad input "
+    "(nothing moved)."
+)
+
+
+def _bad(console: Console, message: str) -> typer.Exit:
+    console.print(f"[red]error[/]: {message}", soft_wrap=True, highlight=False)
+    return typer.Exit(EXIT_BAD_INPUT)
+
+
+def _description(calibration: Calibration, robot: Path | None) -> tuple[RobotDescription, str, str]:
+    """The robot description (from --robot, else the session's) and its TOML text."""
+    if robot is None:
+        state = calibration.state
+        return (
+            description_of_header(state),
+            str(state.header["robot_toml"]),
+            str(state.header.get("robot_path") or ""),
+        )
+    try:
+        toml = robot.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ParameterError(f"--robot: cannot read {robot}: {exc}") from None
+    return parse_robot_description(toml, str(robot)), toml, str(robot)
+
+
+def validate(
+    session: Annotated[Path, typer.Argument(help="The calibration session folder.")],
+    *,
+    path_text: Annotated[str, typer.Option("--path", help=PATH_SYNTAX)],
+    trials: Annotated[
+        int | None,
+        typer.Option(
+            "--trials",
+            callback=bounded("plan_n"),
+            help="Trials to drive (forth-back), or to use from a file (default: all rows).",
+        ),
+    ] = None,
+    measure: Annotated[
+        str | None,
+        typer.Option(
+            "--measure",
+            help="`fake` (the fake robot's true pose) or a file: a trial file for a "
+            "driven path (as run), a pose file for a square.",
+        ),
+    ] = None,
+    port: Annotated[
+        str | None, typer.Option("--port", help="Serial device, pty path or pyserial URL.")
+    ] = None,
+    robot_file: Annotated[
+        Path | None,
+        typer.Option("--robot", help="Robot description (TOML); default: the session's."),
+    ] = None,
+    baud: Annotated[
+        int | None, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
+    ] = None,
+    truth_socket: Annotated[
+        str | None,
+        typer.Option("--truth-socket", help="The fake robot's truth socket (--measure fake)."),
+    ] = None,
+    seed: Annotated[
+        int, typer.Option("--seed", callback=bounded("seed"), help="Seed of the simulated tape.")
+    ] = 0,
+    out: Annotated[
+        Path | None,
+        typer.Option(
+            "--out", help="Validation session folder (default SESSION/validation/<path>)."
+        ),
+    ] = None,
+    alpha: Annotated[
+        float,
+        typer.Option("--alpha", help="False-rejection level of the verdict, in (0, 0.5]."),
+    ] = DEFAULT_ALPHA,
+    force: Annotated[
+        bool, typer.Option("--force", help="Validate an estimate that is not trusted.")
+    ] = False,
+    exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+) -> None:
+    console = Console(stderr=True)
+    if not (math.isfinite(alpha) and 0.0 < alpha <= 0.5):
+        raise _bad(console, f"--alpha must be within (0, 0.5], got {alpha!r}")
+    try:
+        vpath = parse_validation_path(path_text)
+        left_out = parse_exclude(exclude)
+        calibration = load_calibration(session, left_out)
+        if left_out:
+            check_exclude(left_out, [t.trial for t in calibration.state.completed])
+        description, toml, robot_path = _description(calibration, robot_file)
+    except (OdohilError, OSError) as exc:
+        raise _bad(console, str(exc)) from None
+    result = calibration.result
+    if not result.verdict.trusted and not force:
+        console.print(verdict_line(result.verdict), highlight=False)
+        console.print(
+            "[red]refused:[/red] the calibration's estimate is not trusted; nothing tested. "
+            "Fix its trials (or leave them out with --exclude), or pass --force."
+        )
+        raise typer.Exit(EXIT_UNTRUSTED)
+    folder: Path | None = None
+    try:
+        if vpath.kind == "file":
+            assert vpath.file is not None
+            _no_robot(vpath, port, measure)
+            measured = trials_of_file(vpath.file, description)
+            check_not_fitted(calibration.state.plan, [d.forward for d in measured.designs])
+        elif vpath.kind == "square":
+            assert vpath.path is not None
+            if port is not None or measure in (None, "fake"):
+                raise ParameterError(
+                    f"--path {path_text}: a square has in-place turns and the robot protocol "
+                    "drives forth-and-back designs only; give the square's measured poses "
+                    "with --measure FILE (no --port)"
+                )
+            measured = read_path_poses(Path(str(measure)), vpath.path, vpath.text)
+        else:
+            assert vpath.design is not None
+            check_not_fitted(calibration.state.plan, [vpath.design])
+            folder = out or default_folder(session, vpath)
+            measured = _drive_or_reload(
+                folder,
+                vpath,
+                trials,
+                measure,
+                port,
+                baud,
+                truth_socket,
+                seed,
+                description,
+                toml,
+                robot_path,
+                session,
+                console,
+            )
+        if trials is not None:
+            if trials > len(measured):
+                raise ParameterError(
+                    f"--trials {trials}: {measured.source} has {len(measured)} usable trials"
+                )
+            measured = measured.first(trials)
+        tested = check_trials(measured, result, alpha)
+    except typer.Exit:
+        raise
+    except (ParameterError, JournalError, MeasurementError) as exc:
+        raise _bad(console, str(exc)) from None
+    except OdohilError as exc:
+        console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+        raise typer.Exit(EXIT_ERROR) from None
+    data = _json(session, vpath, folder, measured, calibration, tested)
+    if as_json:
+        typer.echo(json.dumps(data))
+    else:
+        _print(data, tested, measured)
+    raise typer.Exit(EXIT_OK if tested.passed else EXIT_UNTRUSTED)
+
+
+def _no_robot(vpath: ValidationPath, port: str | None, measure: str | None) -> None:
+    if port is not None or measure is not None:
+        raise ParameterError(
+            f"--path {vpath.text} reads its trials from the file: --port and --measure "
+            "are not used (to drive, give --path forth-back:K,L)"
+        )
+
+
+def _drive_or_reload(
+    folder: Path,
+    vpath: ValidationPath,
+    trials: int | None,
+    measure: str | None,
+    port: str | None,
+    baud: int | None,
+    truth_socket: str | None,
+    seed: int,
+    description: RobotDescription,
+    toml: str,
+    robot_path: str,
+    session: Path,
+    console: Console,
+) -> ValidationTrials:
+    """Drive a forth-back validation session in ``folder``, or re-read a finished one."""
+    assert vpath.design is not None
+    if (folder / "journal.jsonl").is_file():
+        state = load_session(folder).state
+        settings = state.header.get("settings", {})
+        if settings.get("validation_path") != vpath.text or not state.finished:
+            raise JournalError(
+                f"{folder} holds {'another' if state.finished else 'an unfinished'} "
+                "validation session: give --out NEW_FOLDER"
+                + ("" if state.finished else f", or `odohil resume {folder}` first")
+            )
+        console.print(f"re-testing the trials journaled in {folder} (nothing driven)")
+        return trials_of_session(state, source=str(folder))
+    if trials is None:
+        raise ParameterError("--trials N is needed to drive a validation path (N in 1..10000)")
+    if measure is None:
+        raise ParameterError("--measure is needed to drive: `fake` or a trial file (CSV)")
+    plan = check_session_plan(Plan.of([(vpath.design, trials)]))
+    refuse_unredundant(description, plan, console)
+    check_floor(plan, description)
+    line = resolve_line(description, port, baud, robot_path or "the session's robot description")
+    kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
+    if trial_file:
+        check_trial_file(trial_file, description, plan)
+    if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
+        make_source(kind, description, None, seed, trial_file)  # says what is missing
+    settings = {
+        **line.to_json(),
+        "truth_socket": truth_socket,
+        "seed": seed,
+        "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
+        "validation_of": str(session.resolve()),
+        "validation_path": vpath.text,
+    }
+    journal, state = start_session(
+        folder, toml, plan, measure=kind, settings=settings, robot_path=robot_path
+    )
+    console.print(f"validation session {folder}")
+    console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
+    with session_exit_codes(console), journal, connect(line, truth_socket) as (robot, truth):
+        source = make_source(kind, description, truth, seed, trial_file)
+        observer = ProgressObserver(console, state)
+        engine = SessionEngine(
+            journal,
+            state,
+            robot,
+            source,
+            observer=observer,
+            connection=settings,
+            start_check=show_start(console),
+        )
+        observer.progress.start()
+        try:
+            final = engine.run()
+        except StopUnconfirmedError as exc:
+            observer.progress.stop()
+            report_unconfirmed(console, exc, engine.stop_outcome, folder)
+            raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
+        except KeyboardInterrupt as exc:
+            observer.progress.stop()
+            console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+            report_stop(console, engine.stop_outcome, folder)
+            raise typer.Exit(exit_for_signal(signal_of(exc))) from None
+        except OdohilError as exc:
+            observer.progress.stop()
+            console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+            report_stop(console, engine.stop_outcome, folder)
+            raise typer.Exit(EXIT_ERROR) from None
+        finally:
+            observer.progress.stop()
+    return trials_of_session(final, source=str(folder))
+
+
+def _json(
+    session: Path,
+    vpath: ValidationPath,
+    folder: Path | None,
+    measured: ValidationTrials,
+    calibration: Calibration,
+    tested: ValidationResult,
+) -> dict[str, Any]:
+    result = calibration.result
+    verdict = tested.to_json_dict()
+    verdict["parameter_uncertainty"] = (
+        "included (delta method, the estimate's covariance)"
+        if tested.parameter_uncertainty
+        else "left out: the estimate's covariance is not finite"
+    )
+    predictions = {}
+    for label, path in zip(measured.labels, measured.paths, strict=True):
+        if label not in predictions:
+            p = predict_path(path, result.params)
+            predictions[label] = {"mean": p.mean.tolist(), "cov": p.cov.tolist()}
+    return {
+        "verdict": verdict,
+        "path": vpath.text,
+        "session": str(session),
+        "validation_session": str(folder) if folder is not None else None,
+        "source": measured.source,
+        "n_trials": len(measured),
+        "left_out_ambiguous": list(measured.left_out),
+        "trials": [
+            {
+                "trial": n,
+                "path": label,
+                "pose_change": pose.tolist(),
+                "residual": r.tolist(),
+                "nees": float(e),
+            }
+            for n, label, pose, r, e in zip(
+                measured.numbers,
+                measured.labels,
+                measured.poses,
+                tested.residuals,
+                tested.trial_nees,
+                strict=True,
+            )
+        ],
+        "prediction": predictions,
+        "calibration": {
+            "verdict": result.verdict.to_json_dict(),
+            "parameters": {p.name: p.to_json_dict() for p in result.parameters},
+            "covariance": [list(row) for row in result.covariance]
+            if parameter_covariance(result) is not None
+            else None,
+        },
+    }
+
+
+def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationTrials) -> None:
+    out = Console(width=max(100, Console().width))
+    status = "PASS" if tested.passed else "FAIL"
+    failed = tested.failed()
+    text = f"validation: {status} ({tested.n_trials} trials of {data['path']}"
+    text += f"; rejected by {', '.join(failed)})" if failed else ")"
+    out.print(text, highlight=False)
+    table = Table(title=f"NEES chi-square tests, each at level {tested.alpha / 4:g}")
+    for column in ("test", "NEES", "dof", "p-value", "threshold", "result"):
+        table.add_column(column, justify="left" if column in ("test", "result") else "right")
+    for t in tested.tests:
+        table.add_row(
+            t.name,
+            f"{t.statistic:.4g}",
+            str(t.dof),
+            f"{t.p_value:.3g}",
+            f"{t.threshold:.4g}",
+            "pass" if t.passed else "[red]FAIL[/]",
+        )
+    out.print(table)
+    out.print(f"parameter uncertainty: {data['verdict']['parameter_uncertainty']}", highlight=False)
+    if measured.left_out:
+        out.print(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``validate`` to the ``odohil`` app."""
+    app.command("validate", help=_HELP)(validate)

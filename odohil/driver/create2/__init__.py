@@ -1,0 +1,1 @@
+"""The iRobot Create 2 backend: the OI link (``link``) and the ``Robot`` (``robot``)."""

@@ -1,0 +1,638 @@
+"""``Create2Robot``: the iRobot Create 2 behind the session's ``Robot`` protocol.
+
+What it sends (facts §3-§9 and the CHOICEs in protocols/create2/README.md):
+
+- connect: wait after opening (1 s, C17), resynchronise the command parser
+  (16 x ``00`` then Start, C10), stop any stream (``148 0``), then read the
+  mode: it must be Passive; a robot that reports 2 there has the +1 mode bug
+  (C7) and every later mode reading is corrected by it;
+- arm: Safe (``131``; Full ``132`` only when asked), checked by reading the
+  mode back; refused while a cliff, wheel drop or bump is reported; then the
+  stream of the driver's packets starts (``148``; or, with ``sampling="poll"``,
+  every reading is a Query List): bench/create2_leg_end.py found streaming
+  ends legs at least as tightly at 115200 and 19200 baud (BENCHMARKS.md);
+- drive: straight legs with Drive Direct (both wheels at the set speed),
+  in-place turns with the wheels at opposite speeds; each step ends on the
+  encoder counts 43/44 (deltas mod 65536, wrap-safe both ways) against
+  targets counted from the trial's start, so a leg that ends a count long
+  makes the next one a count short; near the end it slows to a crawl and
+  stops ahead of the target by the distance the wheels cover while a
+  reading is on its way;
+- every reading during a motion is checked: a cliff, a wheel drop, a bump or
+  a mode other than the armed one (the OI drops Safe to Passive on its own
+  safety stops) stops the robot and raises SafetyStopError; encoders that do
+  not move while the wheels are told to stop it with MotionError; any other
+  failure, and Ctrl-C, stop it before the exception goes on;
+- close: ``91 00 00 00 00``, ``96 00``, Start, Stop (C13): the OI ends Off.
+
+The OI has no command watchdog (§8): a drive command holds until replaced,
+so a host that dies mid-leg leaves the robot driving until a Safe-mode
+safety stop. DriveSettings.watchdog_s cannot be honoured; docs/create2.md
+says so.
+
+Odometry: each reading's encoder deltas become wheel travels with the
+description's counts per revolution and wheel diameter, and the pose
+advances along their arc with its wheel base (libcreate's update, without
+its wrap bug).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from types import TracebackType
+
+from odohil.driver.create2.link import (
+    Create2Link,
+    Reading,
+    Sampling,
+    open_port,
+)
+from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
+from odohil.errors import (
+    ConnectionFailedError,
+    MotionError,
+    OdohilError,
+    OdohilTimeoutError,
+    ParameterError,
+    SafetyError,
+    SafetyStopError,
+    StopUnconfirmedError,
+)
+from odohil.protocol.create2 import commands
+from odohil.protocol.create2.commands import MAX_SPEED_MM_S
+from odohil.protocol.create2.numbers import encoder_delta
+from odohil.protocol.create2.opcodes import BAUD_RATES, DEFAULT_BAUD, Mode
+from odohil.science.diff_drive import DiffDriveGeometry, odometry_step
+from odohil.science.paths import Design, Leg, Turn
+from odohil.science.robot_description import RobotSettings
+
+OPEN_WAIT_S = 1.0
+"""Wait after opening the port before the first byte, s (C17; libcreate)."""
+MODE_WAIT_S = 0.02
+"""Wait after a mode command, s (C17)."""
+CRAWL_MM_S = 40
+"""Wheel speed for the last part of a step, mm/s."""
+SLOW_HORIZON_S = 0.045
+"""A step slows to the crawl when it is this long (at its current rate) from its end:
+about two readings, so the crawl starts before the slow zone is crossed."""
+STOP_LEAD_S = 0.012
+"""Stop this long (at the current rate) before the target, plus the line time of
+a reading: the wheels turn on while a reading is on its way (its values up to
+15 ms old) and the stop goes out."""
+RATE_WINDOW_S = 0.1
+"""The wheels' rate is measured over this much time of readings, s..."""
+RATE_MIN_SPAN_S = 0.025
+"""...and over at least this much (before that, the previous rate holds), s."""
+STILL_READINGS = 2
+"""A robot is still when this many readings in a row show the same counts."""
+STALL_S = 0.6
+"""Encoders that have not moved for this long while the wheels should turn: a stall, s."""
+MAX_ATTEMPTS = 3
+"""A step that stopped short (a reading came late) is finished at the crawl, at most
+this many drives in all."""
+STEP_TOLERANCE_M = 0.01
+"""Largest distance (per wheel) a step may end from its target, m, ...
+"""
+STEP_TOLERANCE_FRACTION = 0.01
+"""...or this fraction of the step's wheel travel, when larger (a late stop on a
+busy host; the next step's target makes up for it)."""
+MIN_STEP_COUNTS = 10
+"""Shortest step the backend drives, counts (4.4 mm at the Create 2's constants)."""
+STOP_CONFIRM_TIMEOUT_S = 2.0
+
+
+def _wrap(angle: float) -> float:
+    """Angle reduced to (-pi, pi], rad."""
+    wrapped = math.remainder(angle, 2.0 * math.pi)
+    return math.pi if wrapped == -math.pi else wrapped
+
+
+@dataclass(frozen=True)
+class _Step:
+    """One step as wheel-count targets: signs of the wheels and counts to go."""
+
+    left_sign: int
+    right_sign: int
+    counts: float
+    speed_mm_s: int
+    what: str
+
+
+class Create2Robot:
+    """A connected Create 2 (context manager; :meth:`close` stops it).
+
+    Also the ``create2`` backend of the ``odohil.robots`` entry-point group
+    (pyproject.toml; odohil/session/robots.py): :meth:`open` and
+    :attr:`default_baud`.
+
+    Args:
+        link: the open link.
+        geometry: the description's counts per revolution, wheel diameter
+            and wheel base.
+        full_mode: drive in Full (no OI safety stops) instead of Safe.
+    """
+
+    name = "create2"
+    default_baud = DEFAULT_BAUD
+    baud_rates = BAUD_RATES
+
+    def __init__(
+        self,
+        link: Create2Link,
+        geometry: DiffDriveGeometry | None = None,
+        *,
+        full_mode: bool = False,
+    ) -> None:
+        self._link = link
+        self.geometry = geometry or DiffDriveGeometry()
+        self.full_mode = full_mode
+        self.mode_offset = 0
+        self._armed = False
+        self._commanded = False
+        self._last: Reading | None = None
+        self._pose = (0.0, 0.0, 0.0)
+        self._origin = (0.0, 0.0, 0.0)
+        self._counts_seen = 0
+
+    # ---- connection --------------------------------------------------------------
+    @classmethod
+    def connect(
+        cls,
+        url: str,
+        *,
+        baud: int = DEFAULT_BAUD,
+        geometry: DiffDriveGeometry | None = None,
+        full_mode: bool = False,
+        sampling: Sampling = "stream",
+        open_wait_s: float = OPEN_WAIT_S,
+    ) -> Create2Robot:
+        """Open ``url`` and bring the OI to Passive (module docstring).
+
+        Raises ConnectionFailedError when the port does not open or the robot
+        does not answer in Passive (asleep? BRC wiring, docs/create2.md).
+        """
+        link = Create2Link(open_port(url, baud), url, baud, sampling)
+        robot = cls(link, geometry, full_mode=full_mode)
+        try:
+            time.sleep(open_wait_s)
+            link.send(commands.RESYNC)
+            time.sleep(MODE_WAIT_S)
+            link.send(commands.stream([]))
+            time.sleep(MODE_WAIT_S)
+            raw = link.ask(commands.sensors(35), 1)[0]
+            if raw not in (Mode.PASSIVE, Mode.PASSIVE + 1):
+                raise ConnectionFailedError(
+                    f"after Start the OI must be Passive (1), it reports mode {raw}"
+                )
+            robot.mode_offset = raw - Mode.PASSIVE
+            robot._last = link.reading()
+        except OdohilError as exc:
+            link.close()
+            if isinstance(exc, ConnectionFailedError):
+                raise
+            raise ConnectionFailedError(
+                f"the Create 2 on {url} does not answer after Start: {exc} "
+                "(is it awake? see docs/create2.md, wiring)"
+            ) from exc
+        return robot
+
+    @classmethod
+    def open(
+        cls, url: str, baud: int | None = None, robot: RobotSettings | None = None
+    ) -> Create2Robot:
+        """The backend entry: connect at ``baud`` (115200 when None) with the
+        description's ``[robot]`` constants and mode (defaults: the Create 2's)."""
+        settings = robot or RobotSettings(protocol="create2")
+        return cls.connect(
+            url,
+            baud=cls.default_baud if baud is None else baud,
+            geometry=settings.drive,
+            full_mode=settings.full_mode,
+        )
+
+    @property
+    def port(self) -> str:
+        """The port URL."""
+        return self._link.url
+
+    @property
+    def transport(self) -> object:
+        """The open pyserial port (a ``fakecreate2://`` port carries the fake's truth)."""
+        return self._link.port
+
+    @property
+    def link(self) -> Create2Link:
+        """The underlying link (statistics, tests)."""
+        return self._link
+
+    def __enter__(self) -> Create2Robot:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop, pause any stream, leave the OI Off (C13), close. Idempotent."""
+        if self._link.closed:
+            return
+        with contextlib.suppress(OdohilError):
+            self._link.send(
+                commands.drive_direct(0, 0)
+                + commands.pause_resume(False)
+                + commands.start()
+                + commands.stop_oi()
+            )
+            self._link.drain()
+        self._commanded = False
+        self._link.close()
+
+    # ---- readings and odometry ----------------------------------------------------
+    def _read(self) -> Reading:
+        reading = self._link.reading()
+        previous = self._last
+        if previous is not None:
+            dl = encoder_delta(previous.left_counts, reading.left_counts)
+            dr = encoder_delta(previous.right_counts, reading.right_counts)
+            left_m, right_m = self.geometry.wheel_travel(dl, dr)
+            self._pose = odometry_step(self._pose, left_m, right_m, self.geometry.wheel_base_m)
+        self._last = reading
+        return reading
+
+    def _sample(self, reading: Reading, moved: bool) -> OdometrySample:
+        ox, oy, oth = self._origin
+        x, y, th = self._pose
+        c, s = math.cos(oth), math.sin(oth)
+        dx, dy = x - ox, y - oy
+        return OdometrySample(
+            host_time_s=reading.host_time_s,
+            robot_time_s=reading.host_time_s,
+            x_m=c * dx + s * dy,
+            y_m=-s * dx + c * dy,
+            theta_rad=_wrap(th - oth),
+            moving=moved or self._commanded,
+            wire=(
+                f"L={reading.left_counts} R={reading.right_counts} counts, "
+                f"mode {reading.mode_raw - self.mode_offset}"
+            ),
+        )
+
+    def _reading_sample(self) -> tuple[Reading, OdometrySample]:
+        before = self._last
+        reading = self._read()
+        moved = before is not None and (
+            before.left_counts != reading.left_counts or before.right_counts != reading.right_counts
+        )
+        return reading, self._sample(reading, moved)
+
+    def odometry(self) -> OdometrySample:
+        """Read the encoders now; the odometry pose."""
+        return self._guarded(lambda: self._reading_sample()[1])
+
+    def zero(self, pose: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> OdometrySample:
+        """The odometry reads ``pose`` (x m, y m, heading rad) here (host side:
+        the OI's encoders cannot be zeroed without Reset)."""
+        sample = self.odometry()
+        px, py, pth = pose
+        qx, qy, qth = self._pose
+        oth = qth - pth
+        c, s = math.cos(oth), math.sin(oth)
+        self._origin = (qx - (c * px - s * py), qy - (s * px + c * py), oth)
+        return self._sample(self._last or self._read(), sample.moving)
+
+    # ---- modes and safety ------------------------------------------------------------
+    @property
+    def _drive_mode(self) -> Mode:
+        return Mode.FULL if self.full_mode else Mode.SAFE
+
+    def mode(self) -> Mode:
+        """The OI mode now (packet 35, corrected for the +1 bug)."""
+        reading = self._read()
+        return Mode(min(3, max(0, reading.mode_raw - self.mode_offset)))
+
+    def arm(self, settings: DriveSettings) -> OdometrySample:
+        """Safe (or Full when the description asks), checked; refused on hazards."""
+        self._speeds(settings)
+        opcode = commands.full() if self.full_mode else commands.safe()
+        self._link.send(opcode)
+        time.sleep(MODE_WAIT_S)
+        reading, sample = self._reading_sample()
+        mode = reading.mode_raw - self.mode_offset
+        if mode != self._drive_mode:
+            raise SafetyError(
+                f"the OI did not enter {self._drive_mode.name} (it reports mode {mode}); "
+                "nothing moved"
+            )
+        hazards = reading.hazards()
+        if hazards:
+            self._link.send(commands.start())  # back to Passive: nothing may move
+            raise SafetyStopError(
+                f"the robot reports {', '.join(hazards)}: clear it before driving; "
+                "nothing moved, OI back in Passive"
+            )
+        self._armed = True
+        if self._link.sampling == "stream" and not self._link.streaming:
+            self._link.start_stream()
+        return sample
+
+    def _check(self, reading: Reading) -> None:
+        problems = reading.hazards()
+        mode = reading.mode_raw - self.mode_offset
+        if mode != self._drive_mode:
+            name = Mode(mode).name if 0 <= mode <= 3 else str(mode)
+            problems.append(f"OI mode {name} instead of {self._drive_mode.name}")
+        if problems:
+            self.stop()
+            self._armed = False
+            raise SafetyStopError(
+                f"{', '.join(problems)} during the motion; robot told to stop at "
+                f"{self._sample(reading, True).pose_text()}"
+            )
+
+    # ---- stopping ---------------------------------------------------------------------------
+    def stop(self) -> None:
+        """Drive Direct 0, 0 now, without waiting (best effort)."""
+        self._commanded = False
+        with contextlib.suppress(OdohilError):
+            self._link.send(commands.drive_direct(0, 0))
+
+    def _wait_still(self, timeout_s: float) -> OdometrySample:
+        deadline = time.monotonic() + timeout_s
+        still = 0
+        problem = "no reading"
+        while True:
+            try:
+                sample = self._reading_sample()[1]
+            except OdohilError as exc:
+                problem = str(exc)
+                if self._link.closed or time.monotonic() >= deadline:
+                    break
+                continue
+            still = 0 if sample.moving else still + 1
+            if still >= STILL_READINGS - 1 and not sample.moving:
+                return sample
+            problem = f"still moving at {sample.pose_text()}"
+            if time.monotonic() >= deadline:
+                break
+        raise StopUnconfirmedError(
+            f"the robot did not report that it stopped within {timeout_s:g} s: {problem}"
+        )
+
+    def stop_and_confirm(self, timeout_s: float = STOP_CONFIRM_TIMEOUT_S) -> OdometrySample:
+        """Stop, then read until the counts stand still; StopUnconfirmedError if not."""
+        if not math.isfinite(timeout_s) or timeout_s < 0:
+            raise ParameterError(f"timeout must be finite and >= 0 s, got {timeout_s!r}")
+        if self._link.closed:
+            raise StopUnconfirmedError("the robot did not report that it stopped: line closed")
+        self.stop()
+        return self._wait_still(timeout_s)
+
+    def settle(self, timeout_s: float) -> OdometrySample:
+        """Stop and wait until the encoders stand still, within ``timeout_s``."""
+        return self.stop_and_confirm(timeout_s)
+
+    def _guarded(self, action: Callable[[], OdometrySample]) -> OdometrySample:
+        try:
+            return action()
+        except BaseException:
+            if self._commanded:
+                self.stop()
+            raise
+
+    # ---- driving -------------------------------------------------------------------------------
+    def _speeds(self, settings: DriveSettings) -> tuple[int, int]:
+        """Leg and turn wheel speeds, mm/s, checked."""
+        leg = round(settings.speed_m_s * 1000.0)
+        turn = round(settings.turn_rate_rad_s * self.geometry.wheel_base_m / 2.0 * 1000.0)
+        limit = MAX_SPEED_MM_S / 1000.0
+        if not (math.isfinite(settings.speed_m_s) and 1 <= leg <= MAX_SPEED_MM_S):
+            raise ParameterError(
+                f"speed_m_s must be in [0.001, {limit:g}] m/s for the Create 2, "
+                f"got {settings.speed_m_s!r}"
+            )
+        if not (math.isfinite(settings.turn_rate_rad_s) and 1 <= turn <= MAX_SPEED_MM_S):
+            most = limit / (self.geometry.wheel_base_m / 2.0)
+            raise ParameterError(
+                f"turn_rate_rad_s must give wheel speeds of 1..{MAX_SPEED_MM_S} mm/s: "
+                f"(0, {most:.2f}] rad/s at wheel base {self.geometry.wheel_base_m:g} m, "
+                f"got {settings.turn_rate_rad_s!r}"
+            )
+        if not (math.isfinite(settings.step_timeout_s) and settings.step_timeout_s > 0):
+            raise ParameterError(
+                f"step_timeout_s must be positive, got {settings.step_timeout_s!r}"
+            )
+        return leg, turn
+
+    def _steps(self, design: Design, settings: DriveSettings) -> list[_Step]:
+        leg_speed, turn_speed = self._speeds(settings)
+        steps: list[_Step] = []
+        for step in design.path().steps:
+            if isinstance(step, Leg):
+                sign = 1 if step.length_m > 0 else -1
+                counts = self.geometry.counts_for(abs(step.length_m))
+                steps.append(_Step(sign, sign, counts, leg_speed, f"leg {step.length_m:g} m"))
+            else:
+                assert isinstance(step, Turn)
+                sign = 1 if step.angle_rad > 0 else -1
+                arc = abs(step.angle_rad) * self.geometry.wheel_base_m / 2.0
+                counts = self.geometry.counts_for(arc)
+                steps.append(_Step(-sign, sign, counts, turn_speed, f"turn {step.angle_rad:g} rad"))
+        for planned in steps:
+            if planned.counts < MIN_STEP_COUNTS:
+                raise ParameterError(
+                    f"{planned.what} is {planned.counts:.1f} encoder counts; at least "
+                    f"{MIN_STEP_COUNTS} (nothing sent)"
+                )
+        return steps
+
+    def drive(
+        self,
+        design: Design,
+        settings: DriveSettings,
+        on_sample: Callable[[OdometrySample], None] | None = None,
+    ) -> TrialMotion:
+        """Drive one trial of ``design`` (module docstring); stops the robot
+        before raising on any failure."""
+        steps = self._steps(design, settings)
+        if not self._armed:
+            raise SafetyError("arm() the robot before driving: it is not in Safe or Full")
+        samples: list[OdometrySample] = []
+
+        def record(sample: OdometrySample) -> None:
+            samples.append(sample)
+            if on_sample is not None:
+                on_sample(sample)
+
+        with self._motion():
+            started = time.monotonic()
+            reading, start = self._reading_sample()
+            self._check(reading)
+            record(start)
+            travelled = [0.0, 0.0]  # signed counts since the trial's start
+            target = [0.0, 0.0]
+            for step in steps:
+                target[0] += step.left_sign * step.counts
+                target[1] += step.right_sign * step.counts
+                self._drive_step(step, target, travelled, settings, record)
+            end = samples[-1]
+        return TrialMotion(
+            design=design,
+            samples=tuple(samples),
+            start=start,
+            end=end,
+            end_pose=_relative(start, end),
+            started_s=started,
+            ended_s=time.monotonic(),
+        )
+
+    @contextlib.contextmanager
+    def _motion(self) -> Iterator[None]:
+        try:
+            yield
+        except BaseException:
+            self.stop()
+            raise
+
+    def _drive_step(
+        self,
+        step: _Step,
+        target: list[float],
+        travelled: list[float],
+        settings: DriveSettings,
+        record: Callable[[OdometrySample], None],
+    ) -> None:
+        signs = (step.left_sign, step.right_sign)
+
+        def remaining() -> float:
+            return sum(s * (t - d) for s, t, d in zip(signs, target, travelled, strict=True)) / 2
+
+        crawl = min(step.speed_mm_s, CRAWL_MM_S)
+        deadline = time.monotonic() + settings.step_timeout_s
+        tolerance = max(
+            self.geometry.counts_for(STEP_TOLERANCE_M), STEP_TOLERANCE_FRACTION * step.counts
+        )
+        speed = step.speed_mm_s
+        for _attempt in range(MAX_ATTEMPTS):
+            last = self._run_to_target(step, speed, crawl, remaining, travelled, deadline, record)
+            # wait until the wheels stand still, then check where the step ended
+            still = 0
+            while still < STILL_READINGS - 1:
+                previous = last
+                reading, sample = self._reading_sample()
+                last = reading
+                record(sample)
+                self._check(reading)
+                self._track(previous, reading, travelled)
+                moved = (previous.left_counts, previous.right_counts) != (
+                    reading.left_counts,
+                    reading.right_counts,
+                )
+                still = 0 if moved else still + 1
+                if time.monotonic() > deadline:
+                    raise StopUnconfirmedError(f"{step.what}: the wheels still turn after the stop")
+            if remaining() <= tolerance:
+                break
+            speed = crawl  # stopped short (a late reading): finish at the crawl
+        off = [t - d for t, d in zip(target, travelled, strict=True)]
+        if max(abs(o) for o in off) > tolerance:
+            raise MotionError(
+                f"{step.what} ended {off[0]:+.0f} (left), {off[1]:+.0f} (right) counts from "
+                f"its target (tolerance {tolerance:.0f} counts, "
+                f"{tolerance * self.geometry.metres_per_count:.3g} m); "
+                "robot stopped"
+            )
+
+    def _run_to_target(
+        self,
+        step: _Step,
+        speed: int,
+        crawl: int,
+        remaining: Callable[[], float],
+        travelled: list[float],
+        deadline: float,
+        record: Callable[[OdometrySample], None],
+    ) -> Reading:
+        """Drive the step's wheels until the target is (about to be) reached,
+        then stop; the last reading."""
+        last = self._last
+        assert last is not None
+        rate = 0.0  # counts per second along the step, measured
+        history: list[tuple[float, float]] = []  # (robot time, -remaining) at this speed
+        lead_s = STOP_LEAD_S + self._link.transfer_s
+        moved_at = time.monotonic()
+        if remaining() > 0:
+            self._command(step, speed)
+        while self._commanded:
+            previous = last
+            reading, sample = self._reading_sample()
+            last = reading
+            record(sample)
+            self._check(reading)
+            self._track(previous, reading, travelled)
+            now = reading.host_time_s
+            if (previous.left_counts, previous.right_counts) != (
+                reading.left_counts,
+                reading.right_counts,
+            ):
+                moved_at = now
+            history.append((reading.robot_time_s, -remaining()))
+            rate = _rate(history, rate)
+            left_to_go = remaining()
+            if left_to_go <= rate * lead_s or left_to_go <= 0:
+                self.stop()
+                break
+            if speed > crawl and left_to_go <= rate * SLOW_HORIZON_S:
+                self._command(step, crawl)
+                history.clear()
+                rate *= crawl / speed
+                speed = crawl
+            if now - moved_at > STALL_S:
+                self.stop()
+                raise MotionError(
+                    f"{step.what}: the encoders have not moved for {STALL_S:g} s while the "
+                    f"wheels were told to turn (stalled or held?); robot told to stop at "
+                    f"{sample.pose_text()}"
+                )
+            if now > deadline:
+                self.stop()
+                raise OdohilTimeoutError(
+                    f"{step.what} not done within its step timeout; robot "
+                    f"told to stop at {sample.pose_text()}"
+                )
+        return last
+
+    def _track(self, previous: Reading, reading: Reading, travelled: list[float]) -> None:
+        travelled[0] += encoder_delta(previous.left_counts, reading.left_counts)
+        travelled[1] += encoder_delta(previous.right_counts, reading.right_counts)
+
+    def _command(self, step: _Step, speed: int) -> None:
+        self._commanded = True
+        self._link.send(commands.drive_direct(step.right_sign * speed, step.left_sign * speed))
+
+
+def _rate(history: list[tuple[float, float]], previous: float) -> float:
+    """Counts per second over the readings of the last :data:`RATE_WINDOW_S`
+    (readings can arrive bunched: one interval alone says little); the
+    previous rate while they span less than :data:`RATE_MIN_SPAN_S`."""
+    now = history[-1][0]
+    while len(history) > 2 and now - history[1][0] >= RATE_WINDOW_S:
+        del history[0]
+    span = now - history[0][0]
+    if span < RATE_MIN_SPAN_S:
+        return previous
+    return max(0.0, (history[-1][1] - history[0][1]) / span)
+
+
+def _relative(start: OdometrySample, end: OdometrySample) -> tuple[float, float, float]:
+    """``end`` in the frame of ``start``: (x m, y m, heading change rad in (-pi, pi])."""
+    dx, dy = end.x_m - start.x_m, end.y_m - start.y_m
+    c, s = math.cos(start.theta_rad), math.sin(start.theta_rad)
+    return (c * dx + s * dy, -s * dx + c * dy, _wrap(end.theta_rad - start.theta_rad))

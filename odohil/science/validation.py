@@ -1,0 +1,360 @@
+"""Does the calibrated model predict a path it was not fitted on?
+
+Validation trials of known encoder paths (forth-and-back designs, squares, any
+:class:`~odohil.science.paths.EncoderPath`) are tested against the model's
+prediction at the estimated parameters:
+
+- trial i's pose change p_i = (x m, y m, Delta rad) is predicted with mean
+  m_i = E[p | theta-hat] and covariance S_i = C_i(theta-hat) + R_i, the model's
+  exact covariance (:func:`~odohil.science.moments.pose_moments`) plus the
+  measurement covariance R_i of the measured pose;
+- the estimate's own uncertainty (covariance Sigma of theta-hat, 4 x 4, SI)
+  enters by the delta method through the mean: m_i moves by J_i e with
+  J_i = d m_i / d theta (3 x 4, central differences) and e ~ N(0, Sigma). The
+  error e is the same for every trial, so the trials are not independent:
+  the stacked residual r = (r_1, ..., r_n) has covariance
+  V = blockdiag(S_i) + J Sigma J^T, J the stacked J_i;
+- the statistic is the normalised estimation error squared over the whole
+  set, NEES = r^T V^-1 r, chi-square with 3n degrees of freedom when the
+  model is right; per axis a (x, y, theta) the same with the n residuals of
+  that axis (dof n). V^-1 is applied by the Woodbury identity with
+  Sigma = L L^T, so the cost is O(n).
+
+The test is one-sided (upper tail): a NEES too large means the robot strays
+further than the model says, which is what "confidently wrong" means; a NEES
+too small only means the model is cautious. Four tests (overall, x, y,
+theta) each at level alpha/4 (Bonferroni): the set fails when any one
+rejects, so the false-rejection rate of the verdict is at most alpha.
+
+What the delta method leaves out: the dependence of C_i on theta-hat (an
+error in K_theta or K_rho scales the predicted spread rather than moving the
+mean). It is second order for the mean but not for the spread: with many
+validation trials the test becomes a test of K_theta and K_rho themselves,
+so a calibration whose K_theta is off by its own standard error can be
+rejected. docs/validation.md says how many trials keep the test honest.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from odohil.errors import ParameterError
+from odohil.science.moments import pose_moments
+from odohil.science.parameters import ErrorParameters
+from odohil.science.paths import EncoderPath, FloatArray
+
+AXES = ("x", "y", "theta")
+"""The pose-change components, in order: x m, y m, Delta rad."""
+DEFAULT_ALPHA = 0.01
+"""Default false-rejection level of the whole verdict."""
+N_TESTS = 4
+"""Overall plus one per axis; each is run at alpha / N_TESTS."""
+
+_RELATIVE_STEP = 1e-4
+_ABSOLUTE_STEPS = (1e-7, 1e-7, 1e-10, 1e-10)
+"""Smallest central-difference steps per parameter (E_R rad/m, E_T, K_theta
+rad^2/m, K_rho m): the mean is smooth in each."""
+
+
+@dataclass(frozen=True)
+class PathPrediction:
+    """The model's prediction of one trial of a path, SI.
+
+    Attributes:
+        mean: (3,) expected (x m, y m, Delta rad).
+        cov: (3, 3) the model's covariance (without measurement noise).
+        jacobian: (3, 4) d mean / d (E_R, E_T, K_theta, K_rho).
+    """
+
+    mean: FloatArray
+    cov: FloatArray
+    jacobian: FloatArray
+
+
+def predict_path(path: EncoderPath, params: ErrorParameters) -> PathPrediction:
+    """Mean, covariance and the mean's Jacobian in the parameters of one trial."""
+    moments = pose_moments(path, params)
+    values = np.array(params.as_tuple(), dtype=np.float64)
+    jacobian = np.zeros((3, 4))
+    for j in range(4):
+        step = max(_ABSOLUTE_STEPS[j], _RELATIVE_STEP * abs(values[j]))
+        low, high = values.copy(), values.copy()
+        high[j] += step
+        low[j] -= step
+        if j >= 2 and low[j] < 0:  # variance rates stay >= 0: one-sided difference
+            low[j] = values[j]
+        width = high[j] - low[j]
+        up = pose_moments(path, ErrorParameters(*high)).mean
+        down = pose_moments(path, ErrorParameters(*low)).mean
+        jacobian[:, j] = (up - down) / width
+    return PathPrediction(mean=moments.mean, cov=moments.cov, jacobian=jacobian)
+
+
+@dataclass(frozen=True)
+class ChiSquareTest:
+    """One upper-tail chi-square test.
+
+    Attributes:
+        name: ``overall``, ``x``, ``y`` or ``theta``.
+        statistic: the NEES (squared Mahalanobis distance of the stacked residuals).
+        dof: degrees of freedom (3n overall, n per axis).
+        p_value: chi-square(dof) upper-tail probability of ``statistic``.
+        level: the level it is run at (alpha / 4).
+        threshold: the statistic above which it rejects (the 1 - level quantile).
+        passed: statistic <= threshold.
+    """
+
+    name: str
+    statistic: float
+    dof: int
+    p_value: float
+    level: float
+    threshold: float
+    passed: bool
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """{"nees", "dof", "p_value", "level", "threshold", "passed"}."""
+        return {
+            "nees": self.statistic,
+            "dof": self.dof,
+            "p_value": self.p_value,
+            "level": self.level,
+            "threshold": self.threshold,
+            "passed": self.passed,
+        }
+
+
+@dataclass(frozen=True)
+class ValidationResult:
+    """The NEES tests of one validation set.
+
+    Attributes:
+        passed: no test rejects.
+        alpha: the verdict's false-rejection level (each test at alpha / 4).
+        n_trials: trials tested.
+        overall: the joint test of all 3n residuals.
+        axes: the per-axis tests, x, y, theta.
+        residuals: (n, 3) measured minus predicted mean (heading wrapped to
+            (-pi, pi]).
+        trial_nees: (n,) each trial's own squared distance r_i^T V_ii^-1 r_i
+            (chi-square(3) alone; for pointing at a trial, not for the verdict).
+        parameter_uncertainty: whether the estimate's covariance was included.
+    """
+
+    passed: bool
+    alpha: float
+    n_trials: int
+    overall: ChiSquareTest
+    axes: tuple[ChiSquareTest, ...]
+    residuals: FloatArray
+    trial_nees: FloatArray
+    parameter_uncertainty: bool
+
+    @property
+    def tests(self) -> tuple[ChiSquareTest, ...]:
+        """Overall first, then x, y, theta."""
+        return (self.overall, *self.axes)
+
+    def failed(self) -> tuple[str, ...]:
+        """Names of the tests that reject."""
+        return tuple(t.name for t in self.tests if not t.passed)
+
+    def to_json_dict(self) -> dict[str, Any]:
+        """{"status", "alpha", "n_trials", "overall", "axes", "failed",
+        "parameter_uncertainty", "trial_nees"} (SI)."""
+        return {
+            "status": "pass" if self.passed else "fail",
+            "alpha": self.alpha,
+            "n_trials": self.n_trials,
+            "overall": self.overall.to_json_dict(),
+            "axes": {t.name: t.to_json_dict() for t in self.axes},
+            "failed": list(self.failed()),
+            "parameter_uncertainty": self.parameter_uncertainty,
+            "trial_nees": [float(v) for v in self.trial_nees],
+        }
+
+
+def _wrap(angles: FloatArray) -> FloatArray:
+    wrapped: FloatArray = np.remainder(angles + math.pi, 2.0 * math.pi) - math.pi
+    return wrapped
+
+
+def _sqrt_psd(matrix: FloatArray) -> FloatArray:
+    """L with L L^T = matrix (symmetric PSD; tiny negative eigenvalues clipped)."""
+    sym = 0.5 * (matrix + matrix.T)
+    values, vectors = np.linalg.eigh(sym)
+    root: FloatArray = vectors * np.sqrt(np.clip(values, 0.0, None))
+    return root
+
+
+def _woodbury_nees(
+    residuals: FloatArray, blocks: FloatArray, loadings: FloatArray
+) -> tuple[float, FloatArray]:
+    """r^T (blockdiag(S_i) + U U^T)^-1 r for r = (r_1..r_n), U = (U_1; ..; U_n).
+
+    residuals (n, d), blocks (n, d, d) positive definite, loadings (n, d, q).
+    Also returns each r_i^T (S_i + U_i U_i^T)^-1 r_i.
+    """
+    try:
+        chol = np.linalg.cholesky(blocks)
+    except np.linalg.LinAlgError as exc:
+        raise ParameterError(
+            "a predicted covariance is not positive definite: the model predicts no "
+            "spread on some axis and no measurement covariance was given"
+        ) from exc
+    white_r = np.linalg.solve(chol, residuals[..., None])[..., 0]  # L_i^-1 r_i
+    white_u = np.linalg.solve(chol, loadings)  # L_i^-1 U_i
+    plain = float(np.sum(white_r**2))
+    q = loadings.shape[2]
+    b = np.einsum("nij,ni->j", white_u, white_r)  # U^T D^-1 r
+    inner = np.eye(q) + np.einsum("nij,nik->jk", white_u, white_u)  # I + U^T D^-1 U
+    nees = plain - float(b @ np.linalg.solve(inner, b))
+    full = blocks + np.einsum("nij,nkj->nik", loadings, loadings)
+    per_trial = np.einsum(
+        "ni,ni->n", residuals, np.linalg.solve(full, residuals[..., None])[..., 0]
+    )
+    return nees, per_trial
+
+
+def _test(name: str, statistic: float, dof: int, level: float) -> ChiSquareTest:
+    threshold = float(stats.chi2.isf(level, dof))
+    return ChiSquareTest(
+        name=name,
+        statistic=statistic,
+        dof=dof,
+        p_value=float(stats.chi2.sf(statistic, dof)),
+        level=level,
+        threshold=threshold,
+        passed=statistic <= threshold,
+    )
+
+
+def validation_test(
+    poses: FloatArray,
+    predictions: Sequence[PathPrediction],
+    measurement_covs: FloatArray | None = None,
+    parameter_cov: FloatArray | None = None,
+    alpha: float = DEFAULT_ALPHA,
+) -> ValidationResult:
+    """Test measured pose changes against the model's predictions (module docs).
+
+    Args:
+        poses: (n, 3) measured (x m, y m, Delta rad), n >= 1.
+        predictions: one per trial (trials of one path may share one).
+        measurement_covs: (n, 3, 3) measurement covariances, or None (exact poses).
+        parameter_cov: (4, 4) covariance of the estimate (SI), or None to leave
+            the parameter uncertainty out.
+        alpha: the verdict's false-rejection level, in (0, 0.5].
+
+    Raises:
+        ParameterError: shapes disagree, non-finite input, alpha out of range,
+            or a predicted covariance is singular.
+    """
+    poses = np.asarray(poses, dtype=np.float64)
+    n = poses.shape[0] if poses.ndim == 2 else 0
+    if poses.ndim != 2 or poses.shape[1] != 3 or n < 1:
+        raise ParameterError(f"poses must have shape (n, 3) with n >= 1, got {poses.shape}")
+    if len(predictions) != n:
+        raise ParameterError(f"{n} poses but {len(predictions)} predictions")
+    if not (math.isfinite(alpha) and 0.0 < alpha <= 0.5):
+        raise ParameterError(f"alpha must be in (0, 0.5], got {alpha!r}")
+    if not np.all(np.isfinite(poses)):
+        raise ParameterError("poses must be finite")
+    means = np.stack([p.mean for p in predictions])
+    blocks = np.stack([p.cov for p in predictions])
+    jacobians = np.stack([p.jacobian for p in predictions])
+    if measurement_covs is not None:
+        measurement_covs = np.asarray(measurement_covs, dtype=np.float64)
+        if measurement_covs.shape != (n, 3, 3) or not np.all(np.isfinite(measurement_covs)):
+            raise ParameterError(
+                f"measurement covariances must be finite, shape ({n}, 3, 3), "
+                f"got {measurement_covs.shape}"
+            )
+        blocks = blocks + 0.5 * (measurement_covs + measurement_covs.transpose(0, 2, 1))
+    if parameter_cov is not None:
+        parameter_cov = np.asarray(parameter_cov, dtype=np.float64)
+        if parameter_cov.shape != (4, 4) or not np.all(np.isfinite(parameter_cov)):
+            raise ParameterError(
+                "the estimate's covariance must be a finite 4 x 4 matrix (a parameter "
+                "the data do not determine has no finite covariance)"
+            )
+        loadings = jacobians @ _sqrt_psd(parameter_cov)
+    else:
+        loadings = np.zeros((n, 3, 4))
+    residuals = poses - means
+    residuals[:, 2] = _wrap(residuals[:, 2])
+    level = alpha / N_TESTS
+    overall, trial_nees = _woodbury_nees(residuals, blocks, loadings)
+    tests = [_test("overall", overall, 3 * n, level)]
+    for a, name in enumerate(AXES):
+        axis_nees, _ = _woodbury_nees(
+            residuals[:, a : a + 1], blocks[:, a : a + 1, a : a + 1], loadings[:, a : a + 1, :]
+        )
+        tests.append(_test(name, axis_nees, n, level))
+    return ValidationResult(
+        passed=all(t.passed for t in tests),
+        alpha=alpha,
+        n_trials=n,
+        overall=tests[0],
+        axes=tuple(tests[1:]),
+        residuals=residuals,
+        trial_nees=trial_nees,
+        parameter_uncertainty=parameter_cov is not None,
+    )
+
+
+@dataclass(frozen=True)
+class EllipseData:
+    """What a plot of validation trials against the prediction needs, SI.
+
+    Attributes:
+        mean: (2,) predicted mean end point (x m, y m).
+        cov: (2, 2) predicted covariance of the end point (model + measurement
+            + parameter terms of the first trial).
+        points: (n, 2) measured end points (x m, y m).
+        level: probability mass inside the ellipse drawn (e.g. 0.95).
+        axes_m: the ellipse's semi-axes, metres (major first).
+        angle_rad: direction of the major axis.
+    """
+
+    mean: FloatArray
+    cov: FloatArray
+    points: FloatArray
+    level: float
+    axes_m: tuple[float, float]
+    angle_rad: float
+
+
+def ellipse_data(
+    poses: FloatArray,
+    prediction: PathPrediction,
+    measurement_cov: FloatArray | None = None,
+    parameter_cov: FloatArray | None = None,
+    level: float = 0.95,
+) -> EllipseData:
+    """The predicted end-point ellipse of one path (at probability ``level``)
+    and the measured end points, for the report's plot."""
+    cov = prediction.cov[:2, :2].copy()
+    if measurement_cov is not None:
+        cov = cov + np.asarray(measurement_cov, dtype=np.float64)[:2, :2]
+    if parameter_cov is not None:
+        j = prediction.jacobian[:2]
+        cov = cov + j @ np.asarray(parameter_cov, dtype=np.float64) @ j.T
+    values, vectors = np.linalg.eigh(0.5 * (cov + cov.T))
+    scale = float(stats.chi2.ppf(level, 2))
+    major, minor = (math.sqrt(max(float(v), 0.0) * scale) for v in values[::-1])
+    angle = math.atan2(float(vectors[1, -1]), float(vectors[0, -1]))
+    return EllipseData(
+        mean=prediction.mean[:2].copy(),
+        cov=cov,
+        points=np.asarray(poses, dtype=np.float64)[:, :2].copy(),
+        level=level,
+        axes_m=(major, minor),
+        angle_rad=angle,
+    )

@@ -1,0 +1,305 @@
+"""A motion-capture pose stream over tcp: newline-delimited JSON world poses.
+
+The sender (a motion-capture system's bridge, a total station, a ROS node)
+listens on ``tcp://HOST:PORT``; odohil connects and reads lines, each a JSON
+object ``{"t": s, "x": m, "y": m, "theta": rad}`` in the capture system's
+world frame (other keys are ignored). See docs/motion-capture.md.
+
+Clocks: every pose is stamped on arrival with this computer's monotonic clock
+(``received_s``, :func:`time.monotonic`); staleness and the still window are
+judged on that clock. The sender's ``t`` is its own clock, never compared
+with ours: it only has to increase from one pose to the next (a repeated or
+older ``t`` is a replayed or reordered frame and is dropped and counted).
+
+A line that is not such an object (not JSON, a missing or non-finite member,
+longer than :data:`MAX_LINE_BYTES`) is counted with its reason and dropped;
+it never stops the stream.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import socket
+import threading
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Any
+from urllib.parse import urlsplit
+
+from odohil.errors import ConnectionFailedError, ParameterError
+
+MAX_LINE_BYTES = 4096
+"""Longest line accepted; a longer one is counted malformed and skipped."""
+BUFFER_S = 10.0
+"""How many seconds of poses the client keeps (host clock)."""
+DEFAULT_CONNECT_TIMEOUT_S = 5.0
+_POLL_S = 0.1
+"""How often the reader thread checks whether it should stop, s."""
+
+
+@dataclass(frozen=True)
+class StreamedPose:
+    """One pose as received.
+
+    Attributes:
+        received_s: this computer's monotonic clock at arrival, s.
+        t_s: the sender's time stamp, s (its own clock).
+        x_m, y_m: position in the capture system's world frame, m.
+        theta_rad: heading in that frame, rad (as sent).
+    """
+
+    received_s: float
+    t_s: float
+    x_m: float
+    y_m: float
+    theta_rad: float
+
+
+@dataclass(frozen=True)
+class StreamStatus:
+    """What the reader thread has seen so far.
+
+    Attributes:
+        n_poses: poses accepted since connecting.
+        n_malformed: lines dropped (bad JSON, members, order or length).
+        last_malformed: the reason for the last dropped line ("" if none).
+        last_received_s: monotonic arrival time of the newest pose (None: none yet).
+        connected_s: monotonic time of the connection.
+        closed: why the connection ended ("" while it is open).
+    """
+
+    n_poses: int
+    n_malformed: int
+    last_malformed: str
+    last_received_s: float | None
+    connected_s: float
+    closed: str
+
+
+def parse_tcp_url(url: str) -> tuple[str, int]:
+    """``tcp://HOST:PORT`` as (host, port).
+
+    Raises:
+        ParameterError: not of that form (the message names the form).
+    """
+    form = "tcp://HOST:PORT (e.g. tcp://192.168.1.20:5555)"
+    parts = urlsplit(url)
+    try:
+        port = parts.port
+    except ValueError:
+        port = None
+    if (
+        parts.scheme != "tcp"
+        or not parts.hostname
+        or port is None
+        or not 0 < port < 65536
+        or parts.path not in ("", "/")
+        or parts.query
+        or parts.fragment
+    ):
+        raise ParameterError(f"--measure {url!r}: a motion-capture stream is given as {form}")
+    return parts.hostname, port
+
+
+def parse_pose_line(line: bytes, received_s: float) -> StreamedPose:
+    """One line as a pose.
+
+    Raises:
+        ValueError: why the line is not a pose (for the malformed count).
+    """
+    try:
+        raw: Any = json.loads(line)
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"not JSON ({exc.__class__.__name__})") from None
+    if not isinstance(raw, dict):
+        raise ValueError("not a JSON object")
+    values: list[float] = []
+    for key in ("t", "x", "y", "theta"):
+        value = raw.get(key)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ValueError(f"{key!r} is missing or not a number")
+        if not math.isfinite(value):
+            raise ValueError(f"{key!r} is not finite")
+        values.append(float(value))
+    return StreamedPose(received_s, values[0], values[1], values[2], values[3])
+
+
+class PoseStream:
+    """The tcp client: a reader thread keeps the last :data:`BUFFER_S` of poses.
+
+    Use as a context manager; leaving it (or :meth:`close`) closes the socket
+    and joins the thread.
+
+    Args:
+        url: ``tcp://HOST:PORT``.
+        connect_timeout_s: how long connecting may take, s.
+        clock: the monotonic clock arrival is stamped with (tests may pass another).
+    """
+
+    def __init__(
+        self,
+        url: str,
+        connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.host, self.port = parse_tcp_url(url)
+        self.url = url
+        self.connect_timeout_s = connect_timeout_s
+        self.clock = clock
+        self._sock: socket.socket | None = None
+        self._thread: threading.Thread | None = None
+        self._stop = threading.Event()
+        self._lock = threading.Condition()
+        self._poses: deque[StreamedPose] = deque()
+        self._n_poses = 0
+        self._n_malformed = 0
+        self._last_malformed = ""
+        self._last_t: float | None = None
+        self._connected_s = 0.0
+        self._closed = ""
+
+    def __enter__(self) -> PoseStream:
+        self.open()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def open(self) -> None:
+        """Connect and start reading.
+
+        Raises:
+            ConnectionFailedError: nobody listens at the URL (it is named).
+        """
+        try:
+            sock = socket.create_connection((self.host, self.port), self.connect_timeout_s)
+        except OSError as exc:
+            raise ConnectionFailedError(
+                f"motion capture {self.url}: cannot connect ({exc}); is the pose sender "
+                "running and listening there?"
+            ) from exc
+        sock.settimeout(_POLL_S)
+        self._sock = sock
+        self._connected_s = self.clock()
+        self._thread = threading.Thread(target=self._read, name=f"mocap {self.url}", daemon=True)
+        self._thread.start()
+
+    def close(self) -> None:
+        """Stop the reader and close the socket. Idempotent."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+            self._thread = None
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+        with self._lock:
+            if not self._closed:
+                self._closed = "closed by odohil"
+            self._lock.notify_all()
+
+    # -- the reader thread ------------------------------------------------
+
+    def _read(self) -> None:
+        assert self._sock is not None
+        pending = b""
+        skipping = False  # inside an over-long line, dropped up to its newline
+        reason = ""
+        while not self._stop.is_set():
+            try:
+                chunk = self._sock.recv(65536)
+            except TimeoutError:
+                continue
+            except OSError as exc:
+                reason = f"connection lost ({exc})"
+                break
+            if not chunk:
+                reason = "the sender closed the connection"
+                break
+            now = self.clock()
+            pending += chunk
+            if skipping:
+                if b"\n" not in pending:
+                    pending = b""
+                    continue
+                pending = pending.split(b"\n", 1)[1]
+                skipping = False
+            *lines, pending = pending.split(b"\n")
+            for line in lines:
+                self._take(line.strip(), now)
+            if len(pending) > MAX_LINE_BYTES:
+                self._malformed(f"a line longer than {MAX_LINE_BYTES} bytes")
+                pending, skipping = b"", True
+        with self._lock:
+            self._closed = self._closed or reason or "closed by odohil"
+            self._lock.notify_all()
+
+    def _malformed(self, reason: str) -> None:
+        with self._lock:
+            self._n_malformed += 1
+            self._last_malformed = reason
+
+    def _take(self, line: bytes, now: float) -> None:
+        if not line:
+            return
+        if len(line) > MAX_LINE_BYTES:
+            self._malformed(f"a line longer than {MAX_LINE_BYTES} bytes")
+            return
+        try:
+            pose = parse_pose_line(line, now)
+        except ValueError as exc:
+            self._malformed(f"{exc}: {line[:80]!r}")
+            return
+        with self._lock:
+            if self._last_t is not None and pose.t_s <= self._last_t:
+                self._n_malformed += 1
+                self._last_malformed = (
+                    f"'t' {pose.t_s:.6g} s does not increase (last {self._last_t:.6g} s)"
+                )
+                return
+            self._last_t = pose.t_s
+            self._poses.append(pose)
+            self._n_poses += 1
+            while self._poses and self._poses[0].received_s < now - BUFFER_S:
+                self._poses.popleft()
+            self._lock.notify_all()
+
+    # -- what callers read -----------------------------------------------
+
+    def status(self) -> StreamStatus:
+        """What the stream has delivered so far."""
+        with self._lock:
+            return StreamStatus(
+                n_poses=self._n_poses,
+                n_malformed=self._n_malformed,
+                last_malformed=self._last_malformed,
+                last_received_s=self._poses[-1].received_s if self._poses else None,
+                connected_s=self._connected_s,
+                closed=self._closed,
+            )
+
+    def poses_between(self, begin_s: float, end_s: float) -> list[StreamedPose]:
+        """Poses that arrived in [begin_s, end_s] (host monotonic clock)."""
+        with self._lock:
+            return [p for p in self._poses if begin_s <= p.received_s <= end_s]
+
+    def wait_for_pose(self, timeout_s: float) -> bool:
+        """Wait until at least one pose has arrived, at most ``timeout_s``;
+        whether one has (False also when the connection ended)."""
+        deadline = self.clock() + timeout_s
+        with self._lock:
+            while self._n_poses == 0 and not self._closed:
+                left = deadline - self.clock()
+                if left <= 0:
+                    break
+                self._lock.wait(min(left, _POLL_S))
+            return self._n_poses > 0

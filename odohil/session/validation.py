@@ -1,0 +1,497 @@
+"""Validation of a calibrated session on a path it was not fitted on.
+
+The calibrated model is the session's estimate, computed as ``odohil
+estimate SESSION`` computes it (robust maximum likelihood over the solved,
+unambiguous trials). The validation trials come from:
+
+- a validation session driven by the engine (a forth-and-back design), in its
+  own folder, by default ``SESSION/validation/<path>/`` (:func:`default_folder`):
+  a session like any other whose header's ``settings`` name the calibration
+  (``validation_of``) and the path (``validation_path``). The calibration's
+  journal never sees these trials, so they are never mixed into its fit;
+- a trial file in the existing format (``--path file:CSV``,
+  odohil/session/trial_files.py), its rows naming their designs;
+- a file of pose changes for a named path (``--path square:SIDE``, which the
+  ``Robot`` protocol cannot drive): columns ``dx_m,dy_m,dtheta_rad`` and
+  optionally ``sigma_x_m,sigma_y_m,sigma_theta_rad`` (measurement standard
+  deviations; 0 when absent).
+
+The test itself is :func:`odohil.science.validation.validation_test`.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from odohil.errors import (
+    JournalError,
+    MeasurementError,
+    OdohilError,
+    ParameterError,
+    TrialFileError,
+)
+from odohil.science.estimators import EstimateResult, estimate
+from odohil.science.limits import RANGES
+from odohil.science.paths import Design, EncoderPath, FloatArray, Variant, square
+from odohil.science.robot_description import RobotDescription
+from odohil.science.validation import (
+    DEFAULT_ALPHA,
+    EllipseData,
+    PathPrediction,
+    ValidationResult,
+    ellipse_data,
+    predict_path,
+    validation_test,
+)
+from odohil.session.plan import Plan
+from odohil.session.state import (
+    SessionState,
+    ambiguous_trials,
+    load_session,
+    session_observations,
+    session_trials,
+)
+from odohil.session.trial_files import MAX_ANGLE_RAD, MAX_POSE_M, MAX_ROWS, TrialSet, read_trials
+
+VALIDATION_FOLDER = "validation"
+"""Sub-folder of a calibration session that holds its validation sessions."""
+PATH_SYNTAX = "square:SIDE, forth-back:K,L[,turn|reverse] or file:CSV"
+POSE_COLUMNS = ("dx_m", "dy_m", "dtheta_rad")
+SIGMA_COLUMNS = ("sigma_x_m", "sigma_y_m", "sigma_theta_rad")
+
+PathKind = Literal["square", "forth-back", "file"]
+
+
+@dataclass(frozen=True)
+class ValidationPath:
+    """What ``--path`` names.
+
+    Attributes:
+        kind: ``square``, ``forth-back`` or ``file``.
+        text: the option's text.
+        design: the forth-and-back design (``forth-back``), else None.
+        path: the encoder path (``square`` and ``forth-back``), else None.
+        file: the trial file (``file``), else None.
+    """
+
+    kind: PathKind
+    text: str
+    design: Design | None = None
+    path: EncoderPath | None = None
+    file: Path | None = None
+
+    @property
+    def drivable(self) -> bool:
+        """Whether the engine can drive it (a forth-and-back design)."""
+        return self.design is not None
+
+    def slug(self) -> str:
+        """A folder name for it, e.g. ``forth-back-k2-l1.5-turn``, ``square-2``."""
+        if self.design is not None:
+            d = self.design
+            return f"forth-back-k{d.k:g}-l{d.l_m:g}-{d.variant}"
+        if self.kind == "square" and self.path is not None:
+            return re.sub(r"[^A-Za-z0-9.]+", "-", self.text).strip("-")
+        return "file-" + (self.file.stem if self.file is not None else "trials")
+
+
+def parse_validation_path(text: str) -> ValidationPath:
+    """Parse ``--path``.
+
+    Raises:
+        ParameterError: naming ``--path``, the accepted forms and ranges.
+    """
+    kind, _, rest = text.strip().partition(":")
+    kind = kind.strip().lower()
+    try:
+        if kind == "square":
+            side = _number(rest, "SIDE")
+            RANGES["side"].check("SIDE", side)
+            return ValidationPath("square", text, path=square(side))
+        if kind in ("forth-back", "forth-and-back"):
+            parts = [p.strip() for p in rest.split(",")]
+            if len(parts) not in (2, 3):
+                raise ParameterError("give K,L or K,L,VARIANT (e.g. forth-back:2,1.5)")
+            variant: Variant = "turn"
+            if len(parts) == 3:
+                if parts[2] not in ("turn", "reverse"):
+                    raise ParameterError(f"VARIANT must be turn or reverse, got {parts[2]!r}")
+                variant = "reverse" if parts[2] == "reverse" else "turn"
+            design = Design(_number(parts[0], "K"), _number(parts[1], "L"), variant)
+            return ValidationPath("forth-back", text, design=design, path=design.path())
+        if kind == "file":
+            if not rest.strip():
+                raise ParameterError("give the trial file, e.g. file:validation.csv")
+            return ValidationPath("file", text, file=Path(rest.strip()))
+    except ParameterError as exc:
+        raise ParameterError(f"--path {text!r}: {exc} (accepted: {PATH_SYNTAX})") from None
+    raise ParameterError(f"--path {text!r}: unknown path; accepted: {PATH_SYNTAX}")
+
+
+def _number(text: str, name: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise ParameterError(f"{name} must be a number, got {text!r}") from None
+    if not math.isfinite(value):
+        raise ParameterError(f"{name} must be finite, got {text!r}")
+    return value
+
+
+def default_folder(session: Path, path: ValidationPath) -> Path:
+    """``SESSION/validation/<path slug>``."""
+    return session / VALIDATION_FOLDER / path.slug()
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """A calibration session's estimate, as ``odohil estimate SESSION`` makes it.
+
+    Attributes:
+        result: the estimate (robust maximum likelihood), with its verdict.
+        state: the session as its journal tells it.
+    """
+
+    result: EstimateResult
+    state: SessionState
+
+
+def load_calibration(session: Path, exclude: Collection[int] = ()) -> Calibration:
+    """The session's estimate (every solved trial but the ambiguous ones and
+    ``exclude``).
+
+    Raises:
+        JournalError: not a session folder, or a corrupt journal.
+        MeasurementError: too few trials for an estimate.
+    """
+    state = load_session(session).state
+    if state.header.get("settings", {}).get("validation_of"):
+        raise JournalError(
+            f"{session} is a validation session; give the calibration session it validates"
+        )
+    observations = session_observations(state)
+    done = {o.trial for o in observations}
+    result = estimate(
+        observations,
+        "robust",
+        exclude=[t for t in exclude if t in done],
+        ambiguous=[t.trial for t in ambiguous_trials(state)],
+    )
+    return Calibration(result, state)
+
+
+def check_not_fitted(plan: Plan | None, designs: Sequence[Design]) -> None:
+    """A validation design must not be one the calibration was fitted on.
+
+    Raises:
+        ParameterError: naming the design.
+    """
+    if plan is None:
+        return
+    fitted = {(i.design.k, i.design.l_m, i.design.variant) for i in plan.items}
+    for design in designs:
+        if (design.k, design.l_m, design.variant) in fitted:
+            raise ParameterError(
+                f"--path: {design.forward.label()} is a design of the calibration's plan; "
+                "validate on a path the fit did not use"
+            )
+
+
+@dataclass(frozen=True)
+class ValidationTrials:
+    """Measured validation trials and the paths they drove.
+
+    Attributes:
+        poses: (n, 3) measured pose changes (x m, y m, Delta rad).
+        covs: (n, 3, 3) their measurement covariances (zeros: exact poses).
+        paths: the encoder path of each trial.
+        labels: a name for each trial's path (e.g. ``k=2 l=1.5 m turn``).
+        numbers: each trial's number (session trial number or file row).
+        backward: each trial was driven backwards (a one-way design's mirror).
+        designs: each trial's design as driven (trial files and sessions; empty
+            for a pose file of a named path).
+        left_out: trials not tested (ambiguous), by number.
+        source: where they came from.
+    """
+
+    poses: FloatArray
+    covs: FloatArray
+    paths: tuple[EncoderPath, ...]
+    labels: tuple[str, ...]
+    numbers: tuple[int, ...]
+    backward: tuple[bool, ...]
+    designs: tuple[Design, ...] = ()
+    left_out: tuple[int, ...] = ()
+    source: str = ""
+
+    def __len__(self) -> int:
+        return int(self.poses.shape[0])
+
+    def first(self, n: int) -> ValidationTrials:
+        """The first ``n`` trials."""
+        return ValidationTrials(
+            self.poses[:n],
+            self.covs[:n],
+            self.paths[:n],
+            self.labels[:n],
+            self.numbers[:n],
+            self.backward[:n],
+            self.designs[:n],
+            self.left_out,
+            self.source,
+        )
+
+
+def _from_trial_set(trials: TrialSet) -> ValidationTrials:
+    rows = trials.trials
+    if not rows:
+        raise MeasurementError(f"{trials.source}: no usable trials")
+    poses = np.array([t.pose_change for t in rows], dtype=np.float64)
+    covs = np.array(
+        [t.pose_cov if t.pose_cov is not None else np.zeros((3, 3)) for t in rows],
+        dtype=np.float64,
+    )
+    return ValidationTrials(
+        poses=poses,
+        covs=covs,
+        paths=tuple(t.design.path() for t in rows),
+        labels=tuple(t.design.forward.label() for t in rows),
+        numbers=tuple(t.number if t.number is not None else i + 1 for i, t in enumerate(rows)),
+        backward=tuple(t.design.backward for t in rows),
+        designs=tuple(t.design for t in rows),
+        left_out=tuple(t.number or 0 for t in trials.ambiguous),
+        source=trials.source,
+    )
+
+
+def trials_of_session(state: SessionState, source: str = "session") -> ValidationTrials:
+    """The solved, unambiguous trials of a (validation) session, with the
+    floor-mark solver's covariance as measurement covariance."""
+    return _from_trial_set(session_trials(state, source=source))
+
+
+def trials_of_file(path: Path, description: RobotDescription | None) -> ValidationTrials:
+    """The trials of a trial file (poses, or raw distances with ``description``).
+
+    Raises:
+        TrialFileError: the file cannot be used (every bad row listed).
+    """
+    return _from_trial_set(read_trials(path, description))
+
+
+def read_path_poses(file: Path, path: EncoderPath, label: str) -> ValidationTrials:
+    """Pose changes of trials of ``path`` from a CSV with the columns
+    ``dx_m,dy_m,dtheta_rad`` and optionally ``sigma_x_m,sigma_y_m,sigma_theta_rad``
+    (blank lines and ``#`` comments ignored).
+
+    Raises:
+        TrialFileError: naming the file, the line and the column.
+    """
+    try:
+        text = file.read_text(encoding="utf-8").removeprefix("\ufeff")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise TrialFileError(f"cannot read {file}: {exc}") from None
+    lines = [
+        (n, line)
+        for n, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
+    if not lines:
+        raise TrialFileError(f"{file}: no header line")
+    header = [h.strip() for h in next(csv.reader([lines[0][1]]))]
+    allowed = POSE_COLUMNS + SIGMA_COLUMNS
+    missing = [c for c in POSE_COLUMNS if c not in header]
+    unknown = [c for c in header if c not in allowed]
+    sigmas = [c in header for c in SIGMA_COLUMNS]
+    if missing or unknown or (any(sigmas) and not all(sigmas)) or len(set(header)) < len(header):
+        raise TrialFileError(
+            f"{file}, line {lines[0][0]}: a pose file for --path {label} has the columns "
+            f"{','.join(POSE_COLUMNS)}[,{','.join(SIGMA_COLUMNS)}]; got {','.join(header)}"
+        )
+    if len(lines) - 1 > MAX_ROWS:
+        raise TrialFileError(f"{file}: {len(lines) - 1} rows; at most {MAX_ROWS}")
+    poses: list[list[float]] = []
+    covs: list[FloatArray] = []
+    numbers: list[int] = []
+    problems: list[str] = []
+    for number, line in lines[1:]:
+        fields = [f.strip() for f in next(csv.reader([line]))]
+        if len(fields) != len(header):
+            problems.append(f"line {number}: expected {len(header)} fields, got {len(fields)}")
+            continue
+        row = dict(zip(header, fields, strict=True))
+        values: dict[str, float] = {}
+        for name in header:
+            try:
+                value = float(row[name])
+            except ValueError:
+                problems.append(f"line {number}: {name} is not a number: {row[name]!r}")
+                continue
+            cap = MAX_ANGLE_RAD if name.endswith("_rad") else MAX_POSE_M
+            if (
+                not math.isfinite(value)
+                or abs(value) > cap
+                or (name in SIGMA_COLUMNS and value < 0)
+            ):
+                low = 0 if name in SIGMA_COLUMNS else -cap
+                problems.append(f"line {number}: {name} must be within [{low:g}, {cap:g}]")
+                continue
+            values[name] = value
+        if len(values) != len(header):
+            continue
+        poses.append([values[c] for c in POSE_COLUMNS])
+        sd = [values.get(c, 0.0) for c in SIGMA_COLUMNS]
+        covs.append(np.diag(np.square(sd)))
+        numbers.append(len(numbers) + 1)
+    if problems:
+        raise TrialFileError(
+            f"{file}: {len(problems)} bad row(s), none used:\n  " + "\n  ".join(problems[:20])
+        )
+    if not poses:
+        raise TrialFileError(f"{file}: no trials")
+    n = len(poses)
+    return ValidationTrials(
+        poses=np.array(poses, dtype=np.float64),
+        covs=np.array(covs, dtype=np.float64),
+        paths=(path,) * n,
+        labels=(label,) * n,
+        numbers=tuple(numbers),
+        backward=(False,) * n,
+        source=str(file),
+    )
+
+
+def _predictions(trials: ValidationTrials, calibration: EstimateResult) -> list[PathPrediction]:
+    cache: dict[EncoderPath, PathPrediction] = {}
+    out = []
+    for path in trials.paths:
+        if path not in cache:
+            cache[path] = predict_path(path, calibration.params)
+        out.append(cache[path])
+    return out
+
+
+def parameter_covariance(calibration: EstimateResult) -> FloatArray | None:
+    """The estimate's 4 x 4 covariance (SI), or None when it is not finite
+    (a parameter the calibration did not determine)."""
+    cov = np.array(calibration.covariance, dtype=np.float64)
+    if cov.shape != (4, 4) or not np.all(np.isfinite(cov)):
+        return None
+    return cov
+
+
+def check_trials(
+    trials: ValidationTrials, calibration: EstimateResult, alpha: float = DEFAULT_ALPHA
+) -> ValidationResult:
+    """The NEES tests of ``trials`` against the calibrated model, the estimate's
+    covariance included when it is finite.
+
+    Raises:
+        ParameterError: alpha out of range, or a singular predicted covariance.
+    """
+    return validation_test(
+        trials.poses,
+        _predictions(trials, calibration),
+        trials.covs,
+        parameter_covariance(calibration),
+        alpha=alpha,
+    )
+
+
+@dataclass(frozen=True)
+class ValidationPlot:
+    """One path's validation trials against its predicted ellipse (SI).
+
+    Attributes:
+        label: the path.
+        ellipse: the predicted 95 % end-point ellipse and the measured end points.
+        numbers: the trial numbers of the points.
+    """
+
+    label: str
+    ellipse: EllipseData
+    numbers: tuple[int, ...]
+
+
+def plot_data(trials: ValidationTrials, calibration: EstimateResult) -> list[ValidationPlot]:
+    """Per path (in order of first appearance), what a plot of the trials
+    against the predicted ellipse needs (the first trial's measurement
+    covariance stands for the path's). A backward one-way trial is mirrored
+    (x and Delta negated) onto its forward path, so one path gives one ellipse."""
+    parameter_cov = parameter_covariance(calibration)
+    groups: dict[str, list[int]] = {}
+    for i, label in enumerate(trials.labels):
+        groups.setdefault(label, []).append(i)
+    plots = []
+    for label, rows in groups.items():
+        reference = trials.paths[rows[0]]
+        prediction = predict_path(reference, calibration.params)
+        mirror = np.array([-1.0, 1.0, -1.0])
+        first = trials.backward[rows[0]]
+        points = np.array(
+            [trials.poses[i] * (mirror if trials.backward[i] != first else 1.0) for i in rows]
+        )
+        plots.append(
+            ValidationPlot(
+                label=label,
+                ellipse=ellipse_data(points, prediction, trials.covs[rows[0]], parameter_cov),
+                numbers=tuple(trials.numbers[i] for i in rows),
+            )
+        )
+    return plots
+
+
+def validation_sessions(session: Path) -> list[Path]:
+    """The validation session folders of a calibration session, sorted."""
+    root = session / VALIDATION_FOLDER
+    if not root.is_dir():
+        return []
+    return sorted(p for p in root.iterdir() if (p / "journal.jsonl").is_file())
+
+
+@dataclass(frozen=True)
+class ValidationReport:
+    """One validation session of a calibration, tested again for the report.
+
+    Attributes:
+        folder: the validation session folder.
+        path: its ``--path`` text.
+        result: the NEES tests, or None when they could not be made.
+        plots: per path, the trials against the predicted ellipse.
+        problem: why there is no result ("" otherwise).
+    """
+
+    folder: Path
+    path: str
+    result: ValidationResult | None
+    plots: tuple[ValidationPlot, ...] = ()
+    problem: str = ""
+
+
+def load_validations(
+    session: Path, calibration: EstimateResult, alpha: float = DEFAULT_ALPHA
+) -> tuple[ValidationReport, ...]:
+    """The validation sessions under ``SESSION/validation/`` tested against
+    ``calibration`` (a folder that cannot be read says why, in ``problem``)."""
+    reports = []
+    for folder in validation_sessions(session):
+        path = folder.name
+        try:
+            state = load_session(folder).state
+            path = str(state.header.get("settings", {}).get("validation_path") or path)
+            trials = trials_of_session(state, source=str(folder))
+            result = check_trials(trials, calibration, alpha)
+            plots = tuple(plot_data(trials, calibration))
+        except OdohilError as exc:
+            reports.append(ValidationReport(folder, path, None, problem=str(exc)))
+            continue
+        reports.append(ValidationReport(folder, path, result, plots))
+    return tuple(reports)
