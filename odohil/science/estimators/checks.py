@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from scipy import special
@@ -34,7 +35,7 @@ from odohil.science.estimators.result import (
     Sufficiency,
     Suggestion,
 )
-from odohil.science.fisher import fisher_information
+from odohil.science.fisher import MomentDerivatives, moment_derivatives, trial_information
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, FloatArray
@@ -183,17 +184,28 @@ def _variances(info: FloatArray) -> FloatArray:
 def _information(
     summaries: Sequence[DesignSummary], params: ErrorParameters
 ) -> tuple[FloatArray, dict[Design, FloatArray]]:
-    """Total information of the data and per-trial information of each design, SI."""
-    measurement = {s.design: s.measurement_cov for s in summaries}
+    """Total information of the data and per-trial information of each design, SI.
 
-    def per_design(design: Design) -> FloatArray:
-        return measurement[design]
-
+    The model's derivatives are taken at the parameters rounded to 3
+    significant digits (:func:`_derivatives_near`): the advice does not need
+    more, and a live session's estimate then reuses them across updates (they
+    cost more than the rest of a live update)."""
     per_trial = {
-        s.design: fisher_information([(s.design, 1)], params, per_design) for s in summaries
+        s.design: trial_information(_derivatives_near(s.design, params), s.measurement_cov)
+        for s in summaries
     }
     total = sum((s.n * per_trial[s.design] for s in summaries), np.zeros((4, 4)))
     return total, per_trial
+
+
+def _derivatives_near(design: Design, params: ErrorParameters) -> MomentDerivatives:
+    rounded = tuple(float(f"{v:.3g}") for v in params.as_tuple())
+    return _cached_derivatives(design, rounded)
+
+
+@lru_cache(maxsize=64)
+def _cached_derivatives(design: Design, values: tuple[float, ...]) -> MomentDerivatives:
+    return moment_derivatives(design_path(design), ErrorParameters(*values))
 
 
 def _extra_trials(
