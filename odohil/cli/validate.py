@@ -4,6 +4,7 @@ odohil/science/validation.py)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from pathlib import Path
@@ -11,8 +12,10 @@ from typing import Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
+from odohil import units
 from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
@@ -27,7 +30,10 @@ from odohil.cli.options import bounded
 from odohil.cli.run import (
     ProgressObserver,
     connect,
+    interrupt_text,
     make_source,
+    open_mocap,
+    parse_measure,
     refuse_unredundant,
     report_stop,
     report_unconfirmed,
@@ -40,6 +46,7 @@ from odohil.errors import (
     MeasurementError,
     OdohilError,
     ParameterError,
+    RobotDescriptionError,
     StopUnconfirmedError,
 )
 from odohil.science.robot_description import RobotDescription, parse_robot_description
@@ -86,7 +93,7 @@ _HELP = (
 
 
 def _bad(console: Console, message: str) -> typer.Exit:
-    console.print(f"[red]error[/]: {message}", soft_wrap=True, highlight=False)
+    console.print(f"[red]error[/]: {escape(message)}", soft_wrap=True, highlight=False)
     return typer.Exit(EXIT_BAD_INPUT)
 
 
@@ -122,8 +129,8 @@ def validate(
         str | None,
         typer.Option(
             "--measure",
-            help="`fake` (the fake robot's true pose) or a file: a trial file for a "
-            "driven path (as run), a pose file for a square.",
+            help="`fake` (the fake robot's true pose), `tcp://HOST:PORT` (motion capture) "
+            "or a file: a trial file for a driven path (as run), a pose file for a square.",
         ),
     ] = None,
     port: Annotated[
@@ -223,10 +230,10 @@ def validate(
         tested = check_trials(measured, result, alpha)
     except typer.Exit:
         raise
-    except (ParameterError, JournalError, MeasurementError) as exc:
+    except (ParameterError, RobotDescriptionError, JournalError, MeasurementError) as exc:
         raise _bad(console, str(exc)) from None
     except OdohilError as exc:
-        console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_ERROR) from None
     data = _json(session, vpath, folder, measured, calibration, tested)
     if as_json:
@@ -275,12 +282,16 @@ def _drive_or_reload(
     if trials is None:
         raise ParameterError("--trials N is needed to drive a validation path (N in 1..10000)")
     if measure is None:
-        raise ParameterError("--measure is needed to drive: `fake` or a trial file (CSV)")
+        raise ParameterError(
+            "--measure is needed to drive: `fake`, `tcp://HOST:PORT` or a trial file (CSV)"
+        )
     plan = check_session_plan(Plan.of([(vpath.design, trials)]))
-    refuse_unredundant(description, plan, console)
+    option = parse_measure(measure)
+    kind, trial_file = option.kind, option.trial_file
+    if kind != "tcp":  # the tape's cross distances must tell the designs apart
+        refuse_unredundant(description, plan, console)
     check_floor(plan, description)
     line = resolve_line(description, port, baud, robot_path or "the session's robot description")
-    kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
     if trial_file:
         check_trial_file(trial_file, description, plan)
     if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
@@ -293,13 +304,19 @@ def _drive_or_reload(
         "validation_of": str(session.resolve()),
         "validation_path": vpath.text,
     }
-    journal, state = start_session(
-        folder, toml, plan, measure=kind, settings=settings, robot_path=robot_path
-    )
-    console.print(f"validation session {folder}")
-    console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
-    with session_exit_codes(console), journal, connect(line, truth_socket) as (robot, truth):
-        source = make_source(kind, description, truth, seed, trial_file)
+    if option.mocap_url:
+        settings["mocap_url"] = option.mocap_url
+    with contextlib.ExitStack() as stack:
+        mocap = stack.enter_context(open_mocap(option.mocap_url, description, console))
+        journal, state = start_session(
+            folder, toml, plan, measure=kind, settings=settings, robot_path=robot_path
+        )
+        console.print(f"validation session {folder}")
+        console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
+        stack.enter_context(session_exit_codes(console))
+        stack.enter_context(journal)
+        robot, truth = stack.enter_context(connect(line, truth_socket))
+        source = make_source(kind, description, truth, seed, trial_file, mocap)
         observer = ProgressObserver(console, state)
         engine = SessionEngine(
             journal,
@@ -319,7 +336,7 @@ def _drive_or_reload(
             raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
         except KeyboardInterrupt as exc:
             observer.progress.stop()
-            console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+            console.print(f"[yellow]interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
             report_stop(console, engine.stop_outcome, folder)
             raise typer.Exit(exit_for_signal(signal_of(exc))) from None
         except OdohilError as exc:
@@ -392,7 +409,7 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
     out = Console(width=max(100, Console().width))
     status = "PASS" if tested.passed else "FAIL"
     failed = tested.failed()
-    text = f"validation: {status} ({tested.n_trials} trials of {data['path']}"
+    text = f"validation: {status} ({units.plural(tested.n_trials, 'trial')} of {data['path']}"
     text += f"; rejected by {', '.join(failed)})" if failed else ")"
     out.print(text, highlight=False)
     table = Table(title=f"NEES chi-square tests, each at level {tested.alpha / 4:g}")
