@@ -17,6 +17,7 @@ from rich.console import Console
 
 from odohil.cli.line import resolve_line
 from odohil.cli.options import bounded
+from odohil.cli.robot_option import robot_protocol
 from odohil.cli.run import (
     SnapshotTruth,
     connect,
@@ -64,10 +65,15 @@ def demo(
     ] = None,
     robot_name: Annotated[
         str,
-        typer.Option("--robot", help="Which fake robot: nomad150 or create2 (docs/create2.md)."),
+        typer.Option(
+            "--robot",
+            help="Which fake robot: nomad150 or create2, or a robot description file whose "
+            "[robot] protocol is one of them (docs/create2.md).",
+        ),
     ] = "nomad150",
 ) -> None:
     """Calibrate the fake robot unattended and compare with its true parameters."""
+    robot_name = robot_protocol(robot_name)
     if robot_name == "create2":
         _demo_create2(seed, json_out, session)
         return

@@ -35,6 +35,7 @@ from odohil.cli.exit_codes import (
 )
 from odohil.cli.line import Line, register_fake_urls, resolve_line
 from odohil.cli.options import bounded
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.verdict import verdict_line
 from odohil.errors import (
     InitError,
@@ -65,13 +66,18 @@ from odohil.session.journal import Journal, Record
 from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
 from odohil.session.plan import Plan
 from odohil.session.pose_source import PoseSource
-from odohil.session.preflight import check_new_session, check_trial_file
+from odohil.session.preflight import check_new_session, check_trial_file, turn_designs
 from odohil.session.robot import Robot
 from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, TapeSource, TruthReader
 from odohil.session.start_pose import StartPose
-from odohil.session.state import SessionState, ambiguous_trials, session_observations
+from odohil.session.state import (
+    SessionState,
+    ambiguous_trials,
+    description_of_header,
+    session_observations,
+)
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
@@ -104,7 +110,7 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     The robot is closed (stopped) on exit.
     """
     register_fake_urls(line.port)
-    robot = open_robot(line.protocol, line.port, line.baud)
+    robot = open_robot(line.protocol, line.port, line.baud, line.robot)
     transport = getattr(robot, "transport", None)
     truth: Any = None
     try:
@@ -335,7 +341,25 @@ def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> Estima
         observations,
         exclude=[t for t in exclude if t in done],
         ambiguous=[t.trial for t in ambiguous_trials(state)],
+        turns_exact=description_of_header(state).robot.turns_exact,
     )
+
+
+ALLOW_TURNS_HELP = (
+    "Run `turn` designs on a robot whose turns carry error ([robot] turns_exact = false); "
+    "the estimate is then not trusted."
+)
+
+
+def warn_turns(console: Console, plan: Plan, description: RobotDescription) -> None:
+    """Warn when the plan turns in place on a robot whose turns carry error."""
+    turns = turn_designs(plan, description)
+    if turns:
+        console.print(
+            f"[yellow]warning:[/] turn designs on a robot whose turns carry error "
+            f"({', '.join(turns)}): the estimate will not be trusted; use variant=reverse",
+            soft_wrap=True,
+        )
 
 
 def report_stop(console: Console, outcome: StopOutcome | None, folder: Path) -> None:
@@ -491,7 +515,7 @@ def run(
         ),
     ] = None,
     *,
-    robot_file: Annotated[Path, typer.Option("--robot", help="Robot description (TOML).")],
+    robot_file: Annotated[Path, typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP)],
     plan_text: Annotated[str, typer.Option("--plan", help=_PLAN_HELP)],
     measure: Annotated[
         str,
@@ -528,6 +552,7 @@ def run(
         typer.Option("--json", help="Print the final estimate as JSON (as estimate --json)."),
     ] = False,
     exclude_text: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
+    allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
 ) -> None:
     """Run a calibration session unattended: n trials, no prompts, journaled.
 
@@ -536,8 +561,9 @@ def run(
     console = Console(stderr=True)
     folder = session or default_session_folder()
     with session_exit_codes(console):
-        checked = check_new_session(plan_text, robot_file, folder)  # before anything moves
+        checked = check_new_session(plan_text, robot_file, folder, allow_turns)  # nothing moved
         plan, description, toml = checked.plan, checked.description, checked.toml
+        warn_turns(console, plan, description)
         exclude = checked_exclude(exclude_text, plan.n_trials, console)
         option = parse_measure(measure)
         kind, trial_file = option.kind, option.trial_file

@@ -43,7 +43,15 @@ from odohil.cli.exit_codes import (
 from odohil.cli.line import Line, register_fake_urls, resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
-from odohil.cli.run import MAY_STILL_MOVE, default_session_folder, final_estimate, report_stop
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback
+from odohil.cli.run import (
+    ALLOW_TURNS_HELP,
+    MAY_STILL_MOVE,
+    default_session_folder,
+    final_estimate,
+    report_stop,
+    warn_turns,
+)
 from odohil.cli.verdict import verdict_line
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
@@ -66,7 +74,7 @@ from odohil.session.engine import (
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
-from odohil.session.preflight import check_session_folder
+from odohil.session.preflight import check_session_folder, check_turns, default_variant
 from odohil.session.robot import Robot
 from odohil.session.robot_file import load_robot_description
 from odohil.session.robots import open_robot
@@ -519,7 +527,11 @@ def _resume(console: Console, folder: Path, max_leg_m: float, port: str | None) 
 
 
 def _prepare(
-    console: Console, robot_file: Path | None, plan_text: str | None, max_leg_m: float
+    console: Console,
+    robot_file: Path | None,
+    plan_text: str | None,
+    max_leg_m: float,
+    allow_turns: bool = False,
 ) -> tuple[str, Plan]:
     if robot_file is None:
         _fail(console, Check("robot description", False, "a new session needs --robot FILE"))
@@ -530,9 +542,13 @@ def _prepare(
         _fail(console, Check("robot description", False, str(exc)))
     console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))
     try:
-        plan = check_session_plan(parse_plan(plan_text or DEFAULT_PLAN))  # wire range, caps
+        plan = check_session_plan(  # wire range, caps; the robot's default variant
+            parse_plan(plan_text or DEFAULT_PLAN, default_variant(description))
+        )
+        check_turns(plan, description, allow_turns)
     except OdohilError as exc:
         _fail(console, Check("plan feasible", False, str(exc)))
+    warn_turns(console, plan, description)
     for check in [*plan_checks(plan, max_leg_m), floor_check(plan, description)]:
         if not check.ok:
             _fail(console, check)
@@ -586,7 +602,7 @@ def _line(
 def _connect(console: Console, line: Line) -> Robot:
     try:
         register_fake_urls(line.port)
-        robot = open_robot(line.protocol, line.port, line.baud)
+        robot = open_robot(line.protocol, line.port, line.baud, line.robot)
     except OdohilError as exc:
         _fail(console, Check("robot answers", False, f"{line.describe()}: {exc}"))
     try:
@@ -618,7 +634,7 @@ def wizard(
     ] = None,
     robot_file: Annotated[
         Path | None,
-        typer.Option("--robot", help="Robot description TOML (new sessions)."),
+        typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP + " For new sessions."),
     ] = None,
     plan_text: Annotated[
         str | None,
@@ -643,6 +659,7 @@ def wizard(
             "--max-leg", callback=bounded("max_leg_m"), help="Longest leg the floor allows, m."
         ),
     ] = DEFAULT_MAX_LEG_M,
+    allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
 ) -> None:
     """Guide a calibration session beside the robot, one trial at a time."""
     console = Console(highlight=False)
@@ -655,7 +672,9 @@ def wizard(
     except OdohilError as exc:
         _fail(console, Check("session folder", False, str(exc)))
     with signals_raise():
-        code = _guided(console, folder, interrupts, port, baud, robot_file, plan_text, max_leg_m)
+        code = _guided(
+            console, folder, interrupts, port, baud, robot_file, plan_text, max_leg_m, allow_turns
+        )
     if code not in (EXIT_OK, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
         console.print(
             f"Stopped. The journal is in {folder}; run the wizard again with "
@@ -673,6 +692,7 @@ def _guided(
     robot_file: Path | None,
     plan_text: str | None,
     max_leg_m: float,
+    allow_turns: bool = False,
 ) -> int:
     """Lock the session (resume or start it), then connect, then run."""
     try:
@@ -692,7 +712,7 @@ def _guided(
                 opened.journal.close()
                 raise
         else:
-            text, plan = _prepare(console, robot_file, plan_text, max_leg_m)
+            text, plan = _prepare(console, robot_file, plan_text, max_leg_m, allow_turns)
             assert robot_file is not None
             description = load_robot_description(robot_file)
             line = _line(console, description, port, baud, str(robot_file))

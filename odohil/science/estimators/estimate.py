@@ -101,6 +101,7 @@ def build_result(
     trials: tuple[TrialDiagnostic, ...] = (),
     excluded: tuple[int, ...] = (),
     ambiguous: Sequence[int] = (),
+    turns_exact: bool = True,
 ) -> EstimateResult:
     """Assemble the result, run both checks and give the verdict.
 
@@ -124,6 +125,7 @@ def build_result(
         [o.label() for o in check.outliers],
         check.verdict,
         ambiguous,
+        turns_exact,
     )
     return EstimateResult(
         method=method,
@@ -190,6 +192,7 @@ def estimate(
     criteria: Criteria | None = None,
     exclude: Iterable[int] = (),
     ambiguous: Sequence[int] = (),
+    turns_exact: bool = True,
 ) -> EstimateResult:
     """Estimate the four parameters from trials.
 
@@ -203,6 +206,8 @@ def estimate(
         exclude: trial numbers to leave out (a view: nothing is deleted).
         ambiguous: trial numbers the caller already left out as ambiguous
             (they make the verdict doubtful).
+        turns_exact: False for a robot whose in-place turns carry error
+            (``[robot] turns_exact``): its ``turn`` trials make the verdict doubtful.
 
     Raises:
         MeasurementError: too few trials, no design that identifies E_R, or
@@ -218,7 +223,12 @@ def estimate(
     summaries = summarise(groups)
     paper = paper_estimate(summaries)
     ml = fit_joint(groups, paper)
-    common = {"excluded": excluded, "ambiguous": ambiguous, "check_params": ml.params}
+    common = {
+        "excluded": excluded,
+        "ambiguous": ambiguous,
+        "check_params": ml.params,
+        "turns_exact": turns_exact,
+    }
     if method == "paper":
         return build_result(
             "paper",
@@ -280,4 +290,5 @@ def estimate(
         trials=diagnostics,
         excluded=excluded,
         ambiguous=ambiguous,
+        turns_exact=turns_exact,
     )

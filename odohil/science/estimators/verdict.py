@@ -3,8 +3,9 @@
 - failed: the fit did not converge, the data are degenerate (every trial of
   a design has the same exact pose), or a parameter has no information
   (infinite standard error);
-- doubtful: the model check fails, some trial is an outlier, or ambiguous
-  trials were left out by the session;
+- doubtful: the model check fails, some trial is an outlier, ambiguous
+  trials were left out by the session, or ``turn`` trials come from a robot
+  whose turns carry error (a differential drive);
 - trusted: none of these.
 
 Precision (the sufficiency check) does not enter: an imprecise estimate with
@@ -65,6 +66,12 @@ def degenerate_designs(observations: Sequence[Observation]) -> list[str]:
     return out
 
 
+def turn_designs(observations: Sequence[Observation]) -> list[str]:
+    """Labels of the designs with in-place turns (``turn`` variant) among the trials."""
+    designs = dict.fromkeys(o.design for o in observations)
+    return [d.label() for d in designs if d.variant == "turn"]
+
+
 def judge(
     observations: Sequence[Observation],
     converged: bool,
@@ -74,6 +81,7 @@ def judge(
     outliers: Sequence[str],
     check_verdict: str,
     ambiguous: Sequence[int] = (),
+    turns_exact: bool = True,
 ) -> Verdict:
     """The verdict from the fit's state and its checks (see the module docstring).
 
@@ -86,6 +94,9 @@ def judge(
         outliers: labels of the outlying trials.
         check_verdict: the model check's sentence.
         ambiguous: trial numbers the session left out as ambiguous.
+        turns_exact: whether the robot's in-place turns carry no error (the
+            paper's model); when False, ``turn`` trials make the verdict
+            doubtful: their spin errors fold into E_R and K_theta unseen.
     """
     failed: list[str] = []
     doubtful: list[str] = []
@@ -112,6 +123,12 @@ def judge(
         doubtful.append(
             "ambiguous trials left out (the floor marks fit two poses): "
             + ", ".join(str(t) for t in ambiguous)
+        )
+    turned = turn_designs(observations) if not turns_exact else []
+    if turned:
+        doubtful.append(
+            f"turn trials on a robot whose turns carry error: {', '.join(turned)} (the spins' "
+            "errors bias E_R and K_theta; calibrate with variant=reverse)"
         )
     if failed:
         return Verdict("failed", tuple(failed + doubtful))
