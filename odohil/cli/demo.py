@@ -133,6 +133,10 @@ CREATE2_TIME_SCALE = 10.0
 """The fake Create 2's time scale: its legs end on 15 ms readings of the
 encoders and a stop sent by the host, so on a faster clock a late reading
 ends a leg centimetres long."""
+CREATE2_MAX_GAP_MS = 15.0
+"""The fake's clock advances at most one 15 ms tick between two calls of the
+driver (fakes/create2/clock.py): a host descheduled by a busy machine loses
+that time instead of letting the wheels drive through it."""
 
 
 def _demo_create2(seed: int, json_out: bool, session: Path | None) -> None:
@@ -149,7 +153,7 @@ def _demo_create2(seed: int, json_out: bool, session: Path | None) -> None:
     paper = DEMO_TRUTH.to_paper_units()
     toml = DEMO_ROBOT_TOML + '[robot]\nprotocol = "create2"\n'
     query = "&".join(
-        [f"seed={seed}", f"time_scale={CREATE2_TIME_SCALE!r}"]
+        [f"seed={seed}", f"time_scale={CREATE2_TIME_SCALE!r}", f"max_gap_ms={CREATE2_MAX_GAP_MS!r}"]
         + [f"{name}={paper[name]!r}" for name in ("E_R", "E_T", "K_theta", "K_rho")]
     )
     port = f"fakecreate2://?{query}"
