@@ -127,7 +127,7 @@ def demo(
     finish(outcome, json_out, console, extra=extra, truth=truth)
 
 
-CREATE2_PLAN = "k=1,l=2,n=18,variant=reverse;k=0.5,l=2,n=18,variant=reverse"
+CREATE2_PLAN = "k=1,l=2,n=12,variant=reverse;k=0.5,l=2,n=12,variant=reverse"
 """Turn-free designs (docs/create2.md): closed 4 m runs and one-way 2 m runs."""
 CREATE2_TIME_SCALE = 10.0
 """The fake Create 2's time scale: its legs end on 15 ms readings of the
