@@ -51,8 +51,8 @@ def resolve_robot(value: str | Path, option: str = "--robot") -> Path:
     if str(value) in names:
         return builtin_path(str(value))
     raise typer.BadParameter(
-        f"{str(value)!r} is neither a robot description file nor a built-in description "
-        f"({', '.join(names)})",
+        f"cannot read {str(value)!r}: no such robot description file, and not the name "
+        f"of a built-in description ({', '.join(names)})",
         param_hint=option,
     )
 

@@ -88,6 +88,7 @@ def test_an_unknown_robot_name_exits_2_naming_the_option_and_the_names(args: lis
     assert "--robot" in flat
     assert "roomba9000" in flat
     assert "create2, nomad150" in flat
+    assert "cannot read" in flat
 
 
 def test_the_planner_recommends_turn_free_designs_for_the_create2() -> None:
