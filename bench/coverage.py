@@ -71,7 +71,6 @@ def run_chunk(args: tuple[int, str, str, int, int]) -> list[Replication]:
     description = default_description(0.001)
     truth = np.array(NOMAD150.as_tuple())
     priors = {d: pose_moments(d.path(), NOMAD150) for d in DESIGNS}
-    n_same = len(description.screws)
     out = []
     for _ in range(count):
         observations = []
@@ -81,7 +80,7 @@ def run_chunk(args: tuple[int, str, str, int, int]) -> list[Replication]:
             for pose in poses:
                 exact = marks_from_pose(description, pose).as_array()
                 noisy = np.abs(exact + tape_noise(rng, law, description.sigma_m, exact.size))
-                marks = MarkDistances(tuple(noisy[:n_same]), tuple(noisy[n_same:]))
+                marks = MarkDistances.of(description, noisy)
                 try:
                     solution = solve_marks(description, marks, odometry, prior=priors[design])
                 except MeasurementError:

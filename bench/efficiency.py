@@ -84,8 +84,7 @@ def run_chunk(
             for pose in poses[design][e]:
                 exact = marks_from_pose(description, pose).as_array()
                 noisy = np.abs(exact + rng.normal(0.0, sigma, exact.size))
-                n_same = len(description.screws)
-                marks = MarkDistances(tuple(noisy[:n_same]), tuple(noisy[n_same:]))
+                marks = MarkDistances.of(description, noisy)
                 try:
                     solution = solve_marks(description, marks, odometry, prior=priors[design])
                 except MeasurementError:
@@ -134,15 +133,6 @@ def _chunk(args: tuple[int, int]) -> list[Outcome]:
     return run_chunk(PAPER_PLAN, NOMAD150, default_description(0.001), n, seed)
 
 
-def paper_units(name: str, value: float) -> float:
-    """An SI error of parameter ``name`` in the paper's units."""
-    if name == "E_R":
-        return units.rad_per_m_to_deg_per_m(value)
-    if name == "K_theta":
-        return units.rad2_per_m_to_deg2_per_m(value)
-    return value
-
-
 def report(
     outcomes: list[Outcome], truth: ErrorParameters, bound: np.ndarray, methods: tuple[str, ...]
 ) -> str:
@@ -153,7 +143,7 @@ def report(
     ]
     summaries = {m: summarise(outcomes, truth, m) for m in methods}
     for a, name in enumerate(PARAMETER_NAMES):
-        row = f"{name:>9}  {paper_units(name, float(bound[a])):>22.4g}  "
+        row = f"{name:>9}  {units.parameter_to_paper(name, float(bound[a])):>22.4g}  "
         cells = []
         for m in methods:
             rmse, rmse_se, coverage, _ = summaries[m]

@@ -37,7 +37,7 @@ def main() -> None:
                 for pose in poses:
                     exact = marks_from_pose(description, pose).as_array()
                     noisy = np.abs(exact + rng.normal(0.0, 0.001, exact.size))
-                    marks = MarkDistances(tuple(noisy[:3]), tuple(noisy[3:]))
+                    marks = MarkDistances.of(description, noisy)
                     solution = solve_marks(
                         description, marks, odometry, prior=prior if use_prior else None
                     )

@@ -193,9 +193,7 @@ def belief_of(estimator: IncrementalEstimator, description: RobotDescription) ->
         result = estimator.result()
     except OdohilError:
         return ParameterBelief.from_priors(priors)
-    values = [p.value for p in result.parameters]
-    stderrs = [p.stderr for p in result.parameters]
-    return ParameterBelief.from_estimate(values, stderrs, result.correlation, priors)
+    return ParameterBelief.from_result(result, priors)
 
 
 def run_experiment(
@@ -220,7 +218,7 @@ def run_experiment(
             rejections = remeasures = 0
             chosen = None
             while True:
-                marks = MarkDistances(tuple(readings[:3]), tuple(readings[3:]))
+                marks = MarkDistances.of(description, readings)
                 predicted = predictive_pose(design, belief_of(estimator, description), odometry)
                 try:
                     selection = select_pose(description, marks, odometry, predicted)

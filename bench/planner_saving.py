@@ -22,12 +22,13 @@ import sys
 import time
 
 import numpy as np
-from efficiency import Outcome, paper_units, run_chunk, summarise
+from efficiency import Outcome, run_chunk, summarise
 
 from odohil.science.fisher import default_description
 from odohil.science.parameters import NOMAD150, PAPER_UNITS, PARAMETER_NAMES
 from odohil.science.paths import Design
 from odohil.science.planner import Plan, expected_standard_errors, minimum_budget
+from odohil.units import parameter_to_paper as to_paper
 
 TARGETS = {
     "E_R": math.radians(0.004),
@@ -61,8 +62,8 @@ def describe(plan: Plan) -> str:
     for a, name in enumerate(PARAMETER_NAMES):
         se = float(plan.standard_errors[a])
         lines.append(
-            f"  expected stderr {name:>7}: {paper_units(name, se):.3g} {PAPER_UNITS[name]}"
-            f" (target {paper_units(name, TARGETS[name]):.3g}, ratio {se / TARGETS[name]:.2f})"
+            f"  expected stderr {name:>7}: {to_paper(name, se):.3g} {PAPER_UNITS[name]}"
+            f" (target {to_paper(name, TARGETS[name]):.3g}, ratio {se / TARGETS[name]:.2f})"
         )
     return "\n".join(lines)
 
@@ -109,8 +110,8 @@ def main() -> None:
     print(f"simulated {len(outcomes)} experiments of the plan ({n_ok} joint estimates):")
     for a, name in enumerate(PARAMETER_NAMES):
         print(
-            f"  {name:>7}: RMSE {paper_units(name, float(rmse[a])):.3g} +- "
-            f"{paper_units(name, float(rmse_se[a])):.2g} {PAPER_UNITS[name]}, "
+            f"  {name:>7}: RMSE {to_paper(name, float(rmse[a])):.3g} +- "
+            f"{to_paper(name, float(rmse_se[a])):.2g} {PAPER_UNITS[name]}, "
             f"RMSE/target {rmse[a] / TARGETS[name]:.2f}, 95% coverage {coverage[a]:.3f}"
         )
     unclear = sum(o.unclear_trials for o in outcomes)

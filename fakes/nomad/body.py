@@ -276,8 +276,8 @@ class RobotBody:
         return (
             round(self.enc_x),
             round(self.enc_y),
-            round(self.axes[STEER].pos) % units.WIRE_ANGLES_PER_TURN,
-            round(self.axes[TURRET].pos) % units.WIRE_ANGLES_PER_TURN,
+            units.wire_angle_in_turn(round(self.axes[STEER].pos)),
+            units.wire_angle_in_turn(round(self.axes[TURRET].pos)),
         )
 
     def velocities_wire(self) -> tuple[int, int, int]:

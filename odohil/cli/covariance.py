@@ -11,20 +11,25 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from odohil import units
 from odohil.cli.options import (
     E_R_DEFAULT,
     E_T_DEFAULT,
     K_RHO_DEFAULT,
     K_THETA_DEFAULT,
+    UNITS_DEFAULT,
     ERDegPerM,
     ETOption,
     KRhoM,
     KThetaDeg2PerM,
+    UnitsOption,
     VariantChoice,
     VariantOption,
     bounded,
     parameters_from_paper_units,
+    unit_system,
 )
+from odohil.cli.render import parameters_line
 from odohil.errors import OdohilError
 from odohil.science.covariance import SimulatedMoments, predicted_moments, simulated_moments
 from odohil.science.limits import check_simulation_work, segments_of
@@ -45,8 +50,23 @@ class PathChoice(StrEnum):
 
 
 def _path(
-    kind: PathChoice, k: float | None, l_m: float | None, variant: VariantChoice, side: float | None
+    kind: PathChoice | None,
+    k: float | None,
+    l_m: float | None,
+    variant: VariantChoice,
+    side: float | None,
 ) -> EncoderPath:
+    if kind is None:  # the path the options name: --k/--l or --side
+        if side is not None and k is None and l_m is None:
+            kind = PathChoice.square
+        elif side is None and (k is not None or l_m is not None):
+            kind = PathChoice.forth_and_back
+        else:
+            raise typer.BadParameter(
+                "give --k K --l L (forth-and-back) or --side S (square), not both"
+                if side is not None
+                else "give --k K --l L (forth-and-back) or --side S (square)"
+            )
     if kind is PathChoice.forth_and_back:
         if k is None or l_m is None:
             raise typer.BadParameter("--path forth-and-back needs --k and --l")
@@ -90,19 +110,23 @@ def _document(
 
 
 def _print(
-    path: EncoderPath, exact: PoseMoments, sim: SimulatedMoments | None, params: ErrorParameters
+    path: EncoderPath,
+    exact: PoseMoments,
+    sim: SimulatedMoments | None,
+    params: ErrorParameters,
+    system: units.UnitSystem,
 ) -> None:
     console = Console()
-    paper = params.to_paper_units()
     table = Table(
         title=f"Pose change after {path.name} ({path.distance_m:g} m driven)",
-        caption=f"E_R = {paper['E_R']:g} deg/m, E_T = {paper['E_T']:g}, "
-        f"K_theta = {paper['K_theta']:g} deg^2/m, K_rho = {paper['K_rho']:g} m",
+        caption=parameters_line(params.to_si_dict(), system),
     )
     table.add_column("quantity")
     table.add_column("closed form", justify="right")
     if sim is not None:
-        table.add_column(f"simulated ({sim.n_trials} trials) +- MC se", justify="right")
+        table.add_column(
+            f"simulated ({units.plural(sim.n_trials, 'trial')}) +- MC se", justify="right"
+        )
     for i, (name, unit) in enumerate(zip(COMPONENTS, COMPONENT_UNITS, strict=True)):
         row = [f"mean {name} ({unit})", f"{exact.mean[i]:.6g}"]
         if sim is not None:
@@ -110,7 +134,7 @@ def _print(
         table.add_row(*row)
     for i in range(3):
         for j in range(i, 3):
-            unit = f"{COMPONENT_UNITS[i]} {COMPONENT_UNITS[j]}"
+            unit = units.product_unit(COMPONENT_UNITS[i], COMPONENT_UNITS[j])
             row = [f"cov({COMPONENTS[i]}, {COMPONENTS[j]}) ({unit})", f"{exact.cov[i, j]:.6g}"]
             if sim is not None:
                 row.append(f"{sim.cov[i, j]:.6g} +- {sim.cov_se[i, j]:.2g}")
@@ -125,7 +149,13 @@ def _print(
 
 
 def covariance(
-    path_kind: Annotated[PathChoice, typer.Option("--path", help="forth-and-back or square.")],
+    path_kind: Annotated[
+        PathChoice | None,
+        typer.Option(
+            "--path",
+            help="forth-and-back or square (default: the one --k/--l or --side names).",
+        ),
+    ] = None,
     k: float | None = typer.Option(
         None, "--k", callback=bounded("k"), help="Forth-and-back pairs, a multiple of 1/2."
     ),
@@ -156,6 +186,7 @@ def covariance(
         help="Segment length of the simulation, m.",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print SI values as JSON."),
+    units_choice: UnitsOption = UNITS_DEFAULT,
 ) -> None:
     """Mean and covariance of the pose change (x, y, Delta) after a path.
 
@@ -181,7 +212,7 @@ def covariance(
     if as_json:
         typer.echo(json.dumps(_document(path, params, exact, sim), indent=2))
     else:
-        _print(path, exact, sim, params)
+        _print(path, exact, sim, params, unit_system(units_choice))
 
 
 def register(app: typer.Typer) -> None:

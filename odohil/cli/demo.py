@@ -15,8 +15,10 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from odohil import units
 from odohil.cli.line import resolve_line
-from odohil.cli.options import bounded
+from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
+from odohil.cli.render import parameters_line
 from odohil.cli.robot_option import robot_protocol
 from odohil.cli.run import (
     SnapshotTruth,
@@ -63,6 +65,7 @@ def demo(
         Path | None,
         typer.Option("--session", help="Keep the session folder here (default: a temp folder)."),
     ] = None,
+    units_choice: UnitsOption = UNITS_DEFAULT,
     robot_name: Annotated[
         str,
         typer.Option(
@@ -72,10 +75,16 @@ def demo(
         ),
     ] = "nomad150",
 ) -> None:
-    """Calibrate the fake robot unattended and compare with its true parameters."""
+    """Calibrate the fake robot unattended and compare with its true parameters.
+
+    The simulated operator measures with a 1 mm tape; when its distances fit no
+    rigid motion (or one looks like a slip) it measures again, as a person
+    would, and the demo says so.
+    """
+    system = unit_system(units_choice)
     robot_name = robot_protocol(robot_name)
     if robot_name == "create2":
-        _demo_create2(seed, json_out, session)
+        _demo_create2(seed, json_out, session, system)
         return
     if robot_name != "nomad150":
         raise typer.BadParameter(
@@ -84,7 +93,7 @@ def demo(
     console = Console(stderr=True)
     truth = DEMO_TRUTH.to_si_dict()
     paper = DEMO_TRUTH.to_paper_units()
-    with session_exit_codes(console):
+    with session_exit_codes(console, json_out):
         from fakes.nomad.process import EmulatorProcess
 
         with tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
@@ -99,7 +108,11 @@ def demo(
                 "--truth-socket", str(Path(tmp) / "truth.sock"),
             ]  # fmt: skip
             with EmulatorProcess(args) as emulator:
-                console.print(f"fake robot on {emulator.device}; true parameters (SI) {truth}")
+                console.print(
+                    f"fake robot on {emulator.device}; its true parameters: "
+                    f"{parameters_line(truth, system)}",
+                    highlight=False,
+                )
                 description = parse_robot_description(DEMO_ROBOT_TOML, "demo robot")
                 settings = {
                     "port": emulator.device,
@@ -120,11 +133,20 @@ def demo(
                 with journal, connect(line, emulator.truth_socket) as (robot, reader):
                     tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
                     source = TapeSource(tape, description)
-                    outcome = execute(journal, state, robot, source, settings, console)
+                    outcome = execute(
+                        journal,
+                        state,
+                        robot,
+                        source,
+                        settings,
+                        console,
+                        system=system,
+                        measurer="the simulated operator",
+                    )
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
     }
-    finish(outcome, json_out, console, extra=extra, truth=truth)
+    finish(outcome, json_out, console, extra=extra, truth=truth, system=system)
 
 
 CREATE2_PLAN = "k=1,l=2,n=12,variant=reverse;k=0.5,l=2,n=12,variant=reverse"
@@ -139,7 +161,9 @@ driver (fakes/create2/clock.py): a host descheduled by a busy machine loses
 that time instead of letting the wheels drive through it."""
 
 
-def _demo_create2(seed: int, json_out: bool, session: Path | None) -> None:
+def _demo_create2(
+    seed: int, json_out: bool, session: Path | None, system: units.UnitSystem
+) -> None:
     """``--robot create2``: the same job on the fake Create 2 (in process, through
     ``fakecreate2://`` and the real driver), reverse designs only.
 
@@ -157,9 +181,15 @@ def _demo_create2(seed: int, json_out: bool, session: Path | None) -> None:
         + [f"{name}={paper[name]!r}" for name in ("E_R", "E_T", "K_theta", "K_rho")]
     )
     port = f"fakecreate2://?{query}"
-    with session_exit_codes(console), tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
+    with (
+        session_exit_codes(console, json_out),
+        tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp,
+    ):
         folder = session or Path(tmp) / "session"
-        console.print(f"fake Create 2 at {port}; true parameters (SI) {truth}")
+        console.print(
+            f"fake Create 2 at {port}; its true parameters: {parameters_line(truth, system)}",
+            highlight=False,
+        )
         description = parse_robot_description(toml, "demo robot")
         line = resolve_line(description, port, None)
         settings = {"port": port, "baud": line.baud, "seed": seed, "truth": truth}
@@ -170,11 +200,20 @@ def _demo_create2(seed: int, json_out: bool, session: Path | None) -> None:
         with journal, connect(line, None) as (robot, reader):
             tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
             source = TapeSource(tape, description)
-            outcome = execute(journal, state, robot, source, settings, console)
+            outcome = execute(
+                journal,
+                state,
+                robot,
+                source,
+                settings,
+                console,
+                system=system,
+                measurer="the simulated operator",
+            )
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
     }
-    finish(outcome, json_out, console, extra=extra, truth=truth)
+    finish(outcome, json_out, console, extra=extra, truth=truth, system=system)
 
 
 def register(app: typer.Typer) -> None:

@@ -11,16 +11,16 @@ from typing import Annotated
 import numpy as np
 import typer
 from rich.console import Console
-from rich.table import Table
 
 from odohil import units
 from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_OK, EXIT_UNTRUSTED
+from odohil.cli.options import UNITS_DEFAULT, UnitsOption, unit_system
+from odohil.cli.render import parameters_table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback, turns_exact_of
 from odohil.cli.verdict import gaussian_line, verdict_line
 from odohil.errors import OdohilError
-from odohil.science.estimators import EstimateResult, Observation, estimate
-from odohil.science.parameters import PAPER_UNITS
+from odohil.science.estimators import Observation, estimate
 from odohil.session.robot_file import load_robot_description
 from odohil.session.state import load_session, session_trials
 from odohil.session.trial_files import Trial, TrialSet, read_trials
@@ -58,32 +58,6 @@ def _load(source: Path, robot: Path | None, err: Console) -> TrialSet:
     return read_trials(source, description)
 
 
-def _paper(name: str, value: float) -> float:
-    if name == "E_R":
-        return units.rad_per_m_to_deg_per_m(value)
-    if name == "K_theta":
-        return units.rad2_per_m_to_deg2_per_m(value)
-    return value
-
-
-def _table(result: EstimateResult) -> Table:
-    table = Table(title=f"odometry error parameters ({result.method}, {result.n_trials} trials)")
-    for column in ("parameter", "value", "stderr", "95% CI", "unit", "value (SI)", "stderr (SI)"):
-        table.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
-    for p in result.parameters:
-        lo, hi = (_paper(p.name, v) for v in p.ci95)
-        table.add_row(
-            p.name,
-            f"{_paper(p.name, p.value):.4g}",
-            f"{_paper(p.name, p.stderr):.2g}",
-            f"[{lo:.4g}, {hi:.4g}]",
-            PAPER_UNITS[p.name],
-            f"{p.value:.4g} {p.unit}",
-            f"{p.stderr:.2g}",
-        )
-    return table
-
-
 def register(app: typer.Typer) -> None:
     """Add ``estimate`` to the app."""
 
@@ -110,7 +84,10 @@ def register(app: typer.Typer) -> None:
             ),
         ] = MethodChoice.robust,
         exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
-        as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+        as_json: Annotated[
+            bool, typer.Option("--json", help="Print the result as JSON (SI).")
+        ] = False,
+        units_choice: UnitsOption = UNITS_DEFAULT,
     ) -> None:
         """Estimate E_R, E_T, K_theta, K_rho from a trial file or a session folder.
 
@@ -154,7 +131,10 @@ def register(app: typer.Typer) -> None:
             raise typer.Exit(status)
         out = Console(width=max(120, Console().width))
         out.print(verdict_line(result.verdict), highlight=False)
-        out.print(_table(result))
+        title = (
+            f"odometry error parameters ({result.method}, {units.plural(result.n_trials, 'trial')})"
+        )
+        out.print(parameters_table(result, unit_system(units_choice), title))
         out.print(f"model check: {result.model_check.verdict}", highlight=False)
         out.print(f"sufficiency: {result.sufficiency.verdict}", highlight=False)
         for reason in result.sufficiency.reasons:
@@ -162,9 +142,12 @@ def register(app: typer.Typer) -> None:
         for note in result.notes:
             out.print(f"note: {note}", highlight=False)
         if result.gaussian:
-            out.print(gaussian_line(result), highlight=False)
+            out.print(gaussian_line(result, unit_system(units_choice)), highlight=False)
         if result.excluded:
-            out.print(f"left out (--exclude): trials {', '.join(map(str, result.excluded))}")
+            out.print(
+                f"left out (--exclude): {units.plural_noun(len(result.excluded), 'trial')} "
+                + ", ".join(map(str, result.excluded))
+            )
         if ambiguous:
             out.print(
                 "ambiguous trials left out (two candidate poses stay plausible): "

@@ -10,6 +10,7 @@ from typing import Annotated, TypeVar
 
 import typer
 
+from odohil import units
 from odohil.errors import OdohilError
 from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, ErrorParameters
@@ -82,3 +83,27 @@ def parameters_from_paper_units(
         return ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
+
+
+class UnitsChoice(StrEnum):
+    """How parameters are printed for people (JSON is always SI)."""
+
+    paper = "paper"
+    si = "si"
+
+
+UnitsOption = Annotated[
+    UnitsChoice,
+    typer.Option(
+        "--units",
+        help="Parameters printed in the paper's units (E_R deg/m, K_theta deg^2/m) "
+        "or SI (rad/m, rad^2/m); E_T is a plain number, K_rho metres. JSON is always SI.",
+    ),
+]
+UNITS_DEFAULT = UnitsChoice(units.DEFAULT_UNIT_SYSTEM)
+"""The same default on every command."""
+
+
+def unit_system(choice: UnitsChoice) -> units.UnitSystem:
+    """The choice as :mod:`odohil.units` names it."""
+    return "si" if choice is UnitsChoice.si else "paper"

@@ -12,7 +12,16 @@ from rich.console import Console
 from rich.table import Table
 
 from odohil import units
-from odohil.cli.options import E_R_DEFAULT, E_T_DEFAULT, K_RHO_DEFAULT, K_THETA_DEFAULT, bounded
+from odohil.cli.options import (
+    E_R_DEFAULT,
+    E_T_DEFAULT,
+    K_RHO_DEFAULT,
+    K_THETA_DEFAULT,
+    UNITS_DEFAULT,
+    UnitsOption,
+    bounded,
+    unit_system,
+)
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import warn_turns
 from odohil.errors import OdohilError
@@ -54,24 +63,6 @@ DEFAULT_TARGETS_TEXT = (
 )
 
 
-def to_paper(name: str, value_si: float) -> float:
-    """A value or standard error of parameter ``name`` from SI to the paper's units."""
-    if name == "E_R":
-        return units.rad_per_m_to_deg_per_m(value_si)
-    if name == "K_theta":
-        return units.rad2_per_m_to_deg2_per_m(value_si)
-    return value_si
-
-
-def from_paper(name: str, value_paper: float) -> float:
-    """A value or standard error of parameter ``name`` from the paper's units to SI."""
-    if name == "E_R":
-        return units.deg_per_m_to_rad_per_m(value_paper)
-    if name == "K_theta":
-        return units.deg2_per_m_to_rad2_per_m(value_paper)
-    return value_paper
-
-
 def _measurement(sigma_m: float | None, robot: Path | None) -> tuple[RobotDescription, str]:
     if sigma_m is not None and robot is not None:
         raise typer.BadParameter("give either --sigma-m or --robot, not both")
@@ -97,10 +88,10 @@ def _document(
         errors[name] = {
             "stderr_si": float(se),
             "unit_si": SI_UNITS[name],
-            "stderr_paper": to_paper(name, float(se)),
+            "stderr_paper": units.parameter_to_paper(name, float(se)),
             "unit_paper": PAPER_UNITS[name],
             "target_si": target,
-            "target_paper": to_paper(name, target),
+            "target_paper": units.parameter_to_paper(name, target),
             "target_source": "given" if name in given else "default",
             "ratio_to_target": float(se) / target,
         }
@@ -137,7 +128,12 @@ def _document(
 
 
 def _print(
-    plan: Plan, prior: ErrorParameters, measurement: str, title: str, given: set[str]
+    plan: Plan,
+    prior: ErrorParameters,
+    measurement: str,
+    title: str,
+    given: set[str],
+    system: units.UnitSystem,
 ) -> None:
     console = Console()
     designs = Table(title=title)
@@ -164,19 +160,19 @@ def _print(
         highlight=False,
     )
     errors = Table(title="Expected standard errors (Cramer-Rao)", caption=measurement)
-    for column in ("parameter", "prior (paper)", "stderr (paper)", "stderr (SI)", "target"):
-        errors.add_column(column, justify="right")
-    paper_prior = prior.to_paper_units()
+    for column in ("parameter", "prior", "stderr", "target", "unit"):
+        errors.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
+    prior_si = prior.to_si_dict()
     for name, se in zip(PARAMETER_NAMES, plan.standard_errors, strict=True):
         target = plan.targets[name]
         ratio = float(se) / target
         source = "" if name in given else " default"
         errors.add_row(
             name,
-            f"{paper_prior[name]:.4g} {PAPER_UNITS[name]}",
-            f"{to_paper(name, float(se)):.3g} {PAPER_UNITS[name]}",
-            f"{float(se):.3g} {SI_UNITS[name]}",
-            f"{to_paper(name, target):.3g}{source} ({ratio:.2f}x)",
+            f"{units.parameter_in(name, prior_si[name], system):.4g}",
+            f"{units.parameter_in(name, float(se), system):.3g}",
+            f"{units.parameter_in(name, target, system):.3g}{source} ({ratio:.2f}x)",
+            units.unit_column(name, system),
         )
     console.print(errors)
     if plan.meets_targets:
@@ -307,6 +303,7 @@ def plan(
         f"robot description's [floor] length_m, else {DEFAULT_FLOOR_M:g}).",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print the plan as JSON."),
+    units_choice: UnitsOption = UNITS_DEFAULT,
 ) -> None:
     """Recommend designs for a budget (or score one with --evaluate); print each
     parameter's expected stderr against its target, and the operator time.
@@ -331,7 +328,9 @@ def plan(
     for name, value in targets_paper.items():
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise typer.BadParameter(f"--target-{name.replace('_', '-')} must be positive")
-    targets = {n: from_paper(n, v) for n, v in targets_paper.items() if v is not None}
+    targets = {
+        n: units.parameter_from_paper(n, v) for n, v in targets_paper.items() if v is not None
+    }
     operator = OperatorTime(measure_s, speed, DEFAULT_TURN_RATE_RAD_PER_S)
     try:
         prior = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
@@ -349,7 +348,7 @@ def plan(
                 min_trials_per_design=min_trials_per_design,
                 operator=operator,
             )
-            title = f"Your plan: {result.distance_m:g} m, {result.n_trials} trials"
+            title = f"Your plan: {result.distance_m:g} m, {units.plural(result.n_trials, 'trial')}"
         else:
             if not math.isfinite(max_leg_m) or max_leg_m <= 0:
                 raise typer.BadParameter(f"--max-leg-m must be a positive length, got {max_leg_m}")
@@ -377,7 +376,8 @@ def plan(
             if budget_min is not None:
                 limits[1] = f"{budget_min:g} min"
             title = (
-                f"Recommended plan: {result.distance_m:g} m, {result.n_trials} trials "
+                f"Recommended plan: {result.distance_m:g} m, "
+                f"{units.plural(result.n_trials, 'trial')} "
                 f"(budget {' and '.join(x for x in limits if x)})"
             )
     except OdohilError as exc:
@@ -385,7 +385,7 @@ def plan(
     if as_json:
         typer.echo(json.dumps(_document(result, prior, measurement, set(targets)), indent=2))
     else:
-        _print(result, prior, measurement, title, set(targets))
+        _print(result, prior, measurement, title, set(targets), unit_system(units_choice))
 
 
 def register(app: typer.Typer) -> None:

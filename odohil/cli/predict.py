@@ -14,15 +14,19 @@ from odohil.cli.options import (
     E_T_DEFAULT,
     K_RHO_DEFAULT,
     K_THETA_DEFAULT,
+    UNITS_DEFAULT,
     ERDegPerM,
     ETOption,
     KRhoM,
     KThetaDeg2PerM,
+    UnitsOption,
     VariantChoice,
     VariantOption,
     bounded,
     parameters_from_paper_units,
+    unit_system,
 )
+from odohil.cli.render import parameters_line
 from odohil.errors import OdohilError
 from odohil.science.closed_forms import ObservableMeans, forth_and_back_means
 from odohil.science.parameters import SI_UNITS, ErrorParameters
@@ -57,14 +61,13 @@ def _degrees(key: str, value: float) -> str:
     return ""
 
 
-def _table(design: Design, params: ErrorParameters, means: ObservableMeans) -> Table:
-    paper = params.to_paper_units()
+def _table(
+    design: Design, params: ErrorParameters, means: ObservableMeans, system: units.UnitSystem
+) -> Table:
     table = Table(
         title=f"Expected observables, forth and back {design.label()} "
         f"(rho = {design.distance_m:g} m)",
-        caption=f"E_R = {paper['E_R']:g} deg/m, E_T = {paper['E_T']:g} "
-        f"(1+E_T = {1.0 + paper['E_T']:g}), K_theta = {paper['K_theta']:g} deg^2/m, "
-        f"K_rho = {paper['K_rho']:g} m",
+        caption=parameters_line(params.to_si_dict(), system) + f" (1+E_T = {1.0 + params.e_t:g})",
     )
     table.add_column("observable")
     table.add_column("meaning")
@@ -100,6 +103,7 @@ def predict(
     k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
     k_rho: KRhoM = K_RHO_DEFAULT,
     as_json: bool = typer.Option(False, "--json", help="Print SI values as JSON."),
+    units_choice: UnitsOption = UNITS_DEFAULT,
 ) -> None:
     """Predict phi1..phi5, <x>, <y> for k forth-and-back runs of length l.
 
@@ -117,7 +121,7 @@ def predict(
     if as_json:
         typer.echo(_json(design, params, means))
     else:
-        Console().print(_table(design, params, means))
+        Console().print(_table(design, params, means, unit_system(units_choice)))
 
 
 def register(app: typer.Typer) -> None:

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from rich.console import Console, Group, RenderableType
@@ -15,10 +14,11 @@ from rich.text import Text
 
 from odohil import units
 from odohil.driver.odometry import OdometrySample
+from odohil.science.estimators import EstimateResult, ParameterEstimate
+from odohil.science.estimators.verdict import Verdict
+from odohil.science.grouping import by_design
 from odohil.science.observables import observables
-from odohil.science.parameters import PAPER_UNITS, PARAMETER_NAMES
 from odohil.science.paths import Design, Leg, Turn
-from odohil.session.report import to_paper
 from odohil.session.state import CompletedTrial
 
 
@@ -37,27 +37,17 @@ def check_line(check: Check) -> Text:
     return Text.assemble(mark, (check.name, "bold"), ": ", check.detail)
 
 
-def _unwrapped(
-    angles: np.ndarray[Any, np.dtype[np.float64]],
-) -> np.ndarray[Any, np.dtype[np.float64]]:
-    centre = math.atan2(float(np.sin(angles).mean()), float(np.cos(angles).mean()))
-    return np.asarray(centre + (angles - centre + math.pi) % (2 * math.pi) - math.pi)
-
-
 def observables_table(trials: Sequence[CompletedTrial]) -> Table:
     """phi1..phi5 of every design with at least two completed trials."""
     table = Table(title="Observables per design", title_justify="left")
     for column in ("design", "n", "phi1 deg", "phi2 deg^2", "phi3 mm", "phi4 mm", "phi5 mm^2"):
         table.add_column(column, justify="left" if column == "design" else "right")
-    by_design: dict[Design, list[CompletedTrial]] = {}
-    for trial in trials:
-        by_design.setdefault(trial.design, []).append(trial)
-    for design, members in by_design.items():
+    for design, members in by_design(trials).items():
         if len(members) < 2:
             table.add_row(design.label(), str(len(members)), "needs 2 trials", "", "", "", "")
             continue
         poses = np.array([t.pose_change for t in members], dtype=np.float64)
-        poses[:, 2] = _unwrapped(poses[:, 2])
+        poses[:, 2] = units.angle_near(poses[:, 2], units.circular_mean(poses[:, 2]))
         phi = observables(poses)
         table.add_row(
             design.label(),
@@ -71,76 +61,115 @@ def observables_table(trials: Sequence[CompletedTrial]) -> Table:
     return table
 
 
-def parameters_table(result: Mapping[str, Any]) -> Table:
-    """The four parameters with standard errors, paper units, from an estimate's JSON object."""
+def parameters_table(
+    result: EstimateResult,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+    title: str | None = None,
+    truth: Mapping[str, float] | None = None,
+) -> Table:
+    """The four parameters with standard errors and 95 % intervals in
+    ``system``'s units; with ``truth`` (SI values by name) a truth column in
+    the same units and whether the interval holds it."""
     table = Table(
-        title=f"Estimate after {result.get('n_trials', '?')} trials", title_justify="left"
+        title=title or f"Estimate after {units.plural(result.n_trials, 'trial')}",
+        title_justify="left",
     )
-    for column in ("parameter", "estimate", "std. error", "unit"):
+    columns = ["parameter", "estimate", "std. error", "95 % interval", "unit"]
+    if truth is not None:
+        columns += ["truth", "truth inside"]
+    for column in columns:
         table.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
-    params = result.get("parameters", {})
-    for name in PARAMETER_NAMES:
-        entry = params.get(name, {})
-        table.add_row(
-            name,
-            _paper(name, entry.get("value")),
-            _paper(name, entry.get("stderr")),
-            PAPER_UNITS[name],
-        )
+    for p in result.parameters:
+        low, high = p.ci95
+        row = [
+            p.name,
+            number_text(p.name, p.value, system),
+            number_text(p.name, p.stderr, system, digits=2),
+            f"[{number_text(p.name, low, system)}, {number_text(p.name, high, system)}]",
+            units.unit_column(p.name, system),
+        ]
+        if truth is not None:
+            row.append(number_text(p.name, truth[p.name], system))
+            row.append("yes" if inside(p, truth[p.name]) else "[red]NO[/]")
+        table.add_row(*row)
     return table
 
 
-def _paper(name: str, value: float | None) -> str:
-    if value is None or not math.isfinite(value):
-        return "undetermined"
-    return f"{to_paper(name, float(value)):.4g}"
+def number_text(name: str, value_si: float, system: units.UnitSystem, digits: int = 4) -> str:
+    """A parameter's value (SI) as text in ``system``'s units, without the unit;
+    "-" when not finite (undetermined, or an unbounded interval end)."""
+    if not math.isfinite(value_si):
+        return "-"
+    return f"{units.parameter_in(name, value_si, system):.{digits}g}"
 
 
-def more_trials_text(result: Mapping[str, Any], remaining_in_plan: int) -> Text:
+def parameters_line(values_si: Mapping[str, float], system: units.UnitSystem) -> str:
+    """``E_R = -1 deg/m, E_T = -0.05, K_theta = 0.3 deg^2/m, K_rho = 0.0009 m``."""
+    return ", ".join(
+        f"{name} = "
+        + units.with_unit(number_text(name, value, system), units.parameter_unit(name, system))
+        for name, value in values_si.items()
+    )
+
+
+def inside(entry: ParameterEstimate, value: float) -> bool:
+    """Whether ``value`` lies in the entry's 95 % interval (a non-finite end: unbounded)."""
+    low, high = entry.ci95
+    return (not math.isfinite(low) or low <= value) and (not math.isfinite(high) or value <= high)
+
+
+def more_trials_text(result: EstimateResult, remaining_in_plan: int) -> Text:
     """How many more trials reach the target precision (the sufficiency check)."""
-    suff = result.get("sufficiency", {})
-    if suff.get("sufficient"):
+    suff = result.sufficiency
+    if suff.sufficient:
         return Text("Target precision reached for every parameter.", style="green")
-    lines = [str(suff.get("verdict", "precision target not reached"))]
+    lines = [suff.verdict or "precision target not reached"]
     # One suggestion per parameter and design: the design needs the largest.
     needed: dict[str, int | None] = {}
-    for s in suff.get("suggestions", []):
-        design, more = str(s.get("design")), s.get("more_trials")
+    for s in suff.suggestions:
+        design, more = s.design_label, s.more_trials
         if design not in needed or (
-            needed[design] is not None and (more is None or more > needed[design])
+            (known := needed[design]) is not None and (more is None or more > known)
         ):
             needed[design] = more
     for design, more in needed.items():
         lines.append(
             f"  {design}: "
-            + ("cannot reach it alone" if more is None else f"{more} more trials reach the target")
+            + (
+                "cannot reach it alone"
+                if more is None
+                else f"{units.plural(more, 'more trial')} "
+                f"{'reaches' if more == 1 else 'reach'} the target"
+            )
         )
-    lines.append(f"  ({remaining_in_plan} trials remain in the plan)")
+    lines.append(
+        f"  ({units.plural(remaining_in_plan, 'trial')} "
+        f"{'remains' if remaining_in_plan == 1 else 'remain'} in the plan)"
+    )
     return Text("\n".join(lines), style="yellow")
 
 
 def estimate_panel(
-    trials: Sequence[CompletedTrial], result: Mapping[str, Any], remaining: int
+    trials: Sequence[CompletedTrial],
+    result: EstimateResult,
+    remaining: int,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
 ) -> RenderableType:
     """The live table after a trial: observables, parameters, trials still needed."""
-    check = result.get("model_check", {})
-    verdict = Text(f"Model check: {check.get('verdict', 'n/a')}")
     return Group(
         observables_table(trials),
-        parameters_table(result),
+        parameters_table(result, system),
         more_trials_text(result, remaining),
-        verdict,
-        verdict_text(result),
+        Text(f"Model check: {result.model_check.verdict}"),
+        verdict_text(result.verdict),
     )
 
 
-def verdict_text(result: Mapping[str, Any]) -> Text:
+def verdict_text(verdict: Verdict) -> Text:
     """``Verdict: trusted`` (green) or ``Verdict: doubtful: reasons`` (red)."""
-    verdict = result.get("verdict", {})
-    status = str(verdict.get("status", "n/a"))
-    reasons = "; ".join(str(r) for r in verdict.get("reasons", []))
-    style = "green" if status == "trusted" else "bold red"
-    return Text(f"Verdict: {status}" + (f": {reasons}" if reasons else ""), style=style)
+    reasons = "; ".join(verdict.reasons)
+    style = "green" if verdict.trusted else "bold red"
+    return Text(f"Verdict: {verdict.status}" + (f": {reasons}" if reasons else ""), style=style)
 
 
 class MotionProgress:

@@ -12,6 +12,7 @@ from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
 from odohil.cli.verdict import verdict_line
 from odohil.errors import OdohilError
+from odohil.session.exports import export_files
 from odohil.session.report import load_report, write_report
 from odohil.session.state import load_session
 
@@ -29,7 +30,7 @@ def report(
     ] = False,
     exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
 ) -> None:
-    """Write index.html (plots inline), parameters.json and odometry_covariance.yaml to --out.
+    """Write index.html (plots inline), parameters.json and the files of odohil export to --out.
 
     An estimate that is not trusted is refused (exit 3, nothing written)
     unless --force; exit 2 on a bad session or --exclude.
@@ -53,7 +54,8 @@ def report(
         )
         raise typer.Exit(EXIT_UNTRUSTED)
     try:
-        files = write_report(data, out)
+        extra = () if data.result is None else export_files(data.result, source=session.name)
+        files = write_report(data, out, extra)
     except OSError as exc:
         console.print(f"[red]error:[/red] {exc}")
         raise typer.Exit(EXIT_BAD_INPUT) from None

@@ -8,9 +8,10 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
+from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
 from odohil.cli.line import resolve_line
-from odohil.cli.options import bounded
+from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.run import (
     Outcome,
     connect,
@@ -58,8 +59,14 @@ def resume(
         ),
     ] = None,
     json_out: Annotated[
-        bool, typer.Option("--json", help="Print the final estimate as JSON.")
+        bool,
+        typer.Option(
+            "--json",
+            help="Print one JSON object (SI), as run --json: the final estimate, or the "
+            "status and partial estimate of a run that did not finish.",
+        ),
     ] = False,
+    units_choice: UnitsOption = UNITS_DEFAULT,
     from_here: Annotated[
         bool,
         typer.Option(
@@ -78,7 +85,8 @@ def resume(
     that is not where the next trial starts is refused (exit 2) unless --from-here.
     """
     console = Console(stderr=True)
-    with session_exit_codes(console):
+    system = unit_system(units_choice)
+    with session_exit_codes(console, json_out):
         with session_input(console):
             check_session_folder(session)
             resumed = resume_session(session)
@@ -110,7 +118,8 @@ def resume(
             if kind == "file" and trial_file:  # before the port opens
                 check_trial_file(trial_file, description, state.plan)
             console.print(
-                f"resuming {session}: {done} of {state.plan.n_trials} trials done"
+                f"resuming {session}: {done} of "
+                f"{units.plural(state.plan.n_trials, 'trial')} done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
             )
             console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
@@ -140,11 +149,11 @@ def resume(
 
                 outcome = execute(
                     resumed.journal, state, robot, source, connection, console,
-                    start_check=start_check,
+                    start_check=start_check, system=system,
                 )  # fmt: skip
                 if refused:
                     outcome = Outcome(EXIT_BAD_INPUT, None)
-    finish(outcome, json_out, console)
+    finish(outcome, json_out, console, system=system)
 
 
 def register(app: typer.Typer) -> None:

@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
+import signal
 import time
 from collections.abc import Collection, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -22,8 +24,8 @@ import typer
 from rich.console import Console
 from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
-from rich.table import Table
 
+from odohil import units
 from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
@@ -34,7 +36,8 @@ from odohil.cli.exit_codes import (
     exit_for_signal,
 )
 from odohil.cli.line import Line, register_fake_urls, resolve_line
-from odohil.cli.options import bounded
+from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
+from odohil.cli.render import parameters_table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.verdict import verdict_line
 from odohil.errors import (
@@ -48,7 +51,6 @@ from odohil.errors import (
     TrialFileError,
 )
 from odohil.science.estimators import EstimateResult, estimate
-from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
@@ -76,6 +78,7 @@ from odohil.session.state import (
     SessionState,
     ambiguous_trials,
     description_of_header,
+    load_session,
     session_observations,
 )
 
@@ -223,9 +226,18 @@ def open_mocap(
 class ProgressObserver:
     """A rich progress bar of completed trials, on stderr, with notes."""
 
-    def __init__(self, console: Console, state: SessionState) -> None:
+    def __init__(
+        self,
+        console: Console,
+        state: SessionState,
+        system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+        measurer: str = "the simulated operator",
+    ) -> None:
         assert state.plan is not None
         self.console = console
+        self.system = system
+        self.measurer = measurer
+        self.remeasured: dict[int, None] = {}  # trial numbers, in order
         self.progress = Progress(
             TextColumn("[bold]trials"),
             BarColumn(),
@@ -243,11 +255,6 @@ class ProgressObserver:
         """Advance on each solved trial; print voids and rejections."""
         if record.kind == ev.SOLVED:
             self.progress.update(self.task, completed=len(state.completed))
-        elif record.kind == ev.ESTIMATE and record.data.get("result"):
-            params = record.data["result"].get("parameters", {})
-            e_r = params.get("E_R", {}).get("value")
-            if e_r is not None:
-                self.progress.update(self.task, description=f"E_R {e_r:+.4g} rad/m")
         elif record.kind == ev.VOID:
             self.progress.console.print(
                 f"trial {record.data['trial']} attempt {record.data['attempt']} void: "
@@ -255,17 +262,46 @@ class ProgressObserver:
             )
         elif record.kind == ev.MEASUREMENTS_REJECTED:
             self.progress.console.print(
-                f"trial {record.data['trial']}: distances rejected, taken again: "
-                f"{record.data['reason']}"
+                f"trial {record.data['trial']}: the distances {self.measurer} took fit no "
+                f"rigid motion, so {self.measurer} measured them again: the check at work; "
+                "nothing is lost and the trial counts once (the reason is in the journal).",
+                soft_wrap=True,
+                highlight=False,
             )
+        elif record.kind == ev.REMEASURED and not record.data.get("kept"):
+            self.remeasured.setdefault(int(record.data["trial"]), None)
+
+    def remeasure_summary(self) -> str | None:
+        """One line for every distance the slip check had taken again (None if none)."""
+        if not self.remeasured:
+            return None
+        trials = list(self.remeasured)
+        return (
+            f"In {units.plural(len(trials), 'trial')} ({', '.join(map(str, trials))}) the "
+            f"slip check doubted a distance and {self.measurer} measured it again: the check "
+            "at work; nothing is lost and each trial counts once."
+        )
+
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        """Show the live E_R beside the bar."""
+        e_r = result.parameter("E_R").value
+        if math.isfinite(e_r):
+            value = units.parameter_in("E_R", e_r, self.system)
+            unit = units.parameter_unit("E_R", self.system)
+            self.progress.update(self.task, description=f"E_R {value:+.4g} {unit}")
 
 
 @dataclass(frozen=True)
 class Outcome:
-    """How a session run ended: exit code and the final estimate (if any)."""
+    """How a session run ended: exit code, the final estimate (if any), and
+    for ``--json`` how it ended (``status``: finished, interrupted, error,
+    stop unconfirmed; ``details``: the signal, whether the stop was confirmed,
+    the partial estimate of an interrupted run)."""
 
     exit_code: int
-    estimate: dict[str, Any] | None
+    estimate: EstimateResult | None
+    status: str = "finished"
+    details: Mapping[str, Any] = field(default_factory=dict)
 
 
 def execute(
@@ -278,6 +314,8 @@ def execute(
     motion: MotionSettings | None = None,
     start_check: StartCheck | None = None,
     exclude: frozenset[int] = frozenset(),
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+    measurer: str = "the simulated operator",
 ) -> Outcome:
     """Run the engine with a progress bar; map failures to exit codes (3 when
     the final estimate's verdict is not trusted). ``exclude``: trial numbers
@@ -286,7 +324,7 @@ def execute(
     The engine journals ``stopped`` and stops the robot before an error gets here.
     """
     folder = journal.folder
-    observer = ProgressObserver(console, state)
+    observer = ProgressObserver(console, state, system, measurer)
     engine = SessionEngine(
         journal,
         state,
@@ -304,20 +342,29 @@ def execute(
     except StopUnconfirmedError as exc:
         observer.progress.stop()
         report_unconfirmed(console, exc, engine.stop_outcome, folder)
-        return Outcome(EXIT_STOP_UNCONFIRMED, None)
+        return ended(EXIT_STOP_UNCONFIRMED, "stop unconfirmed", engine, exclude, str(exc))
     except KeyboardInterrupt as exc:
         observer.progress.stop()
-        code = exit_for_signal(signal_of(exc))
-        console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+        signum = signal_of(exc)
+        console.print(f"[yellow]interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
         report_stop(console, engine.stop_outcome, folder)
-        return Outcome(code, None)
+        return ended(
+            exit_for_signal(signum),
+            "interrupted",
+            engine,
+            exclude,
+            interrupt_text(exc),
+            signal=signal.Signals(signum).name,
+        )
     except OdohilError as exc:
         observer.progress.stop()
         console.print(f"[red]error[/]: {exc}", soft_wrap=True)
         report_stop(console, engine.stop_outcome, folder)
-        return Outcome(EXIT_ERROR, None)
+        return ended(EXIT_ERROR, "error", engine, exclude, str(exc))
     finally:
         observer.progress.stop()
+        if (summary := observer.remeasure_summary()) is not None:
+            console.print(summary, soft_wrap=True, highlight=False)
     try:
         fitted = final_estimate(final, exclude)
     except OdohilError as exc:
@@ -325,7 +372,49 @@ def execute(
         return Outcome(EXIT_ERROR, None)
     if not fitted.verdict.trusted:
         console.print(verdict_line(fitted.verdict), highlight=False)
-    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted.to_json_dict())
+    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted)
+
+
+def interrupt_text(exc: BaseException) -> str:
+    """What ended the run, in words: "Ctrl-C" or "SIGTERM received" (never
+    an exception's class name)."""
+    signum = signal_of(exc)
+    if signum == signal.SIGINT:
+        return "Ctrl-C"
+    return str(exc) or f"{signal.Signals(signum).name} received"
+
+
+def ended(
+    code: int,
+    status: str,
+    engine: SessionEngine,
+    exclude: Collection[int],
+    message: str,
+    **details: Any,
+) -> Outcome:
+    """The outcome of a run that did not finish: its status, what was checked
+    on the way out (the robot's stop, the journal) and the estimate of the
+    trials done so far (None when they are too few)."""
+    stop = engine.stop_outcome
+    state = engine.state
+    # what is on disk: a signal may land between a record and the state it makes
+    with contextlib.suppress(OdohilError):
+        state = load_session(engine.journal.folder).state
+    info: dict[str, Any] = {
+        **details,
+        "message": message,
+        "stop_confirmed": None if stop is None else stop.robot_stopped,
+        "journaled": None if stop is None else stop.journaled,
+        "trials_done": len(state.completed),
+        "session": str(engine.journal.folder),
+    }
+    partial: EstimateResult | None = None
+    try:
+        partial = final_estimate(state, exclude)
+    except OdohilError as exc:
+        info["partial_estimate_note"] = str(exc)
+    info["partial_estimate"] = None if partial is None else partial.to_json_dict()
+    return Outcome(code, None, status, info)
 
 
 def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateResult:
@@ -395,9 +484,11 @@ def report_unconfirmed(
     console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
     if exc.__cause__ is not None:
         cause = exc.__cause__
-        console.print(
-            f"the run ended on: {str(cause) or type(cause).__name__}", soft_wrap=True, markup=False
-        )
+        if isinstance(cause, KeyboardInterrupt):
+            why = interrupt_text(cause)
+        else:
+            why = str(cause) or "an error without a message"
+        console.print(f"the run ended on: {why}", soft_wrap=True, markup=False)
     if outcome is None:
         console.print(f"st sent but not confirmed: {exc}", soft_wrap=True, markup=False)
         return
@@ -414,48 +505,60 @@ def show_start(console: Console) -> StartCheck:
 
 
 def print_summary(
-    result: Mapping[str, Any], console: Console, truth: Mapping[str, float] | None = None
+    result: EstimateResult,
+    console: Console,
+    truth: Mapping[str, float] | None = None,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
 ) -> None:
-    """The estimate as a table (SI), with the true values beside when known."""
-    table = Table(title=f"estimate ({result.get('method')}, {result.get('n_trials')} trials)")
-    for column in ("parameter", "value", "std. error", "95 % interval", "unit"):
-        table.add_column(column)
-    if truth is not None:
-        table.add_column("true value")
-        table.add_column("inside")
-    for name in PARAMETER_NAMES:
-        entry = result["parameters"][name]
-        low, high = entry["ci95"]
-        row = [name, _num(entry["value"]), _num(entry["stderr"]), f"[{_num(low)}, {_num(high)}]"]
-        row.append(entry["unit"])
-        if truth is not None:
-            row.append(_num(truth[name]))
-            row.append("yes" if inside(entry, truth[name]) else "[red]NO[/]")
-        table.add_row(*row)
-    console.print(table)
+    """The estimate as a table in ``system``'s units, with the true values
+    (SI, by name) beside when known."""
+    title = f"estimate ({result.method}, {units.plural(result.n_trials, 'trial')})"
+    console.print(parameters_table(result, system, title, truth))
 
 
-def inside(entry: Mapping[str, Any], value: float) -> bool:
-    """Whether ``value`` lies in the entry's 95 % interval (None: unbounded)."""
-    low, high = entry["ci95"]
-    return (low is None or low <= value) and (high is None or value <= high)
-
-
-def _num(value: float | None) -> str:
-    return "-" if value is None else f"{value:.4g}"
+def _ctrl_c(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt("Ctrl-C")
 
 
 @contextlib.contextmanager
-def session_exit_codes(console: Console) -> Iterator[None]:
+def ctrl_c_in_words() -> Iterator[None]:
+    """Within: Ctrl-C raises a KeyboardInterrupt that says "Ctrl-C", so what the
+    engine journals and what the operator reads name the key, not a class
+    (main thread only; the previous handler comes back afterwards)."""
+    try:
+        previous = signal.signal(signal.SIGINT, _ctrl_c)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[None]:
     """Make SIGTERM, SIGHUP and SIGQUIT end the command as Ctrl-C does, and turn
     what escapes into its exit status: a signal 128 + N, an unconfirmed stop 4,
     a session that cannot be opened or is in use 2, any other odohil or OS
-    error 1 (the robot was already stopped and the journal written below)."""
+    error 1 (the robot was already stopped and the journal written below).
+    With ``json_out`` an interrupt before the session ran still prints one
+    JSON object saying so."""
     try:
-        with signals_raise():
+        with signals_raise(), ctrl_c_in_words():
             yield
     except KeyboardInterrupt as exc:
-        console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+        console.print(f"[yellow]interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
+        if json_out:
+            signum = signal_of(exc)
+            document = {
+                "status": "interrupted",
+                "signal": signal.Signals(signum).name,
+                "message": interrupt_text(exc) + " before the session ran: nothing moved",
+                "stop_confirmed": None,
+                "partial_estimate": None,
+            }
+            typer.echo(json.dumps(document))
         raise typer.Exit(exit_for_signal(signal_of(exc))) from None
     except StopUnconfirmedError as exc:
         console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
@@ -549,9 +652,15 @@ def run(
     ] = None,
     json_out: Annotated[
         bool,
-        typer.Option("--json", help="Print the final estimate as JSON (as estimate --json)."),
+        typer.Option(
+            "--json",
+            help="Print one JSON object (SI): the final estimate (as estimate --json) with "
+            '"status": "finished"; when interrupted or failed, the status, the signal, '
+            "whether the stop was confirmed and the partial estimate.",
+        ),
     ] = False,
     exclude_text: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
+    units_choice: UnitsOption = UNITS_DEFAULT,
     allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
 ) -> None:
     """Run a calibration session unattended: n trials, no prompts, journaled.
@@ -560,7 +669,8 @@ def run(
     """
     console = Console(stderr=True)
     folder = session or default_session_folder()
-    with session_exit_codes(console):
+    system = unit_system(units_choice)
+    with session_exit_codes(console, json_out):
         checked = check_new_session(plan_text, robot_file, folder, allow_turns)  # nothing moved
         plan, description, toml = checked.plan, checked.description, checked.toml
         warn_turns(console, plan, description)
@@ -600,8 +710,10 @@ def run(
             console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
             with journal, connect(line, truth_socket) as (robot, truth):
                 source = make_source(kind, description, truth, seed, trial_file, mocap)
-                outcome = execute(journal, state, robot, source, settings, console, exclude=exclude)
-    finish(outcome, json_out, console)
+                outcome = execute(
+                    journal, state, robot, source, settings, console, exclude=exclude, system=system
+                )
+    finish(outcome, json_out, console, system=system)
 
 
 def finish(
@@ -610,13 +722,20 @@ def finish(
     console: Console,
     extra: Mapping[str, Any] | None = None,
     truth: Mapping[str, float] | None = None,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
 ) -> None:
-    """Print the summary (table on stdout, or JSON) and exit with the outcome's code."""
-    if outcome.estimate is not None:
-        if json_out:
-            typer.echo(json.dumps({**outcome.estimate, **(extra or {})}))
+    """Print the summary (a table on stdout, or one JSON object) and exit with
+    the outcome's code. With ``json_out`` a run that did not finish prints its
+    status and partial estimate (:func:`ended`) instead of nothing."""
+    if json_out:
+        if outcome.estimate is not None:
+            document = {"status": outcome.status, **outcome.estimate.to_json_dict()}
         else:
-            print_summary(outcome.estimate, Console(width=max(110, Console().width)), truth)
+            document = {"status": outcome.status, "exit_code": outcome.exit_code}
+            document.update(outcome.details)
+        typer.echo(json.dumps({**document, **(extra or {})}))
+    elif outcome.estimate is not None:
+        print_summary(outcome.estimate, Console(width=max(110, Console().width)), truth, system)
     if outcome.exit_code:
         raise typer.Exit(outcome.exit_code)
 

@@ -13,6 +13,7 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TimeRemainingColumn
 
+from odohil import units
 from odohil.cli.options import (
     E_R_DEFAULT,
     E_T_DEFAULT,
@@ -165,7 +166,9 @@ def simulate(
         _write_atomically(out, design, result.pose_change)
     except OSError as exc:
         raise typer.BadParameter(f"cannot write {str(out)!r}: {exc}", param_hint="--out") from exc
-    err.print(f"wrote {trials} trials of {design.label()} to {out}", highlight=False)
+    err.print(
+        f"wrote {units.plural(trials, 'trial')} of {design.label()} to {out}", highlight=False
+    )
 
 
 def register(app: typer.Typer) -> None:

@@ -13,6 +13,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from odohil import units
 from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
@@ -28,6 +29,7 @@ from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
     ProgressObserver,
     connect,
+    interrupt_text,
     make_source,
     refuse_unredundant,
     report_stop,
@@ -322,7 +324,7 @@ def _drive_or_reload(
             raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
         except KeyboardInterrupt as exc:
             observer.progress.stop()
-            console.print(f"[yellow]interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+            console.print(f"[yellow]interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
             report_stop(console, engine.stop_outcome, folder)
             raise typer.Exit(exit_for_signal(signal_of(exc))) from None
         except OdohilError as exc:
@@ -395,7 +397,7 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
     out = Console(width=max(100, Console().width))
     status = "PASS" if tested.passed else "FAIL"
     failed = tested.failed()
-    text = f"validation: {status} ({tested.n_trials} trials of {data['path']}"
+    text = f"validation: {status} ({units.plural(tested.n_trials, 'trial')} of {data['path']}"
     text += f"; rejected by {', '.join(failed)})" if failed else ")"
     out.print(text, highlight=False)
     table = Table(title=f"NEES chi-square tests, each at level {tested.alpha / 4:g}")

@@ -5,6 +5,7 @@ from __future__ import annotations
 from odohil import units
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
+from odohil.science.parameters import PARAMETER_NAMES
 
 
 def verdict_line(verdict: Verdict) -> str:
@@ -15,17 +16,16 @@ def verdict_line(verdict: Verdict) -> str:
     return text
 
 
-def gaussian_line(result: EstimateResult) -> str:
-    """The Gaussian joint maximum-likelihood values beside the robust ones, paper units."""
+def gaussian_line(
+    result: EstimateResult, system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
+) -> str:
+    """The Gaussian joint maximum-likelihood values beside the robust ones, in
+    ``system``'s units."""
     by_name = {p.name: p for p in result.gaussian}
     parts = []
-    for name in ("E_R", "E_T", "K_theta", "K_rho"):
+    for name in PARAMETER_NAMES:
         if name not in by_name:
             continue
-        value = by_name[name].value
-        if name == "E_R":
-            value = units.rad_per_m_to_deg_per_m(value)
-        elif name == "K_theta":
-            value = units.rad2_per_m_to_deg2_per_m(value)
-        parts.append(f"{name} {value:.4g}")
-    return "Gaussian joint ML beside (paper units): " + ", ".join(parts)
+        value = f"{units.parameter_in(name, by_name[name].value, system):.4g}"
+        parts.append(f"{name} {units.with_unit(value, units.parameter_unit(name, system))}")
+    return "Gaussian joint ML beside: " + ", ".join(parts)

@@ -41,7 +41,7 @@ from odohil.cli.exit_codes import (
     exit_for_signal,
 )
 from odohil.cli.line import Line, register_fake_urls, resolve_line
-from odohil.cli.options import bounded
+from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
@@ -49,13 +49,16 @@ from odohil.cli.run import (
     MAY_STILL_MOVE,
     default_session_folder,
     final_estimate,
+    interrupt_text,
     report_stop,
     warn_turns,
 )
 from odohil.cli.verdict import verdict_line
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
+from odohil.science.estimators import EstimateResult
 from odohil.science.floor_marks import marks_from_pose
+from odohil.science.grouping import by_design
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import Design
@@ -79,7 +82,7 @@ from odohil.session.robot import Robot
 from odohil.session.robot_file import load_robot_description
 from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
-from odohil.session.sources import OperatorSource, TrialContext
+from odohil.session.sources import OperatorSource, TrialContext, check_distance
 from odohil.session.start_pose import StartPose, pose_text, sample_pose
 from odohil.session.state import SessionState
 
@@ -90,18 +93,23 @@ MAX_WIRE = 32767
 """Largest relative move one ``pr`` carries, 0.1 in."""
 _SAMPLES = 400
 _SPREAD_SIGMAS = 4.0
-_UNITS = {"": 1.0, "m": 1.0, "cm": 0.01, "mm": 0.001}
+BACK_WORDS = ("back", "-")
+"""What the operator types at a distance prompt to correct the value typed just before."""
 _NUMBER = re.compile(r"^\s*(?P<number>[^a-z\s]*|nan|inf|[+-]inf|infinity)\s*(?P<unit>mm|cm|m)?\s*$")
 
 
 # --- distances -------------------------------------------------------------
 
 
-def parse_metres(text: str) -> float:
+def parse_metres(text: str, label: str) -> float:
     """A typed distance in metres: ``0.012``, ``12 mm``, ``1.2cm``, ``0.012 m``.
+    The one parse of what the operator typed: the number and its unit become
+    metres here (:data:`odohil.units.METRES_PER_LENGTH_UNIT`), and from here on
+    the distance stays that float, up to its journal record.
 
     Raises:
-        MeasurementError: not a number (with an optional unit), not finite, or negative.
+        MeasurementError: not a number (with an optional unit), or not a
+            distance (:func:`~odohil.session.sources.check_distance`).
     """
     match = _NUMBER.match(text.strip().lower())
     if match is None or not match.group("number"):
@@ -109,16 +117,12 @@ def parse_metres(text: str) -> float:
             f"{text.strip()!r} is not a number of metres (e.g. 0.012, 12 mm or 1.2 cm)"
         )
     try:
-        value = float(match.group("number")) * _UNITS[match.group("unit") or ""]
+        number = float(match.group("number"))
     except ValueError:
         raise MeasurementError(
             f"{text.strip()!r} is not a number of metres (e.g. 0.012, 12 mm or 1.2 cm)"
         ) from None
-    if not math.isfinite(value):
-        raise MeasurementError(f"{text.strip()!r} is not a finite number")
-    if value < 0:
-        raise MeasurementError(f"a distance cannot be negative ({text.strip()})")
-    return value
+    return check_distance(units.to_metres(number, match.group("unit") or "m"), label)
 
 
 @dataclass(frozen=True)
@@ -201,13 +205,13 @@ class Interrupts:
             self.pending = True
             os.write(2, b"\nCtrl-C: stopping the robot...\n")
             return
-        raise KeyboardInterrupt
+        raise KeyboardInterrupt("Ctrl-C")
 
     def check(self) -> None:
         """Raise the Ctrl-C deferred during a motion."""
         if self.pending:
             self.pending = False
-            raise KeyboardInterrupt
+            raise KeyboardInterrupt("Ctrl-C")
 
 
 def _wait_readable(stream: TextIO, slice_s: float = 0.1) -> None:
@@ -245,6 +249,12 @@ class WizardPrompts:
         self.progress = progress
         self.estimate: ErrorParameters | None = None
         self._ranges: dict[tuple[int, int, int], tuple[ExpectedRange, ...]] = {}
+        self._shown: set[tuple[int, int]] = set()
+        self._helped: set[tuple[int, int]] = set()
+        # per (trial, attempt, rejections): a typed value held until the next is
+        # typed (so ``back`` can correct it), and values a rejection did not name
+        self._held: dict[tuple[int, int, int], dict[int, float]] = {}
+        self._kept: dict[tuple[int, int, int], dict[int, float]] = {}
 
     def _input(self, prompt: str) -> str:
         try:
@@ -254,13 +264,39 @@ class WizardPrompts:
         except EOFError:
             raise MeasurementError("the input ended (no operator at the terminal)") from None
 
+    def _header(self, ctx: TrialContext, resumed: bool) -> None:
+        """The trial's context, once per attempt: number, design, driving; on a
+        resumed attempt also where it stands and what was already entered."""
+        self._shown.add((ctx.trial, ctx.attempt))
+        self.console.print(
+            f"\n[bold]Trial {ctx.trial}/{ctx.n_trials}[/] (attempt {ctx.attempt}): "
+            f"{ctx.design.label()}, {ctx.design.distance_m:g} m of driving"
+            + (
+                " [bold](resumed: the motion is done, its marks are on the floor)[/]"
+                if resumed
+                else ""
+            )
+            + "."
+        )
+        if resumed and ctx.measurements:
+            entered = ", ".join(
+                f"{label} = {value:.4f} m"
+                for label, value in zip(ctx.labels, ctx.measurements, strict=False)
+            )
+            left = len(ctx.labels) - len(ctx.measurements)
+            self.console.print(
+                f"Already entered and saved: {entered}; {units.plural(left, 'distance')} to go."
+            )
+
+    def _context(self, ctx: TrialContext) -> None:
+        """Show the trial's context if this wizard has not shown it yet (a resume)."""
+        if (ctx.trial, ctx.attempt) not in self._shown:
+            self._header(ctx, resumed=True)
+
     def confirm_start_marks(self, ctx: TrialContext) -> None:
         """Ask for the start marks."""
         screws = ", ".join(self.description.screw_names)
-        self.console.print(
-            f"\n[bold]Trial {ctx.trial}/{ctx.n_trials}[/] (attempt {ctx.attempt}): "
-            f"{ctx.design.label()}, {ctx.design.distance_m:g} m of driving."
-        )
+        self._header(ctx, resumed=False)
         self._input(
             f"Mark the floor at the {len(self.description.screws)} screws ({screws}), "
             "keep clear of the robot, then press Enter to start the motion: "
@@ -271,6 +307,7 @@ class WizardPrompts:
         self.progress.stop()
         self.interrupts.in_motion = False
         self.interrupts.check()
+        self._context(ctx)
         pose = ctx.encoder_end_pose
         if pose is not None:
             self.console.print(
@@ -286,18 +323,64 @@ class WizardPrompts:
             self._ranges[key] = expected_ranges(self.description, ctx.design, params, ctx.trial)
         return self._ranges[key][index]
 
-    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
-        """Ask until the answer is a plausible distance; return it in metres (text)."""
+    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+        """Distance ``index`` in metres. A distance a rejection did not name is
+        kept without asking. Otherwise the value is handed over only once the
+        next distance is typed, so that typing ``back`` (or ``-``) at the next
+        prompt corrects it; the next value is then held for the next call."""
+        self._context(ctx)
+        key = (ctx.trial, ctx.attempt, ctx.rejections)
+        kept = self._kept.get(key, {})
+        label = ctx.labels[index]
+        if index in kept:
+            self.console.print(f"{label}: {kept[index]:.4f} m kept (the rejection did not name it)")
+            return kept[index]
+        held = self._held.setdefault(key, {})
+        value = held.pop(index) if index in held else self._read_first(ctx, index)
+        following = [j for j in range(index + 1, len(ctx.labels)) if j not in kept]
+        while following:
+            answer = self._read_distance(ctx, following[0], index)
+            if answer is not None:
+                held[following[0]] = answer
+                break
+            self.console.print(f"Correct {label}:")
+            value = self._read_first(ctx, index)
+        return value
+
+    def _read_first(self, ctx: TrialContext, index: int) -> float:
+        """Distance ``index`` with nothing before it to go back to."""
+        value = self._read_distance(ctx, index, None)
+        assert value is not None  # back is refused when there is nothing to go back to
+        return value
+
+    def _read_distance(self, ctx: TrialContext, index: int, back_to: int | None) -> float | None:
+        """Ask until the answer is a plausible distance; return it in metres, or
+        None when the operator typed ``back`` to correct distance ``back_to``."""
         label = ctx.labels[index]
         expected = self._range(ctx, index)
         hint = f"expected {expected.low:.4f} to {expected.high:.4f} m"
-        if problem:
-            self.console.print(f"[red]{problem}[/]")
+        back = f"; back: correct {ctx.labels[back_to]}" if back_to is not None else ""
+        if (ctx.trial, ctx.attempt) not in self._helped:
+            self._helped.add((ctx.trial, ctx.attempt))
+            self.console.print(
+                "Type each distance in metres, or with a unit (12 mm, 1.2 cm); "
+                f"type {' or '.join(BACK_WORDS)} to correct the value typed just before."
+            )
         unconfirmed: float | None = None
         while True:
-            text = self._input(f"{label}, metres ({hint}; cm/mm suffix accepted): ")
+            text = self._input(
+                f"Trial {ctx.trial}/{ctx.n_trials}, {label}, metres ({hint}{back}): "
+            )
+            if text.strip().lower() in BACK_WORDS:
+                if back_to is not None:
+                    return None
+                self.console.print(
+                    "[yellow]nothing to go back to:[/] only the value typed just before can be "
+                    "corrected, and the earlier ones are saved; type this distance"
+                )
+                continue
             try:
-                value = parse_metres(text)
+                value = parse_metres(text, label)
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
                 continue
@@ -314,10 +397,11 @@ class WizardPrompts:
                 )
                 unconfirmed = value
                 continue
-            return repr(value)
+            return value
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> str:
+    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
         """The slip check doubts the trial: ask for the suspect distance again."""
+        self._context(ctx)
         label = ctx.labels[index]
         previous = ctx.measurements[index] if index < len(ctx.measurements) else float("nan")
         self.console.print(f"[yellow]check the marks:[/] {reason}")
@@ -326,14 +410,15 @@ class WizardPrompts:
                 f"Re-measure {label}, metres (you typed {previous:.4f}; press Enter to keep it): "
             )
             if not text.strip():
-                return ""
+                return None
             try:
-                return repr(parse_metres(text))
+                return parse_metres(text, label)
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> str:
+    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
         """The trial is ambiguous: ask for one more cross distance, named by its screws."""
+        self._context(ctx)
         self.console.print(f"[yellow]two poses fit these marks:[/] {reason}")
         while True:
             text = self._input(
@@ -341,9 +426,9 @@ class WizardPrompts:
                 "the trial is then left out): "
             )
             if not text.strip():
-                return ""
+                return None
             try:
-                return repr(parse_metres(text))
+                return parse_metres(text, label)
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
 
@@ -370,10 +455,19 @@ class WizardPrompts:
         return check
 
     def show_rejection(self, ctx: TrialContext, reason: str) -> None:
-        """The set of distances fits no rigid motion: say why, then re-ask the set."""
+        """The set of distances fits no rigid motion: say why; only the
+        distances the rejection names are asked for again, the others are kept."""
+        named = [i for i, label in enumerate(ctx.labels) if label in reason]
+        if named and len(named) < len(ctx.measurements):
+            self._kept[(ctx.trial, ctx.attempt, ctx.rejections + 1)] = {
+                i: value for i, value in enumerate(ctx.measurements) if i not in named
+            }
+            again = ", ".join(ctx.labels[i] for i in named)
+            what = f"only {again} (the other distances are kept)"
+        else:
+            what = "all of this trial's distances"
         self.console.print(
-            f"[red]These distances fit no rigid motion:[/] {reason}\n"
-            "Measure this trial's distances again (all of them)."
+            f"[red]These distances fit no rigid motion:[/] {reason}\nMeasure again {what}."
         )
 
 
@@ -386,8 +480,10 @@ class WizardObserver:
         prompts: WizardPrompts,
         interrupts: Interrupts,
         progress: MotionProgress,
+        system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
     ) -> None:
         self.console = console
+        self.system = system
         self.prompts = prompts
         self.interrupts = interrupts
         self.progress = progress
@@ -417,46 +513,37 @@ class WizardObserver:
             self.interrupts.in_motion = True
             self.progress.start(state.plan.design_of(opened.trial))
         elif kind == ev.SOLVED:
-            x, y, theta = data["pose_change"]
+            trial = state.completed[-1]
+            x, y, theta = trial.pose_change
             self.console.print(
-                f"[green]Trial {data['trial']} solved:[/] dx={1e3 * x:+.1f} mm "
+                f"[green]Trial {trial.trial} solved:[/] dx={1e3 * x:+.1f} mm "
                 f"dy={1e3 * y:+.1f} mm dtheta={math.degrees(theta):+.3f} deg"
-                + (
-                    ""
-                    if data.get("clear_cut", True)
-                    else f" [yellow](not clear-cut: {data['reason']})"
-                )
+                + ("" if trial.clear_cut else f" [yellow](not clear-cut: {trial.note})")
             )
             if not _can_estimate(state):
                 self.console.print("No estimate yet: it needs 2 trials of a design.")
-        elif kind == ev.ESTIMATE:
-            result = data["result"]
-            self.prompts.estimate = _params_of(result)
-            assert state.plan is not None
-            remaining = state.plan.n_trials - len(state.completed)
-            self.console.print(estimate_panel(state.completed, result, remaining))
         elif kind == ev.VOID:
             self.progress.stop()
             self.console.print(f"[yellow]Trial {data['trial']} attempt voided:[/] {data['reason']}")
         elif kind == ev.FINISHED:
-            self.console.print(f"[bold green]Session complete:[/] {data['n_trials']} trials.")
+            self.console.print(
+                f"[bold green]Session complete:[/] {units.plural(data['n_trials'], 'trial')}."
+            )
+
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        """The live estimate: the expected distances follow it; show the table."""
+        self.prompts.estimate = result.params
+        assert state.plan is not None
+        remaining = state.plan.n_trials - len(state.completed)
+        self.console.print(estimate_panel(state.completed, result, remaining, self.system))
 
 
 def _can_estimate(state: SessionState) -> bool:
-    counts: dict[Design, int] = {}
-    for trial in state.completed:
-        counts[trial.design.forward] = counts.get(trial.design.forward, 0) + 1
-    return any(n >= 2 and d.path().signed_distance_m != 0 for d, n in counts.items())
-
-
-def _params_of(result: Any) -> ErrorParameters | None:
-    try:
-        values = [
-            float(result["parameters"][n]["value"]) for n in ("E_R", "E_T", "K_theta", "K_rho")
-        ]
-        return ErrorParameters(*values)
-    except (KeyError, TypeError, ValueError, OdohilError):
-        return None
+    designs = by_design(state.completed, lambda trial: trial.design.forward)
+    return any(
+        len(trials) >= 2 and design.path().signed_distance_m != 0
+        for design, trials in designs.items()
+    )
 
 
 # --- pre-flight --------------------------------------------------------------
@@ -472,7 +559,8 @@ def plan_checks(plan: Plan, max_leg_m: float) -> list[Check]:
         if abs(units.metres_to_wire(leg)) > MAX_WIRE:
             problems.append(f"{item.design.label()}: a leg does not fit one move command")
     detail = (
-        f"{plan.n_trials} trials, {plan.distance_m:.1f} m of driving ({plan.to_text()})"
+        f"{units.plural(plan.n_trials, 'trial')}, {plan.distance_m:.1f} m of driving "
+        f"({plan.to_text()})"
         if not problems
         else "; ".join(problems)
     )
@@ -521,7 +609,7 @@ def _resume(console: Console, folder: Path, max_leg_m: float, port: str | None) 
         _fail(console, floor)
     console.print(check_line(floor))
     done = len(state.completed)
-    detail = f"resuming {folder}: {done} of {state.plan.n_trials} trials done"
+    detail = f"resuming {folder}: {done} of {units.plural(state.plan.n_trials, 'trial')} done"
     console.print(check_line(Check("session", True, detail)))
     return Opened(resumed.journal, state)
 
@@ -656,9 +744,12 @@ def wizard(
     max_leg_m: Annotated[
         float,
         typer.Option(
-            "--max-leg", callback=bounded("max_leg_m"), help="Longest leg the floor allows, m."
+            "--max-leg-m",
+            callback=bounded("max_leg_m"),
+            help="Longest leg the floor allows, m (the same option as plan's).",
         ),
     ] = DEFAULT_MAX_LEG_M,
+    units_choice: UnitsOption = UNITS_DEFAULT,
     allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
 ) -> None:
     """Guide a calibration session beside the robot, one trial at a time."""
@@ -673,7 +764,16 @@ def wizard(
         _fail(console, Check("session folder", False, str(exc)))
     with signals_raise():
         code = _guided(
-            console, folder, interrupts, port, baud, robot_file, plan_text, max_leg_m, allow_turns
+            console,
+            folder,
+            interrupts,
+            port,
+            baud,
+            robot_file,
+            plan_text,
+            max_leg_m,
+            unit_system(units_choice),
+            allow_turns,
         )
     if code not in (EXIT_OK, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
         console.print(
@@ -692,6 +792,7 @@ def _guided(
     robot_file: Path | None,
     plan_text: str | None,
     max_leg_m: float,
+    system: units.UnitSystem,
     allow_turns: bool = False,
 ) -> int:
     """Lock the session (resume or start it), then connect, then run."""
@@ -721,18 +822,23 @@ def _guided(
             robot = _connect(console, line)
             interrupts.robot = robot
             with robot:
-                return _run(console, opened, robot, interrupts, line)
+                return _run(console, opened, robot, interrupts, line, system)
     except KeyboardInterrupt as exc:
         return exit_for_signal(signal_of(exc))
 
 
-def _run(console: Console, opened: Opened, robot: Robot, interrupts: Interrupts, line: Line) -> int:
+def _run(
+    console: Console,
+    opened: Opened,
+    robot: Robot,
+    interrupts: Interrupts,
+    line: Line,
+    system: units.UnitSystem,
+) -> int:
     description = description_of(opened.state)
     progress = MotionProgress(console)
     prompts = WizardPrompts(console, description, interrupts, progress)
-    observer = WizardObserver(console, prompts, interrupts, progress)
-    if opened.state.last_estimate is not None:
-        prompts.estimate = _params_of(opened.state.last_estimate.get("result"))
+    observer = WizardObserver(console, prompts, interrupts, progress, system)
     engine = SessionEngine(
         opened.journal,
         opened.state,
@@ -753,7 +859,7 @@ def _run(console: Console, opened: Opened, robot: Robot, interrupts: Interrupts,
         return EXIT_STOP_UNCONFIRMED
     except KeyboardInterrupt as exc:
         progress.stop()
-        console.print(f"\n[yellow]Interrupted[/] ({str(exc) or 'Ctrl-C'})", soft_wrap=True)
+        console.print(f"\n[yellow]Interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
         report_stop(console, engine.stop_outcome, opened.journal.folder)
         return exit_for_signal(signal_of(exc))
     except OdohilError as exc:

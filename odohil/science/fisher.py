@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from odohil.errors import ParameterError
+from odohil.science.floor_marks import mark_jacobian
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, EncoderPath, FloatArray
@@ -225,27 +226,6 @@ def default_description(sigma_m: float) -> RobotDescription:
         for name, angle in (("A", 0.0), ("B", 120.0), ("C", 240.0))
     )
     return RobotDescription(screws=screws, sigma_m=sigma_m, cross_pairs=(("A", "B"),))
-
-
-def mark_jacobian(description: RobotDescription, poses: FloatArray) -> FloatArray:
-    """d(distances)/d(pose) of the floor-mark forward model
-    (:func:`odohil.science.floor_marks.marks_from_pose`), same-screw distances
-    first then cross, for poses (n, 3) (m, m, rad): shape (n, m_distances, 3)."""
-    points = description.positions()
-    cross = description.cross_indices()
-    source = np.vstack([points, points[[j for _, j in cross]].reshape(-1, 2)])
-    target = np.vstack([points, points[[i for i, _ in cross]].reshape(-1, 2)])
-    c = np.cos(poses[:, 2])[:, None]
-    s = np.sin(poses[:, 2])[:, None]
-    rx = c * source[:, 0] - s * source[:, 1]
-    ry = s * source[:, 0] + c * source[:, 1]
-    vx = rx + poses[:, 0:1] - target[:, 0]
-    vy = ry + poses[:, 1:2] - target[:, 1]
-    dist = np.hypot(vx, vy)
-    safe = np.where(dist > 0, dist, 1.0)
-    ux, uy = vx / safe, vy / safe
-    jacobian: FloatArray = np.stack([ux, uy, ux * -ry + uy * rx], axis=-1)
-    return jacobian
 
 
 def measurement_covariance(description: RobotDescription, pose_change: FloatArray) -> FloatArray:

@@ -5,7 +5,7 @@ frame); its start mark is at p_j and its end mark at R(theta) p_j + t for the re
 pose change (t = (dx, dy), theta = dtheta). Measured: the same-screw distances
 d_j = |end_j - start_j| and up to two cross distances c_ij = |end_j - start_i|.
 
-Method (see docs/measurements.md and NOTES.md section 3):
+Method (see docs/measurements.md and docs/paper-notes.md section 3):
 
 1. Same-screw distances alone: a rigid motion of angle theta is a rotation about
    a centre c, so d_j = 2|sin(theta/2)| |p_j - c|. Eliminating c leaves a
@@ -41,7 +41,9 @@ import numpy.typing as npt
 from scipy import stats
 
 from odohil.errors import InconsistentMeasurementError, MeasurementError
+from odohil.science.frames import inverse_pose, rotate_points, rotation
 from odohil.science.robot_description import RobotDescription
+from odohil.units import angle_near, wrap_angle, wrap_angles
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -85,6 +87,17 @@ class MarkDistances:
 
     same_m: tuple[float, ...]
     cross_m: tuple[float, ...] = ()
+
+    @classmethod
+    def of(
+        cls, description: RobotDescription, distances: Sequence[float] | FloatArray
+    ) -> MarkDistances:
+        """The distances of one trial in the order :func:`distance_labels`
+        names them (same-screw first, then cross), metres, split by the
+        description's screws. Their count is checked by the solver."""
+        values = tuple(float(v) for v in distances)
+        n_same = len(description.screws)
+        return cls(values[:n_same], values[n_same:])
 
     def as_array(self) -> FloatArray:
         """All distances, same-screw first then cross, metres."""
@@ -177,19 +190,6 @@ class _Geometry:
     scale: float
 
 
-def rotation(theta_rad: float) -> FloatArray:
-    """The 2x2 rotation matrix of angle theta (radians)."""
-    c, s = math.cos(theta_rad), math.sin(theta_rad)
-    return np.array([[c, -s], [s, c]], dtype=np.float64)
-
-
-def inverse_pose(pose: Sequence[float] | FloatArray) -> FloatArray:
-    """The inverse rigid motion of (dx m, dy m, dtheta rad), same units."""
-    x, y, theta = (float(v) for v in pose)
-    back = rotation(-theta) @ np.array([x, y])
-    return np.array([-back[0], -back[1], -theta], dtype=np.float64)
-
-
 def distance_labels(description: RobotDescription) -> tuple[str, ...]:
     """Human names of the distances, same-screw first then cross."""
     same = tuple(f"d{n + 1} (screw {s.name})" for n, s in enumerate(description.screws))
@@ -224,6 +224,17 @@ def linearised_marks(
     zero = np.zeros(len(geometry.source))
     residuals, jacobian = _residuals(pose[None, :], geometry, zero, ones)
     return residuals[0] * geometry.sigma, jacobian[0] * geometry.sigma
+
+
+def mark_jacobian(description: RobotDescription, poses: FloatArray) -> FloatArray:
+    """d(distances)/d(pose) of the forward model (:func:`marks_from_pose`),
+    same-screw distances first then cross, for poses (n, 3) (m, m, rad):
+    shape (n, m_distances, 3)."""
+    geometry = _geometry(description)
+    unit_weights = np.full(len(geometry.source), geometry.sigma)  # residuals in metres
+    zero = np.zeros(len(geometry.source))
+    _, jacobian = _residuals(np.asarray(poses, dtype=np.float64), geometry, zero, unit_weights)
+    return jacobian
 
 
 def pose_covariance(
@@ -363,10 +374,7 @@ def _geometry(description: RobotDescription) -> _Geometry:
 
 def _end_points(poses: FloatArray, geometry: _Geometry) -> tuple[FloatArray, FloatArray]:
     """R(theta) source, per pose: x and y parts, shape (B, m)."""
-    c = np.cos(poses[:, 2])[:, None]
-    s = np.sin(poses[:, 2])[:, None]
-    px, py = geometry.source[:, 0], geometry.source[:, 1]
-    return c * px - s * py, s * px + c * py
+    return rotate_points(poses[:, 2], geometry.source)
 
 
 def _model(poses: FloatArray, geometry: _Geometry) -> FloatArray:
@@ -497,7 +505,7 @@ def _local_minima(
         poses[slow], chi2[slow], decrement[slow] = _levenberg_marquardt(
             poses[slow], geometry, measured, weights
         )
-    poses[:, 2] = np.remainder(poses[:, 2] + math.pi, 2.0 * math.pi) - math.pi
+    poses[:, 2] = wrap_angles(poses[:, 2])
     converged = decrement < _CONVERGED_DECREMENT
     if not converged.any():
         converged = chi2 == chi2.min()
@@ -512,16 +520,12 @@ def _local_minima(
 
 
 def _same_pose(a: FloatArray, b: FloatArray, geometry: _Geometry) -> bool:
-    dtheta = math.remainder(float(a[2] - b[2]), 2.0 * math.pi)
+    dtheta = wrap_angle(float(a[2] - b[2]))
     spread = max(float(np.hypot(*(a[:2] - b[:2]))), abs(dtheta) * geometry.scale)
     return spread < _SAME_CANDIDATE * geometry.sigma
 
 
 # --- choice -----------------------------------------------------------------
-
-
-def _branch(theta: float, reference: float) -> float:
-    return reference + math.remainder(theta - reference, 2.0 * math.pi)
 
 
 def _candidate(
@@ -533,7 +537,7 @@ def _candidate(
     prior_mean: FloatArray | None,
     prior_cov: FloatArray | None,
 ) -> MarkCandidate:
-    chosen = np.array([pose[0], pose[1], _branch(float(pose[2]), float(odometry[2]))])
+    chosen = np.array([pose[0], pose[1], angle_near(float(pose[2]), float(odometry[2]))])
     r, _ = _residuals(chosen[None, :], geometry, measured, np.ones(measured.size))
     cross_chi2 = float((r[0, geometry.n_same :] ** 2).sum())
     prior_term: float | None = None
@@ -541,7 +545,7 @@ def _candidate(
     if prior_mean is not None and prior_cov is not None:
         cov, _ = _covariance(chosen, geometry)
         aligned = chosen.copy()
-        aligned[2] = _branch(float(chosen[2]), float(prior_mean[2]))
+        aligned[2] = angle_near(float(chosen[2]), float(prior_mean[2]))
         prior_term = _gaussian_log_density(aligned - prior_mean, prior_cov + cov)
         log_likelihood += prior_term
     return MarkCandidate(
@@ -642,7 +646,7 @@ def _verdict(
 
 def _close(a: FloatArray, b: FloatArray, cov: FloatArray) -> bool:
     delta = a - b
-    delta[2] = math.remainder(float(delta[2]), 2.0 * math.pi)
+    delta[2] = wrap_angle(float(delta[2]))
     spread = np.sqrt(np.diag(cov))
     return bool(np.all(np.abs(delta) <= 10.0 * spread + 1e-9))
 

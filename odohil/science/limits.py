@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from odohil import units
 from odohil.errors import ParameterError
 
 WIRE_METRES_PER_UNIT = 0.00254
@@ -141,7 +142,7 @@ def check_simulation_work(n_trials: int, segments_per_trial: float) -> None:
     total = float(n_trials) * float(segments_per_trial)
     if total > SIMULATION_SEGMENTS_MAX:
         raise ParameterError(
-            f"{n_trials} trials of {segments_per_trial:.0f} segments each is "
+            f"{units.plural(n_trials, 'trial')} of {segments_per_trial:.0f} segments each is "
             f"{total:.3g} segments; at most {SIMULATION_SEGMENTS_MAX:.0e}: give fewer "
             "trials or a longer segment (--segment-m)"
         )

@@ -58,10 +58,8 @@ class ErrorParameters:
     def to_paper_units(self) -> dict[str, float]:
         """The four values in the paper's units (keys E_R, E_T, K_theta, K_rho)."""
         return {
-            "E_R": units.rad_per_m_to_deg_per_m(self.e_r),
-            "E_T": self.e_t,
-            "K_theta": units.rad2_per_m_to_deg2_per_m(self.k_theta),
-            "K_rho": self.k_rho,
+            name: units.parameter_to_paper(name, value)
+            for name, value in zip(PARAMETER_NAMES, self.as_tuple(), strict=True)
         }
 
     def to_si_dict(self) -> dict[str, float]:

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.fisher import (
     PARAMETER_SCALES,
@@ -358,7 +359,8 @@ def plan_experiment(
         )
     if max_trials is not None and max_trials < min_trials_per_design:
         raise ParameterError(
-            f"max_trials {max_trials} is below the {min_trials_per_design} trials a design "
+            f"max_trials {max_trials} is below the "
+            f"{units.plural(min_trials_per_design, 'trial')} a design "
             "needs for honest intervals"
         )
     operator = operator or OperatorTime()
@@ -375,7 +377,8 @@ def plan_experiment(
     ]
     if not fitting:
         raise ParameterError(
-            f"no candidate design fits {min_trials_per_design} trials (the fewest per design "
+            f"no candidate design fits {units.plural(min_trials_per_design, 'trial')} "
+            "(the fewest per design "
             f"for honest intervals) in a budget of {budget_m:g} m"
             + ("" if budget_s is None else f" and {budget_s / 60:g} min")
             + f" and {floor:g} m of floor"
@@ -430,7 +433,8 @@ def evaluate_plan(
     checked = complete_targets(prior, targets)
     errors = expected_standard_errors(designs, prior, description)
     notes = tuple(
-        f"{design.label()}: {n} trials, below the {min_trials_per_design} a design needs for "
+        f"{design.label()}: {units.plural(n, 'trial')}, below the "
+        f"{min_trials_per_design} a design needs for "
         "honest 95 % intervals"
         for design, n in designs
         if n < min_trials_per_design

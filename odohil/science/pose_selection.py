@@ -43,6 +43,7 @@ import numpy.typing as npt
 from scipy import stats
 
 from odohil.errors import RobotDescriptionError
+from odohil.science.estimators.result import EstimateResult
 from odohil.science.fisher import moment_derivatives
 from odohil.science.floor_marks import (
     CLEAR_CUT_LIKELIHOOD_RATIO,
@@ -60,6 +61,7 @@ from odohil.science.floor_marks import (
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design
 from odohil.science.robot_description import ParameterPriors, RobotDescription
+from odohil.units import wrap_angle
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -137,6 +139,17 @@ class ParameterBelief:
         floor = (priors.mean.k_theta, priors.mean.k_rho)
         return cls(ErrorParameters(*mean), cov, "estimate", floor)
 
+    @classmethod
+    def from_result(cls, result: EstimateResult, priors: ParameterPriors) -> ParameterBelief:
+        """An estimate's values, standard errors and correlation (see
+        :meth:`from_estimate`)."""
+        return cls.from_estimate(
+            [p.value for p in result.parameters],
+            [p.stderr for p in result.parameters],
+            result.correlation,
+            priors,
+        )
+
 
 @dataclass(frozen=True, eq=False)
 class SlipCheck:
@@ -204,7 +217,7 @@ def predictive_pose(
     if encoder_end_pose is not None:
         ideal = np.array(design.path().encoder_end_pose())
         offset = np.asarray(encoder_end_pose, dtype=np.float64) - ideal
-        offset[2] = math.remainder(float(offset[2]), 2.0 * math.pi)
+        offset[2] = wrap_angle(float(offset[2]))
         mean += offset
     return PosePrior(mean=mean, cov=cov)
 
@@ -336,7 +349,7 @@ def resolve_with_extra(
 
 def _separation(a: FloatArray, b: FloatArray, sd: FloatArray) -> float:
     delta = np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)
-    delta[2] = math.remainder(float(delta[2]), 2.0 * math.pi)
+    delta[2] = wrap_angle(float(delta[2]))
     return float(np.max(np.abs(delta) / sd))
 
 
@@ -352,7 +365,7 @@ def slip_check(
     distances, jac = linearised_marks(description, pose)
     measured = marks.as_array()
     delta = pose - np.asarray(predicted.mean, dtype=np.float64)
-    delta[2] = math.remainder(float(delta[2]), 2.0 * math.pi)
+    delta[2] = wrap_angle(float(delta[2]))
     innovation = measured - distances + jac @ delta
     m = measured.size
     s = jac @ np.asarray(predicted.cov, dtype=np.float64) @ jac.T

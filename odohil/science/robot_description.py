@@ -53,7 +53,7 @@ from odohil import units
 from odohil.errors import ParameterError, RobotDescriptionError
 from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.limits import RANGES
-from odohil.science.parameters import NOMAD150, ErrorParameters
+from odohil.science.parameters import NOMAD150, PARAMETER_NAMES, ErrorParameters
 
 FloatArray = npt.NDArray[np.float64]
 
@@ -169,12 +169,11 @@ class SerialSettings:
 
 
 def _paper_to_si(values: tuple[float, float, float, float]) -> tuple[float, float, float, float]:
-    return (
-        units.deg_per_m_to_rad_per_m(values[0]),
-        values[1],
-        units.deg2_per_m_to_rad2_per_m(values[2]),
-        values[3],
+    e_r, e_t, k_theta, k_rho = (
+        units.parameter_from_paper(name, value)
+        for name, value in zip(PARAMETER_NAMES, values, strict=True)
     )
+    return (e_r, e_t, k_theta, k_rho)
 
 
 @dataclass(frozen=True)

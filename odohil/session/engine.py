@@ -33,8 +33,10 @@ original exception). :attr:`SessionEngine.stop_outcome` says what was
 confirmed and what reached the disk.
 
 Rendering and estimation are pluggable: a :class:`SessionObserver` sees every
-record with the state it leads to; a :class:`LiveEstimator` turns completed
-trials into the estimate's JSON object.
+record with the state it leads to, and every new live estimate; a
+:class:`LiveEstimator` turns completed trials into an
+:class:`~odohil.science.estimators.EstimateResult`. The estimate becomes JSON
+only in its journal record.
 """
 
 from __future__ import annotations
@@ -56,9 +58,8 @@ from odohil.errors import (
     OdohilError,
     StopUnconfirmedError,
 )
-from odohil.science.estimators import IncrementalEstimator, Observation
+from odohil.science.estimators import EstimateResult, IncrementalEstimator, Observation
 from odohil.science.floor_marks import PosePrior, distance_labels
-from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session import state as ev
@@ -94,13 +95,18 @@ class SessionObserver(Protocol):
         """``record`` was journaled; ``state`` is the session after it."""
         ...
 
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        """The live estimate is now ``result``: after its ``estimate`` record,
+        and on resume once the trials of earlier processes are folded in."""
+        ...
+
 
 class LiveEstimator(Protocol):
     """Turns completed trials into the current estimate."""
 
-    def add(self, trial: CompletedTrial) -> Mapping[str, Any] | None:
-        """Fold one trial in; the estimate's JSON object, or None while too
-        few trials make an estimate."""
+    def add(self, trial: CompletedTrial) -> EstimateResult | None:
+        """Fold one trial in; the current estimate, or None while too few
+        trials make an estimate."""
         ...
 
 
@@ -256,11 +262,11 @@ class IncrementalLiveEstimator:
         self.inner = IncrementalEstimator()
         self.exclude = frozenset(exclude)
 
-    def add(self, trial: CompletedTrial) -> Mapping[str, Any] | None:
+    def add(self, trial: CompletedTrial) -> EstimateResult | None:
         """Fold the trial in (unless its number is in ``exclude``); the current
-        result's JSON object, or None."""
+        result, or None."""
         if trial.trial in self.exclude:
-            return None if self.inner.fit is None else self.inner.result().to_json_dict()
+            return None if self.inner.fit is None else self.inner.result()
         observation = Observation(
             design=trial.design,
             pose_change=np.array(trial.pose_change, dtype=np.float64),
@@ -270,7 +276,7 @@ class IncrementalLiveEstimator:
         )
         if self.inner.add(observation) is None:
             return None
-        return self.inner.result().to_json_dict()
+        return self.inner.result()
 
 
 @dataclass(frozen=True)
@@ -338,7 +344,7 @@ class SessionEngine:
         self.on_sample = on_sample
         self.start_check = start_check
         self.labels = distance_labels(self.description)
-        self.latest_estimate: Mapping[str, Any] | None = None
+        self.latest_estimate: EstimateResult | None = None
         self.stop_outcome: StopOutcome | None = None
         self._predicted: PosePrior | None = None
         self._estimated = 0
@@ -441,6 +447,8 @@ class SessionEngine:
             with contextlib.suppress(OdohilError):
                 self.latest_estimate = self.estimator.add(trial)
         self._estimated = len(self.state.completed)
+        if self.latest_estimate is not None and self.observer is not None:
+            self.observer.estimated(self.latest_estimate, self.state)
 
     def _connect(self) -> None:
         sample = self.robot.arm(self.motion.drive_settings())
@@ -554,15 +562,11 @@ class SessionEngine:
     def _belief(self) -> ParameterBelief:
         """The current estimate as a belief, or the description's priors."""
         priors = self.description.priors
-        result = self.latest_estimate
-        if not result:
+        if self.latest_estimate is None:
             return ParameterBelief.from_priors(priors)
         try:
-            parameters = result["parameters"]
-            values = [float(parameters[name]["value"]) for name in PARAMETER_NAMES]
-            stderrs = [parameters[name]["stderr"] for name in PARAMETER_NAMES]
-            return ParameterBelief.from_estimate(values, stderrs, result.get("correlation"), priors)
-        except (KeyError, TypeError, ValueError, OdohilError):
+            return ParameterBelief.from_result(self.latest_estimate, priors)
+        except OdohilError:
             return ParameterBelief.from_priors(priors)
 
     def _source_log(self, kind: str, data: Mapping[str, Any]) -> TrialContext:
@@ -603,7 +607,9 @@ class SessionEngine:
             self._estimated = n_completed
             self.latest_estimate = result
             if result is not None:
-                self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": result})
+                self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": result.to_json_dict()})
+                if self.observer is not None:
+                    self.observer.estimated(result, self.state)
 
 
 def _solved_json(opened: OpenTrial, measured: MeasuredPose) -> dict[str, Any]:
@@ -657,3 +663,6 @@ class CallbackObserver:
     def record(self, record: Record, state: SessionState) -> None:
         """Pass the record on."""
         self.callback(record, state)
+
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        """Records only: the estimate is in its ``estimate`` record."""

@@ -28,6 +28,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.estimators.result import EstimateResult
 from odohil.science.exports import (
@@ -107,7 +108,8 @@ def _header(fmt: str, result: EstimateResult, source: str, what: str) -> list[st
     p = result.params
     lines += [
         f"# odohil export, format {fmt}: {what}",
-        f"# From {source or 'an estimate'}: {result.n_trials} trials, method {result.method}, "
+        f"# From {source or 'an estimate'}: {units.plural(result.n_trials, 'trial')}, "
+        f"method {result.method}, "
         f"verdict {verdict.status}.",
         f"# Model (SI): E_R {p.e_r:.6g} rad/m, E_T {p.e_t:.6g}, K_theta {p.k_theta:.6g} rad^2/m, "
         f"K_rho {p.k_rho:.6g} m; docs/exports.md gives every formula.",

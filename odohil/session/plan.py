@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
+from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.limits import RANGES, check_wire_leg
 from odohil.science.paths import VARIANTS, Design, FloorChoreography, floor_choreography
@@ -177,7 +178,9 @@ def check_session_plan(plan: Plan) -> Plan:
             raise ParameterError(f"plan design {number} ({item.to_text()}): {exc}") from None
     total = RANGES["plan_n"]
     if plan.n_trials > total.high:
-        raise ParameterError(f"the plan has {plan.n_trials} trials; at most {total.high:g}")
+        raise ParameterError(
+            f"the plan has {units.plural(plan.n_trials, 'trial')}; at most {total.high:g}"
+        )
     return plan
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from odohil import units
 from odohil.errors import ParameterError, RobotDescriptionError, TrialFileError
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.plan import Plan, check_session_plan, parse_plan
@@ -105,7 +106,8 @@ def check_trial_file(
     trials = read_trials(path, description)
     if len(trials) < plan.n_trials:
         raise TrialFileError(
-            f"--measure {path}: {len(trials)} row(s) for a plan of {plan.n_trials} trials; "
+            f"--measure {path}: {len(trials)} row(s) for a plan of "
+            f"{units.plural(plan.n_trials, 'trial')}; "
             "the file needs one row per trial, in plan order"
         )
     wrong = []

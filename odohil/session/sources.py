@@ -40,6 +40,7 @@ from typing import Any, Protocol, cast
 import numpy as np
 
 from odohil.errors import InconsistentMeasurementError, MeasurementError
+from odohil.science import frames
 from odohil.science.floor_marks import (
     MarkDistances,
     distance_labels,
@@ -142,31 +143,32 @@ class OperatorPrompts(Protocol):
         """Ask the operator to mark the end positions; return when done."""
         ...
 
-    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
-        """Ask for distance ``ctx.labels[index]`` in metres; return what was typed.
-
-        ``problem`` is empty, or says why the previous answer was refused."""
+    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+        """Ask for distance ``ctx.labels[index]``; return it in metres (the
+        interface parses what was typed, once, and asks again until it is a
+        distance)."""
         ...
 
     def show_rejection(self, ctx: TrialContext, reason: str) -> None:
         """Tell the operator the distances are inconsistent and will be retaken."""
         ...
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> str:
+    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
         """Ask to measure distance ``ctx.labels[index]`` again (``reason``: the
-        slip check's message); return what was typed, empty to keep the value."""
+        slip check's message); return it in metres, or None to keep the value."""
         ...
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> str:
+    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
         """Ask for one more cross distance, ``label`` (e.g. ``A start to C end``),
-        because the trial is ambiguous (``reason``); return what was typed,
-        empty when it cannot be measured."""
+        because the trial is ambiguous (``reason``); return it in metres, or
+        None when it cannot be measured."""
         ...
 
 
 class OperatorSource:
-    """A person with a tape, through :class:`OperatorPrompts`; answers are
-    checked (a finite, non-negative number of metres) and asked again if bad."""
+    """A person with a tape, through :class:`OperatorPrompts`. The numbers the
+    interface parsed are handed on as they are: :class:`TapeSource` checks
+    every distance, from any source, once (:func:`check_distance`)."""
 
     def __init__(self, prompts: OperatorPrompts) -> None:
         self.prompts = prompts
@@ -182,14 +184,8 @@ class OperatorSource:
         return {}
 
     def distance(self, ctx: TrialContext, index: int) -> float:
-        """Ask until the answer is a usable distance in metres."""
-        problem = ""
-        while True:
-            answer = self.prompts.ask_distance(ctx, index, problem)
-            try:
-                return check_distance(answer, ctx.labels[index])
-            except MeasurementError as exc:
-                problem = str(exc)
+        """Ask the operator for the distance, metres."""
+        return self.prompts.ask_distance(ctx, index)
 
     def rejected(self, ctx: TrialContext, reason: str) -> None:
         """Tell the operator."""
@@ -197,44 +193,27 @@ class OperatorSource:
 
     def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
         """Ask the operator to re-enter the suspect distance; None keeps it."""
-        while True:
-            answer = self.prompts.ask_remeasure(ctx, index, reason).strip()
-            if not answer:
-                return None
-            try:
-                return check_distance(answer, ctx.labels[index])
-            except MeasurementError as exc:
-                reason = str(exc)
+        return self.prompts.ask_remeasure(ctx, index, reason)
 
     def extra_distance(
         self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
     ) -> float | None:
         """Ask the operator for the named cross distance; None if skipped."""
-        while True:
-            answer = self.prompts.ask_extra_distance(ctx, label, reason).strip()
-            if not answer:
-                return None
-            try:
-                return check_distance(answer, label)
-            except MeasurementError as exc:
-                reason = str(exc)
+        return self.prompts.ask_extra_distance(ctx, label, reason)
 
 
-def check_distance(value: object, label: str) -> float:
-    """``value`` as a distance in metres: finite and non-negative.
+def check_distance(value_m: float, label: str) -> float:
+    """The one check of a measured distance, metres: finite and non-negative.
+    Returns it unchanged (no conversion: sources hand over numbers).
 
     Raises:
-        MeasurementError: not a number, not finite, or negative.
+        MeasurementError: not finite, or negative (naming ``label``).
     """
-    try:
-        number = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise MeasurementError(f"{label}: {value!r} is not a number of metres") from None
-    if not math.isfinite(number):
-        raise MeasurementError(f"{label}: {value!r} is not a finite number")
-    if number < 0:
-        raise MeasurementError(f"{label}: a distance cannot be negative ({number} m)")
-    return number
+    if not math.isfinite(value_m):
+        raise MeasurementError(f"{label}: {value_m!r} is not a finite number of metres")
+    if value_m < 0:
+        raise MeasurementError(f"{label}: a distance cannot be negative ({value_m!r} m)")
+    return value_m
 
 
 class TruthReader(Protocol):
@@ -250,11 +229,8 @@ def relative_true_pose(
 ) -> tuple[float, float, float]:
     """The true pose change from two true poses (x m, y m, heading rad): the end
     point in the start frame, and the heading change minus ``winding_rad``."""
-    x0, y0, th0 = (float(v) for v in start)
-    x1, y1, th1 = (float(v) for v in end)
-    c, s = math.cos(th0), math.sin(th0)
-    dx, dy = x1 - x0, y1 - y0
-    return (c * dx + s * dy, -s * dx + c * dy, th1 - th0 - winding_rad)
+    x, y, turned = frames.relative_pose(start, end)
+    return (x, y, turned - winding_rad)
 
 
 class FakeTruthSource:
@@ -368,7 +344,7 @@ class RecordedSource:
                 f"{self.origin}: row {row + 1} is design {self.designs[row].label()}, "
                 f"trial {ctx.trial} runs {ctx.design.label()}"
             )
-        return check_distance(self.rows[row][index], ctx.labels[index])
+        return self.rows[row][index]
 
     def remeasure(self, ctx: TrialContext, index: int, reason: str) -> None:
         """Recorded distances cannot be retaken: keep the value (the trial is flagged)."""
@@ -484,12 +460,9 @@ class TapeSource:
                 ``max_rejections`` times, or the distance source gave up.
         """
         ids = {"trial": ctx.trial, "attempt": ctx.attempt}
-        n_same = len(self.description.screws)
         while True:
             ctx = self._measure_missing(ctx, log)
-            marks = MarkDistances(
-                same_m=ctx.measurements[:n_same], cross_m=ctx.measurements[n_same:]
-            )
+            marks = MarkDistances.of(self.description, ctx.measurements)
             end_pose = ctx.encoder_end_pose
             if end_pose is None:
                 raise MeasurementError(f"trial {ctx.trial}: no odometry end pose to solve against")

@@ -523,13 +523,13 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
     the slip check doubts it. Ambiguous trials are left out of ``trials`` and
     listed in ``ambiguous``.
     """
-    n_screws = len(description_of_header(state).screws)
+    description = description_of_header(state)
     as_trials = [
         Trial(
             design=t.design,
             pose_change=np.array(t.pose_change, dtype=np.float64),
             pose_cov=np.array(t.cov, dtype=np.float64),
-            marks=MarkDistances(same_m=t.measurements[:n_screws], cross_m=t.measurements[n_screws:])
+            marks=MarkDistances.of(description, t.measurements)
             if t.measurements
             else None,  # measured as a pose (a trial file of poses, motion capture)
             odometry_end_pose=np.array(t.encoder_end_pose, dtype=np.float64),

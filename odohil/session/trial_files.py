@@ -27,6 +27,7 @@ import numpy.typing as npt
 
 from odohil.errors import MeasurementError, ParameterError, TrialFileError
 from odohil.science.floor_marks import MarkDistances, PoseDistribution
+from odohil.science.grouping import by_design
 from odohil.science.paths import VARIANTS, Design, Variant
 from odohil.science.pose_selection import ParameterBelief, predictive_pose, select_pose
 from odohil.science.robot_description import RobotDescription
@@ -102,11 +103,11 @@ class TrialSet:
 
     def designs(self) -> tuple[Design, ...]:
         """The distinct designs, in order of first appearance."""
-        return tuple(dict.fromkeys(trial.design for trial in self.trials))
+        return tuple(by_design(self.trials))
 
     def for_design(self, design: Design) -> tuple[Trial, ...]:
         """The trials of one design, in file order."""
-        return tuple(trial for trial in self.trials if trial.design == design)
+        return tuple(by_design(self.trials).get(design, ()))
 
     def flagged(self) -> tuple[Trial, ...]:
         """The trials whose pose from the marks is in doubt."""
@@ -334,8 +335,7 @@ class _RowParser:
     ) -> Trial:
         description = self._description
         assert description is not None  # checked with the header
-        n_same = len(description.screws)
-        marks = MarkDistances(tuple(numbers[:n_same]), tuple(numbers[n_same:]))
+        marks = MarkDistances.of(description, numbers)
         if self._prior is not None:
             if design not in self._priors:
                 self._priors[design] = self._prior(design)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import subprocess
 from pathlib import Path
 
@@ -64,8 +65,32 @@ def test_json_output_recovers_the_simulated_parameters(trial_file: Path, method:
 def test_table_output_shows_paper_units_and_verdicts(trial_file: Path) -> None:
     done = run("estimate", trial_file)
     assert done.returncode == 0, done.stderr
-    for text in ("E_R", "K_theta", "deg/m", "deg^2/m", "rad/m", "model check:", "sufficiency:"):
+    for text in ("E_R", "K_theta", "deg/m", "deg^2/m", "model check:", "sufficiency:"):
         assert text in done.stdout
+    # before: paper and SI columns side by side, E_T's unit printed as "1"
+    assert "rad/m" not in done.stdout
+    assert "(no unit)" in done.stdout
+
+
+def _row(table: str, name: str) -> list[str]:
+    line = next(line for line in table.splitlines() if line.strip("│┃ ").startswith(name + " "))
+    return [cell.strip() for cell in line.strip("│┃ ").split("│")]
+
+
+def test_units_si_prints_the_json_values_and_paper_converts_them(trial_file: Path) -> None:
+    data = json.loads(run("estimate", trial_file, "--json").stdout)["parameters"]
+    si = run("estimate", trial_file, "--units", "si")
+    paper = run("estimate", trial_file, "--units", "paper")
+    assert si.returncode == paper.returncode == 0, si.stderr
+    assert "rad/m" in si.stdout
+    assert "rad^2/m" in si.stdout
+    assert "deg/m" not in si.stdout
+    assert paper.stdout == run("estimate", trial_file).stdout  # paper is the default
+    for name, factor in (("E_R", 180 / math.pi), ("K_theta", (180 / math.pi) ** 2)):
+        assert float(_row(si.stdout, name)[1]) == pytest.approx(data[name]["value"], rel=1e-3)
+        shown = float(_row(paper.stdout, name)[1])
+        assert shown == pytest.approx(data[name]["value"] * factor, rel=1e-3)
+    assert _row(paper.stdout, "E_T")[4] == "(no unit)"
 
 
 def _shifted(trial_file: Path, folder: Path, row: int, dx: float, dy: float) -> Path:

@@ -1,4 +1,5 @@
-"""Fisher information: NOTES.md section 2's bound table, the score identity, floor marks."""
+"""Fisher information: docs/paper-notes.md section 2's bound table, the score
+identity, floor marks."""
 
 from __future__ import annotations
 
@@ -29,7 +30,8 @@ PAPER_PLAN = [(DESIGN_A, 30), (DESIGN_B, 30)]
 
 
 def paper_units(se: np.ndarray) -> tuple[float, float, float, float]:
-    """(E_R deg/m, K_theta deg^2/m, 1+E_T, K_rho m): the column order of NOTES.md."""
+    """(E_R deg/m, K_theta deg^2/m, 1+E_T, K_rho m): the column order of
+    docs/paper-notes.md section 2."""
     return (
         units.rad_per_m_to_deg_per_m(float(se[0])),
         units.rad2_per_m_to_deg2_per_m(float(se[2])),
@@ -147,7 +149,7 @@ def test_measurement_covariance_linearises_the_floor_mark_forward_model() -> Non
 
 
 def test_heading_error_of_design_a_is_about_a_quarter_degree() -> None:
-    # NOTES.md section 3: about 0.23 deg from 1 mm distances on a 0.2 m circle
+    # docs/paper-notes.md section 3: about 0.23 deg from 1 mm distances on a 0.2 m circle
     description = default_description(0.001)
     mean = pose_moments(DESIGN_A.path(), NOMAD150).mean
     sd_deg = math.degrees(math.sqrt(measurement_covariance(description, mean)[2, 2]))

@@ -15,15 +15,14 @@ from odohil.science.floor_marks import (
     MarkSolution,
     PosePrior,
     distance_labels,
-    inverse_pose,
     marks_from_pose,
-    rotation,
     solve_marks,
 )
+from odohil.science.frames import inverse_pose, rotation
 from odohil.science.robot_description import RobotDescription, Screw
 
 CIRCLE = (Screw("A", 0.2, 0.0), Screw("B", -0.1, 0.1732), Screw("C", -0.1, -0.1732))
-"""Three screws on a 0.2 m circle (NOTES section 3)."""
+"""Three screws on a 0.2 m circle (docs/paper-notes.md section 3)."""
 ORIGIN = (0.0, 0.0, 0.0)
 PROPERTY = settings(
     max_examples=120,
@@ -44,8 +43,7 @@ def noisy(
 ) -> MarkDistances:
     exact = marks_from_pose(description, pose).as_array()
     measured = np.abs(exact + rng.normal(0.0, description.sigma_m, exact.size))
-    n = len(description.screws)
-    return MarkDistances(tuple(measured[:n]), tuple(measured[n:]))
+    return MarkDistances.of(description, measured)
 
 
 def pose_error(solution: MarkSolution, truth: np.ndarray) -> np.ndarray:
@@ -55,6 +53,15 @@ def pose_error(solution: MarkSolution, truth: np.ndarray) -> np.ndarray:
 
 
 # --- forward model ------------------------------------------------------------
+
+
+def test_distances_split_by_the_description_in_label_order() -> None:
+    description = circle(cross=(("A", "B"), ("B", "C")))
+    marks = MarkDistances.of(description, [0.1, 0.2, 0.3, 0.4, 0.5])
+    assert marks == MarkDistances((0.1, 0.2, 0.3), (0.4, 0.5))
+    assert len(distance_labels(description)) == len(marks.as_array())
+    with pytest.raises(MeasurementError, match="expected 2 cross distances"):
+        solve_marks(description, MarkDistances.of(description, [0.1, 0.2, 0.3, 0.4]), ORIGIN)
 
 
 def test_forward_model_by_hand() -> None:
@@ -299,11 +306,11 @@ def test_arbitrary_distances_raise_only_typed_errors(
     assert solution.clear_cut or solution.reason
 
 
-# --- accuracy (NOTES section 3) -----------------------------------------------------
+# --- accuracy (docs/paper-notes.md section 3) -----------------------------------------------------
 
 
 def test_heading_error_from_1_mm_distances_on_a_0_2_m_circle() -> None:
-    """About 0.23 deg (NOTES section 3): for a mostly translating robot the
+    """About 0.23 deg (docs/paper-notes.md section 3): for a mostly translating robot the
     heading information is sum_j (p_j across the motion)^2 / sigma^2, here
     1.5 * 0.2^2 / (1 mm)^2, so sd = 1 mm / sqrt(0.06 m^2) = 0.234 deg. The
     reported covariance gives it, and so does the scatter of the estimates."""

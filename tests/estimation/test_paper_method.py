@@ -60,7 +60,7 @@ def test_recovers_truth_with_measurement_noise_and_other_designs() -> None:
 
 
 def test_measurement_variance_subtraction_removes_phi2_bias() -> None:
-    """NOTES.md section 2: at 0.3 deg heading error, raw phi2 in design A
+    """docs/paper-notes.md section 2: at 0.3 deg heading error, raw phi2 in design A
     overstates K_theta by about 0.0075 deg^2/m."""
     obs = trials([(A, 600)], np.random.default_rng(13), meas=MEAS)
     result = estimate(obs, "paper")

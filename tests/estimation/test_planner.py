@@ -1,4 +1,4 @@
-"""The experiment planner: NOTES.md section 4's design rules, and its expected
+"""The experiment planner: docs/paper-notes.md section 4's design rules, and its expected
 standard errors confirmed by simulated experiments fitted by the joint estimator."""
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ PAPER_PLAN = [(Design(1, 6.0), 30), (Design(20, 0.5), 30)]
 
 
 def test_single_k1_design_near_8m_matches_or_beats_the_paper_plan() -> None:
-    """NOTES.md section 4: with 960 m and 60 trials one k=1 design around l = 8 m
+    """docs/paper-notes.md section 4: with 960 m and 60 trials one k=1 design around l = 8 m
     beats A+B. Our bound agrees on E_R, E_T and K_theta; K_rho is a tie (both
     are at the sqrt(2/n) limit of 60 trials): A+B's x-y cross terms give it
     0.4 % more, so the targets allow 1 % on K_rho."""

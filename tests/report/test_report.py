@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import json
-import re
 from pathlib import Path
 
 import pytest
 
 from odohil.science.estimators import estimate
+from odohil.session.exports import FILE_NAMES
 from odohil.session.journal import read_journal
 from odohil.session.report import load_report
 from odohil.session.state import SessionState, replay, session_observations
@@ -27,11 +27,10 @@ def test_report_is_self_contained_and_matches_the_estimate(
     run = run_report(folder, out)
     assert run.returncode == 0, run.stderr
 
-    assert sorted(p.name for p in out.iterdir()) == [
-        "index.html",
-        "odometry_covariance.yaml",
-        "parameters.json",
-    ]
+    # The report writes the same filter files as odohil export (FILE_NAMES).
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        ["index.html", "parameters.json", *FILE_NAMES.values()]
+    )
     page = parse_page(out / "index.html")
     assert_self_contained(page)
     # Every plot is there, inline.
@@ -48,13 +47,19 @@ def test_report_is_self_contained_and_matches_the_estimate(
     written = json.loads((out / "parameters.json").read_text())
     assert written == json.loads(json.dumps(expected))
 
-    yaml = (out / "odometry_covariance.yaml").read_text()
-    values = dict(re.findall(r"^\s+(\w+): (-?[0-9.e+-]+)", yaml, flags=re.MULTILINE))
+    model = json.loads((out / FILE_NAMES["json"]).read_text())
     params = written["parameters"]
-    assert float(values["heading_rad2_per_m"]) == pytest.approx(params["K_theta"]["value"], 1e-6)
-    assert float(values["translation_m2_per_m"]) == pytest.approx(params["K_rho"]["value"], 1e-6)
-    assert float(values["heading_drift_rad_per_m"]) == pytest.approx(params["E_R"]["value"], 1e-6)
-    assert float(values["distance_scale"]) == pytest.approx(1 + params["E_T"]["value"], 1e-8)
+    rates = model["variance_rates"]
+    assert rates["heading_rad2_per_m"] == pytest.approx(params["K_theta"]["value"], 1e-12)
+    assert rates["along_track_m2_per_m"] == pytest.approx(params["K_rho"]["value"], 1e-12)
+    corrections = model["corrections"]
+    assert corrections["heading_drift_rad_per_m"]["value"] == pytest.approx(
+        params["E_R"]["value"], 1e-12
+    )
+    assert corrections["distance_scale"]["value"] == pytest.approx(1 + params["E_T"]["value"])
+    # Every export is named on the page.
+    html = (out / "index.html").read_text()
+    assert all(name in html for name in FILE_NAMES.values())
 
 
 def test_report_converges_over_trials(session: tuple[Path, SessionState], tmp_path: Path) -> None:
@@ -103,9 +108,12 @@ def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_pa
     written = json.loads((out / "parameters.json").read_text())
     assert written["verdict"]["status"] == "doubtful"
     assert "trial 3" in written["verdict"]["reasons"][0]
-    yaml = (out / "odometry_covariance.yaml").read_text()
-    assert yaml.startswith("# WARNING: this estimate is DOUBTFUL")
-    assert re.search(r"^  status: doubtful$", yaml, flags=re.MULTILINE)
+    for name in FILE_NAMES.values():
+        text = (out / name).read_text()
+        if name.endswith(".yaml"):
+            assert text.startswith("# WARNING: this estimate is DOUBTFUL"), name
+        else:
+            assert json.loads(text)["verdict"]["status"] == "doubtful"
     html = (out / "index.html").read_text()
     assert "Verdict: <strong>doubtful</strong>" in html
     assert "written on request (--force)" in html
@@ -127,11 +135,7 @@ def test_report_exclude_leaves_the_trial_out(bumped: Path, tmp_path: Path) -> No
     assert written["verdict"]["status"] == "trusted"
     assert written["excluded"] == [3]
     assert written["n_trials"] == 11
-    assert re.search(
-        r"^  excluded_trials: \[3\]$",
-        (out / "odometry_covariance.yaml").read_text(),
-        flags=re.MULTILINE,
-    )
+    assert json.loads((out / FILE_NAMES["json"]).read_text())["excluded"] == [3]
     rows = parse_page(out / "index.html").pointed_out
     assert rows[3].startswith("excluded")
     assert not any("excluded" in what for n, what in rows.items() if n != 3)

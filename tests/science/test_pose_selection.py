@@ -16,7 +16,7 @@ import pytest
 from odohil.errors import InconsistentMeasurementError, RobotDescriptionError
 from odohil.science.estimators import Observation, estimate
 from odohil.science.floor_marks import MarkDistances, marks_from_pose, solve_marks
-from odohil.science.parameters import NOMAD150, PARAMETER_NAMES
+from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design
 from odohil.science.pose_selection import (
     ParameterBelief,
@@ -58,10 +58,7 @@ def _belief(description: RobotDescription, rng: np.random.Generator) -> Paramete
             odometry = design.path().encoder_end_pose()
             solved = solve_marks(description, _marks(description, noisy), odometry)
             observations.append(Observation(design, solved.pose_change, solved.cov))
-    result = estimate(observations).to_json_dict()
-    values = [result["parameters"][n]["value"] for n in PARAMETER_NAMES]
-    stderrs = [result["parameters"][n]["stderr"] for n in PARAMETER_NAMES]
-    return ParameterBelief.from_estimate(values, stderrs, result["correlation"], ParameterPriors())
+    return ParameterBelief.from_result(estimate(observations), ParameterPriors())
 
 
 @pytest.mark.slow
@@ -142,7 +139,7 @@ def test_one_way_mirror_is_not_chosen_against_the_encoders() -> None:
 def test_an_ambiguous_trial_lists_its_candidates() -> None:
     """A closed trial without any cross distance: same-screw distances cannot
     tell a motion from its inverse, and a closed path's prediction is about
-    equidistant from both (NOTES section 3), so both stay plausible."""
+    equidistant from both (docs/paper-notes.md section 3), so both stay plausible."""
     description = RobotDescription(CIRCLE, 0.001, ())
     design = Design(1, 3)
     odometry = design.path().encoder_end_pose()

@@ -103,6 +103,7 @@ def test_run_prints_the_estimate_of_the_session(emulator: EmulatorProcess, tmp_p
     )
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
+    assert result.pop("status") == "finished"  # beside the estimate object (issue 11)
     assert result["n_trials"] == 8
     assert set(result["parameters"]) == {"E_R", "E_T", "K_theta", "K_rho"}
     state = load_session(tmp_path / "session").state

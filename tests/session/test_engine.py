@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -9,7 +10,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from odohil.cli.wizard import parse_metres
 from odohil.errors import MeasurementError
+from odohil.science.estimators import EstimateResult
+from odohil.science.floor_marks import marks_from_pose
 from odohil.session import state as ev
 from odohil.session.engine import (
     CallbackObserver,
@@ -20,9 +24,16 @@ from odohil.session.engine import (
 )
 from odohil.session.journal import Record, read_journal
 from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource, TrialContext, recorded_source_from_file
+from odohil.session.sources import (
+    FakeTruthSource,
+    OperatorSource,
+    TrialContext,
+    check_distance,
+    recorded_source_from_file,
+    relative_true_pose,
+)
 from odohil.session.state import SessionState, load_session_trials, replay
-from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
+from tests.session.helpers import FAST, ROBOT_TOML, PortTruth, description, fake_robot
 
 PLAN = "k=1,l=1,n=3;k=0.5,l=1.5,n=3"
 # exaggerated errors so that the solved poses differ visibly from the odometry
@@ -194,43 +205,113 @@ def test_recorded_row_of_another_design_is_refused(tmp_path: Path) -> None:
     assert _kinds(tmp_path / "s")[-1] == ev.STOPPED
 
 
-class _Prompts:
-    """A scripted operator."""
+class _TapeOperator:
+    """An operator with a perfect tape behind the wizard's parser: each distance
+    is typed with more digits than a float holds ("0.1 + tiny digits"), parsed
+    once by :func:`odohil.cli.wizard.parse_metres` and handed over as a float;
+    ``negative`` makes the interface hand over a negative number instead."""
 
-    def __init__(self, answers: list[str]) -> None:
-        self.answers = answers
-        self.problems: list[str] = []
-        self.marked: list[str] = []
+    def __init__(self, truth: PortTruth, negative: bool = False) -> None:
+        self.truth = truth
+        self.negative = negative
+        self.start = (0.0, 0.0, 0.0)
+        self.change = (0.0, 0.0, 0.0)
+        self.typed: list[str] = []
+        self.given: list[float] = []
 
     def confirm_start_marks(self, ctx: TrialContext) -> None:
-        self.marked.append("start")
+        self.start = self.truth.true_pose()
 
     def confirm_end_marks(self, ctx: TrialContext) -> None:
-        self.marked.append("end")
+        winding = ctx.design.path().winding_rad
+        self.change = relative_true_pose(self.start, self.truth.true_pose(), winding)
 
-    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
-        self.problems.append(problem)
-        return self.answers.pop(0)
+    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+        exact = float(marks_from_pose(description(), self.change).as_array()[index])
+        text = f"{exact!r}0000000000071"
+        value = -exact if self.negative else parse_metres(text, ctx.labels[index])
+        self.typed.append(text)
+        self.given.append(value)
+        return value
 
     def show_rejection(self, ctx: TrialContext, reason: str) -> None:
         raise AssertionError(reason)
 
+    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+        return None
 
-def test_operator_answers_are_checked_and_asked_again() -> None:
-    from odohil.science.paths import Design
-    from odohil.session.sources import OperatorSource
+    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
+        return None
 
-    prompts = _Prompts(["abc", "-0.1", "nan", " 0.25 "])
-    source = OperatorSource(prompts)
-    ctx = TrialContext(1, 1, 1, Design(1, 1.0), ("d1 (screw A)",))
-    assert source.mark_start(ctx) == {}
-    assert source.mark_end(ctx) == {}
-    assert source.distance(ctx, 0) == 0.25
-    assert prompts.marked == ["start", "end"]
-    assert prompts.problems[0] == ""
-    assert "not a number" in prompts.problems[1]
-    assert "negative" in prompts.problems[2]
-    assert "finite" in prompts.problems[3]
+
+def test_a_typed_distance_reaches_the_journal_as_the_same_float(tmp_path: Path) -> None:
+    """One parse, one conversion: what the operator typed becomes one float
+    (the one Python parses from the text) and the journal holds that float."""
+    with fake_robot(QUERY) as (robot, truth):
+        journal, state = _start(tmp_path, "k=1,l=1,n=1")
+        operator = _TapeOperator(truth)
+        with journal:
+            SessionEngine(journal, state, robot, OperatorSource(operator)).run()
+    journaled = [
+        r.data["value_m"] for r in read_journal(tmp_path).records if r.kind == ev.MEASUREMENT
+    ]
+    assert journaled == operator.given == [float(text) for text in operator.typed]
+    assert all(type(v) is float for v in journaled)
+    assert len(journaled) == len(description().screws) + len(description().cross_pairs)
+
+
+def test_a_distance_that_is_no_distance_is_refused_once_by_name(tmp_path: Path) -> None:
+    """The one check (odohil.session.sources.check_distance) stands where every
+    source's distances enter the session: nothing unchecked reaches the journal."""
+    with fake_robot(QUERY) as (robot, truth):
+        journal, state = _start(tmp_path, "k=1,l=1,n=1")
+        with journal, pytest.raises(MeasurementError, match=r"d1 \(screw A\): a distance cannot"):
+            SessionEngine(journal, state, robot, OperatorSource(_TapeOperator(truth, True))).run()
+    kinds = _kinds(tmp_path)
+    assert ev.MEASUREMENT not in kinds
+    assert kinds[-1] == ev.STOPPED
+    with pytest.raises(MeasurementError, match="not a finite number"):
+        check_distance(math.nan, "d1")
+    assert check_distance(0.25, "d1") == 0.25
+
+
+class _EstimateWatcher:
+    """Sees records and typed live estimates, in order."""
+
+    def __init__(self) -> None:
+        self.seen: list[tuple[str, Any]] = []
+
+    def record(self, record: Record, state: SessionState) -> None:
+        self.seen.append((record.kind, record.data))
+
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        self.seen.append(("estimated", result))
+
+
+def test_the_live_estimate_crosses_the_session_typed(tmp_path: Path) -> None:
+    """The engine and its observers hold an EstimateResult; JSON only in the
+    journal's ``estimate`` record, which is exactly its to_json_dict()."""
+    watcher = _EstimateWatcher()
+    with fake_robot(QUERY) as (robot, truth):
+        journal, state = _start(tmp_path, "k=1,l=1,n=3")
+        with journal:
+            engine = SessionEngine(
+                journal,
+                state,
+                robot,
+                FakeTruthSource(truth, description(), seed=3),
+                estimator=IncrementalLiveEstimator(),
+                observer=watcher,
+            )
+            engine.run()
+    assert isinstance(engine.latest_estimate, EstimateResult)
+    typed = [(i, v) for i, (kind, v) in enumerate(watcher.seen) if kind == "estimated"]
+    assert typed, "no live estimate"
+    for i, result in typed:
+        kind, data = watcher.seen[i - 1]
+        assert kind == ev.ESTIMATE
+        assert data["result"] == json.loads(json.dumps(result.to_json_dict()))
+    assert typed[-1][1] is engine.latest_estimate
 
 
 def test_records_go_to_the_observer_in_order(tmp_path: Path) -> None:

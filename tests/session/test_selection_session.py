@@ -191,20 +191,20 @@ class TapeOperator:
         )
         self.truths[ctx.trial] = self.change
 
-    def ask_distance(self, ctx: TrialContext, index: int, problem: str) -> str:
-        return repr(float(marks_from_pose(self.description, self.change).as_array()[index]))
+    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+        return float(marks_from_pose(self.description, self.change).as_array()[index])
 
     def show_rejection(self, ctx: TrialContext, reason: str) -> None:
         raise AssertionError(f"exact distances rejected: {reason}")
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> str:
-        return self.ask_distance(ctx, index, "")
+    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+        return self.ask_distance(ctx, index)
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> str:
+    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
         self.extra_labels.append(label)
         start, end = label.replace(" start to ", " ").replace(" end", "").split()
         probe = replace(self.description, cross_pairs=((start, end),))
-        return repr(marks_from_pose(probe, self.change).cross_m[0])
+        return marks_from_pose(probe, self.change).cross_m[0]
 
 
 def test_the_operator_settles_an_ambiguous_trial_with_one_more_named_distance(

@@ -34,7 +34,7 @@ from odohil.science.floor_marks import (
 )
 from odohil.science.robot_description import parse_robot_description
 from odohil.session import state as ev
-from odohil.session.journal import read_journal
+from odohil.session.journal import journal_path, read_journal
 from odohil.session.sources import relative_true_pose
 from odohil.session.state import replay
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
@@ -94,10 +94,11 @@ def _marks(child: pexpect.spawn, truth: TruthClient, asked: bool = False) -> lis
     return [float(v) for v in marks_from_pose(DESCRIPTION, change).as_array()]
 
 
-def _type_all(child: pexpect.spawn, values: list[float], done: str) -> None:
+def _type_all(child: pexpect.spawn, values: list[float], done: str, digits: str = "") -> None:
+    """Type every distance (``repr``, then ``digits`` more than a float holds)."""
     for i, value in enumerate(values):
         then = _prompt(i + 1) if i + 1 < len(values) else done
-        _answer(child, repr(value), then)
+        _answer(child, repr(value) + digits, then)
 
 
 def _refused(child: pexpect.spawn, text: str, reason: str) -> None:
@@ -136,8 +137,11 @@ def test_three_trial_session_with_bad_inputs_interrupt_and_resume(tmp_path: Path
         wrong[4] += 0.05
         _type_all(child, wrong, "fit no rigid motion")
         child.expect(re.escape(LABELS[4]))  # the suspect is named
-        child.expect(_prompt(0))
-        _type_all_from(child, values, 0, "Trial 2 solved")
+        # before: every distance was asked again; now only those the rejection names
+        child.expect(r"Measure again only ")
+        asked = _retype_asked(child, values, "Trial 2 solved")
+        assert 4 in asked, asked
+        assert len(asked) < len(values), asked
         for name in (
             "phi1 deg",
             "Estimate after 2 trials",
@@ -149,7 +153,7 @@ def test_three_trial_session_with_bad_inputs_interrupt_and_resume(tmp_path: Path
             "K_rho",
         ):
             child.expect(re.escape(name))
-        child.expect("more trials reach the target|Target precision reached")
+        child.expect("more trials? reach(es)? the target|Target precision reached")
 
         # Trial 3: Ctrl-C during the motion.
         child.expect("Mark the floor at the 3 screws")
@@ -191,6 +195,17 @@ def test_three_trial_session_with_bad_inputs_interrupt_and_resume(tmp_path: Path
     assert [t.trial for t in state.completed] == [1, 2, 3]
     assert [t.attempt for t in state.completed] == [1, 1, 2]
     assert state.voided == 1
+
+
+def _retype_asked(child: pexpect.spawn, values: list[float], done: str) -> list[int]:
+    """Answer whichever distances are asked for (the true ones) until ``done``;
+    the indices asked, in order."""
+    asked: list[int] = []
+    patterns = [_prompt(i) for i in range(len(values))] + [done]
+    while (i := child.expect(patterns)) < len(values):
+        asked.append(i)
+        child.sendline(repr(values[i]))
+    return asked
 
 
 def _type_all_from(child: pexpect.spawn, values: list[float], first: int, done: str) -> None:
@@ -237,10 +252,13 @@ def test_a_typo_is_caught_and_only_that_distance_is_re_entered(tmp_path: Path) -
     with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
         child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", "k=1,l=3,n=4",
                         "--session", str(folder)])  # fmt: skip
+        typed_first: list[float] = []
         for trial in (1, 2, 3):
             values = _marks(child, truth)
             child.expect(_prompt(0))
-            _type_all(child, values, f"Trial {trial} solved")
+            # trial 1 typed with more digits than a float holds ("0.1 + tiny digits")
+            _type_all(child, values, f"Trial {trial} solved", "00000000007" if trial == 1 else "")
+            typed_first = typed_first or [float(repr(v) + "00000000007") for v in values]
         values = _marks(child, truth)
         child.expect(_prompt(0))
         index, typed = _absorbed_typo(values)
@@ -261,6 +279,10 @@ def test_a_typo_is_caught_and_only_that_distance_is_re_entered(tmp_path: Path) -
     state = replay(records)
     assert state.completed[-1].measurements == pytest.approx(values)
     assert not state.completed[-1].slip
+    # a typed distance stays the one float Python parses from the text, up to the journal
+    journaled = [r.data["value_m"] for r in records if r.kind == ev.MEASUREMENT]
+    assert journaled[: len(typed_first)] == typed_first
+    assert all(type(v) is float for v in journaled)
 
 
 def test_resume_after_ctrl_c_mid_motion_asks_to_put_the_robot_back(tmp_path: Path) -> None:
@@ -295,12 +317,58 @@ def test_resume_after_ctrl_c_mid_motion_asks_to_put_the_robot_back(tmp_path: Pat
         values = _marks(child, truth)
         child.expect(_prompt(0))
         _type_all(child, values, "Trial 1 solved")
-        child.expect(r"Session complete:\S* 1 trials")
+        child.expect(r"Session complete:\S* 1 trial\.")
         child.expect(pexpect.EOF)
         child.close()
         assert child.exitstatus == 3  # one trial gives no estimate: not trusted
     kinds = [r.kind for r in read_journal(folder).records]
     assert kinds.count(ev.START_POSE) == 2
+
+
+def test_resumed_mid_trial_shows_its_context_and_back_corrects_the_last_value(
+    tmp_path: Path,
+) -> None:
+    """Before: a resumed wizard landed on a bare "d2 (screw B)" prompt, and a
+    value typed could not be corrected. Now the resumed trial is shown (number,
+    design, what was entered), and ``back`` at the next prompt corrects the
+    value typed just before it: the wrong one never reaches the journal."""
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT_TOML)
+    folder = tmp_path / "session"
+    args = ["--seed", "4", "--time-scale", "20", "--no-pacing"]
+    with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
+        child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", "k=1,l=1,n=1",
+                        "--session", str(folder)])  # fmt: skip
+        values = _marks(child, truth)
+        child.expect(re.escape(f"Trial 1/1, {LABELS[0]}, metres ("))
+        _answer(child, repr(values[0]), _prompt(1))
+        _answer(child, repr(values[1]), _prompt(2))  # d1 is saved once d2 is typed
+        child.sendintr()
+        child.expect(r"Interrupted\S* \(Ctrl-C\)")
+        child.expect(pexpect.EOF)
+        child.close()
+        assert child.exitstatus == 130
+
+        child = _spawn(["--port", emu.device, "--session", str(folder)])
+        child.expect(r"Trial 1/1\S* \(attempt 1\): k=1 l=1 m")
+        child.expect("resumed: the motion is done")
+        child.expect(re.escape(f"Already entered and saved: {LABELS[0]} = {values[0]:.4f} m"))
+        child.expect(re.escape(f"Trial 1/1, {LABELS[1]}, metres ("))
+        child.sendline("back")  # nothing typed in this run yet: nothing to correct
+        child.expect("nothing to go back to")
+        child.expect(_prompt(1))
+        _answer(child, repr(values[1] + 0.002), re.escape(f"back: correct {LABELS[1]}"))
+        child.sendline("-")
+        child.expect(re.escape(f"Correct {LABELS[1]}"))
+        _answer(child, repr(values[1]), _prompt(2))
+        _type_all_from(child, values, 2, "Trial 1 solved")
+        child.expect(r"Session complete:\S* 1 trial\.")
+        child.expect(pexpect.EOF)
+        child.close()
+    records = read_journal(folder).records
+    typed = [r.data["value_m"] for r in records if r.kind == ev.MEASUREMENT]
+    assert typed == values
+    assert "KeyboardInterrupt" not in journal_path(folder).read_text()
 
 
 def test_the_wizard_connects_with_robot_toml_serial_and_says_so(tmp_path: Path) -> None:

@@ -19,10 +19,12 @@ from odohil.errors import MotionError, ParameterError
 from odohil.protocol.nomad.limits import leg_to_wire
 from odohil.protocol.nomad.messages import Pr
 from odohil.protocol.nomad.numbers import S16_MAX
+from odohil.science import frames
 from odohil.science.paths import Design, Leg
 from odohil.units import (
-    WIRE_ANGLES_PER_TURN,
     radians_to_wire,
+    wire_angle_difference,
+    wire_angle_in_turn,
     wire_to_radians,
     wrap_angle,
 )
@@ -68,14 +70,10 @@ class MotionRecord:
 
 def relative_pose(start: EncoderSample, end: EncoderSample) -> tuple[float, float, float]:
     """``end`` in the frame of ``start``: (x m, y m, heading change rad in (-pi, pi])."""
-    dx, dy = end.x_m - start.x_m, end.y_m - start.y_m
-    c, s = math.cos(start.steer_rad), math.sin(start.steer_rad)
-    return (c * dx + s * dy, -s * dx + c * dy, wrap_angle(end.steer_rad - start.steer_rad))
-
-
-def _angle_diff_wire(a: int, b: int) -> int:
-    d = (a - b) % WIRE_ANGLES_PER_TURN
-    return d - WIRE_ANGLES_PER_TURN if d > WIRE_ANGLES_PER_TURN // 2 else d
+    x, y, turned = frames.relative_pose(
+        (start.x_m, start.y_m, start.steer_rad), (end.x_m, end.y_m, end.steer_rad)
+    )
+    return (x, y, wrap_angle(turned))
 
 
 def _check_step(
@@ -84,11 +82,11 @@ def _check_step(
     heading = wire_to_radians(before.steer_wire)
     want_x = before.x_wire + cmd.trans * math.cos(heading)
     want_y = before.y_wire + cmd.trans * math.sin(heading)
-    want_steer = (before.steer_wire + cmd.steer) % WIRE_ANGLES_PER_TURN
+    want_steer = wire_angle_in_turn(before.steer_wire + cmd.steer)
     errors = (
         abs(after.x_wire - want_x),
         abs(after.y_wire - want_y),
-        abs(_angle_diff_wire(after.steer_wire, want_steer)),
+        abs(wire_angle_difference(after.steer_wire, want_steer)),
     )
     if max(errors) > tolerance:
         robot.stop()

@@ -44,7 +44,7 @@ from odohil.protocol.nomad.framing import Packet
 from odohil.protocol.nomad.numbers import S16_MAX, U16_MAX
 from odohil.protocol.nomad.replies import decode_reply
 from odohil.protocol.nomad.state import N150_MASK, RobotState, StateMask, decode_state_payload
-from odohil.units import WIRE_ANGLES_PER_TURN, metres_to_wire, radians_to_wire
+from odohil.units import metres_to_wire, radians_to_wire, wire_angle_in_turn
 
 WS_MAX_S = 255
 _U32_WRAP = 1 << 32
@@ -250,8 +250,8 @@ class NomadRobot:
         """``da``: call the current steering and turret angles these, radians."""
         self._call(
             m.Da(
-                radians_to_wire(steer_rad) % WIRE_ANGLES_PER_TURN,
-                radians_to_wire(turret_rad) % WIRE_ANGLES_PER_TURN,
+                wire_angle_in_turn(radians_to_wire(steer_rad)),
+                wire_angle_in_turn(radians_to_wire(turret_rad)),
             )
         )
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from odohil.protocol.nomad.state import RobotState
-from odohil.units import WIRE_ANGLES_PER_TURN, wire_to_metres, wire_to_radians
+from odohil.units import wire_angle_in_turn, wire_to_metres, wire_to_radians
 
 MOTOR_TRANS = 0b001
 MOTOR_STEER = 0b010
@@ -56,8 +56,8 @@ class EncoderSample:
     @classmethod
     def from_state(cls, state: RobotState, host_time_s: float) -> EncoderSample:
         """Convert a state packet; angles reduced modulo 3600 wire units."""
-        steer = state.steer % WIRE_ANGLES_PER_TURN
-        turret = state.turret % WIRE_ANGLES_PER_TURN
+        steer = wire_angle_in_turn(state.steer)
+        turret = wire_angle_in_turn(state.turret)
         return cls(
             host_time_s=host_time_s,
             robot_time_s=state.timestamp_ms / 1000.0,

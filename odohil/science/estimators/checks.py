@@ -24,8 +24,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from odohil import units
 from odohil.errors import ParameterError
-from odohil.science.estimators.observations import DesignSummary, Observation, wrap
+from odohil.science.estimators.observations import DesignSummary, Observation
 from odohil.science.estimators.result import (
     ModelCheck,
     Outlier,
@@ -34,6 +35,7 @@ from odohil.science.estimators.result import (
     Suggestion,
 )
 from odohil.science.fisher import fisher_information
+from odohil.science.grouping import by_design
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, FloatArray
@@ -83,14 +85,12 @@ def mahalanobis2(observations: Sequence[Observation], params: ErrorParameters) -
     """Each trial's squared Mahalanobis distance from the model (Delta residual
     taken modulo 2 pi); vectorised per design."""
     out = np.empty(len(observations))
-    by_design: dict[Design, list[int]] = {}
-    for i, obs in enumerate(observations):
-        by_design.setdefault(obs.design, []).append(i)
-    for design, index in by_design.items():
+    trials = by_design(range(len(observations)), lambda i: observations[i].design)
+    for design, index in trials.items():
         m = pose_moments(design.path(), params)
         poses = np.array([observations[i].pose_change for i in index])
         resid = poses - m.mean
-        resid[:, 2] = wrap(resid[:, 2])
+        resid[:, 2] = units.wrap_angles(resid[:, 2])
         total = m.cov + np.array([observations[i].measurement_cov for i in index])
         total = 0.5 * (total + np.swapaxes(total, 1, 2))
         try:
@@ -297,7 +297,8 @@ def sufficiency(
         if doable:
             best = min(doable, key=lambda s: (s.more_trials or 0) * s.l_m * 2 * s.k)
             advice.append(
-                f"{PARAMETER_NAMES[p]}: about {best.more_trials} more trials of {best.design_label}"
+                f"{PARAMETER_NAMES[p]}: about "
+                f"{units.plural(best.more_trials or 0, 'more trial')} of {best.design_label}"
             )
         else:
             advice.append(f"{PARAMETER_NAMES[p]}: more trials of these designs would not do")

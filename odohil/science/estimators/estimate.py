@@ -10,6 +10,7 @@ from typing import Literal
 import numpy as np
 from scipy import stats
 
+from odohil import units
 from odohil.errors import MeasurementError
 from odohil.science.estimators.checks import Criteria, model_check, sufficiency
 from odohil.science.estimators.joint import JointFit, joint_estimate, start_phi
@@ -35,8 +36,9 @@ METHODS: tuple[Method, ...] = ("robust", "joint", "paper")
 def paper_notes(paper: PaperEstimate) -> tuple[str, ...]:
     """Which designs gave which parameters."""
     return (
-        f"E_R, K_theta, E_T from {paper.first.design.label()} ({paper.first.n} trials); "
-        f"K_rho from {paper.second.design.label()} ({paper.second.n} trials)",
+        f"E_R, K_theta, E_T from {paper.first.design.label()} "
+        f"({units.plural(paper.first.n, 'trial')}); "
+        f"K_rho from {paper.second.design.label()} ({units.plural(paper.second.n, 'trial')})",
     )
 
 

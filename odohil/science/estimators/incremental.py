@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
+from odohil import units
 from odohil.errors import MeasurementError
 from odohil.science.estimators.checks import Criteria
 from odohil.science.estimators.estimate import build_result, fit_joint
@@ -111,7 +112,7 @@ class IncrementalEstimator:
             )
         notes = (
             f"incremental joint maximum likelihood ({len(self._groups)} groups of "
-            f"{self.n_trials} trials)",
+            f"{units.plural(self.n_trials, 'trial')})",
         )
         return build_result(
             "joint",

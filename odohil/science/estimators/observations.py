@@ -15,13 +15,15 @@ same as unwrapping every trial relative to the model mean.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from odohil.errors import MeasurementError
+from odohil.science.grouping import by_design
 from odohil.science.paths import Design, FloatArray
+from odohil.units import angle_near, circular_mean
 
 
 @dataclass(frozen=True)
@@ -72,21 +74,11 @@ class Observation:
         return f"line {self.line}" if self.line is not None else "a trial"
 
 
-def wrap(angle: FloatArray | float) -> FloatArray:
-    """Angles reduced to [-pi, pi), radians."""
-    return np.asarray((np.asarray(angle) + math.pi) % (2.0 * math.pi) - math.pi)
-
-
-def circular_mean(angles: FloatArray) -> float:
-    """The circular mean of angles (rad), in [-pi, pi]."""
-    return float(math.atan2(float(np.sin(angles).mean()), float(np.cos(angles).mean())))
-
-
 def align_heading(mean: FloatArray, reference: float) -> FloatArray:
     """A copy of a model mean (x, y, Delta) with Delta moved by a multiple of
     2 pi to within pi of ``reference`` (rad)."""
     out = np.array(mean, dtype=np.float64)
-    out[2] = reference - float(wrap(reference - out[2]))
+    out[2] = angle_near(float(out[2]), reference)
     return out
 
 
@@ -172,10 +164,10 @@ def group_trials(
     image (:func:`mirrored`), which the model distributes exactly alike.
     """
     observations = [forward_view(o) for o in observations]
-    references: dict[Design, float] = {}
-    for design in _designs(observations):
-        angles = np.array([o.pose_change[2] for o in observations if o.design == design])
-        references[design] = circular_mean(angles)
+    references = {
+        design: circular_mean([o.pose_change[2] for o in members])
+        for design, members in by_design(observations).items()
+    }
     groups: dict[tuple[Design, tuple[float, ...]], TrialGroup] = {}
     for obs in observations:
         key = (obs.design, measurement_key(obs.measurement_cov, relative_bin))
@@ -205,13 +197,6 @@ def forward_view(observation: Observation) -> Observation:
     """The trial as the estimators model it: a backward trial as its forward
     design's mirror image (:func:`mirrored`), any other trial as it is."""
     return mirrored(observation) if observation.design.backward else observation
-
-
-def _designs(observations: Iterable[Observation]) -> list[Design]:
-    seen: dict[Design, None] = {}
-    for obs in observations:
-        seen.setdefault(obs.design, None)
-    return list(seen)
 
 
 @dataclass(frozen=True)
@@ -248,12 +233,8 @@ class DesignSummary:
 
 def summarise(groups: Sequence[TrialGroup]) -> list[DesignSummary]:
     """Pool the groups of each design (Delta re-aligned to the design's first reference)."""
-    by_design: dict[Design, list[TrialGroup]] = {}
-    for group in groups:
-        if group.n > 0:
-            by_design.setdefault(group.design, []).append(group)
     out = []
-    for design, members in by_design.items():
+    for design, members in by_design(g for g in groups if g.n > 0).items():
         reference = members[0].reference
         n = sum(g.n for g in members)
         total = np.zeros(3)

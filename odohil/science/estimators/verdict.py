@@ -21,7 +21,9 @@ from typing import Any, Literal
 
 import numpy as np
 
+from odohil import units
 from odohil.science.estimators.observations import Observation
+from odohil.science.grouping import by_design
 
 Status = Literal["trusted", "doubtful", "failed"]
 
@@ -55,14 +57,12 @@ TRUSTED = Verdict("trusted")
 def degenerate_designs(observations: Sequence[Observation]) -> list[str]:
     """Labels of designs with 2 or more trials whose exact poses are all identical."""
     out = []
-    designs = dict.fromkeys(o.design for o in observations)
-    for design in designs:
-        mine = [o for o in observations if o.design == design]
+    for design, mine in by_design(observations).items():
         if len(mine) < 2 or any(np.any(o.measurement_cov != 0) for o in mine):
             continue
         poses = np.array([o.pose_change for o in mine])
         if np.all(np.ptp(poses, axis=0) == 0):
-            out.append(f"{design.label()} ({len(mine)} trials)")
+            out.append(f"{design.label()} ({units.plural(len(mine), 'trial')})")
     return out
 
 

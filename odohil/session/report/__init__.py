@@ -6,8 +6,8 @@ would pay for it); :func:`write_report` does.
 
 :func:`write_report` writes, into one folder: ``index.html`` (self-contained:
 every plot inline, referring to no other file) and the exports
-(``parameters.json``, ``odometry_covariance.yaml``, and any further
-:class:`ExportFile` the caller passes).
+(``parameters.json`` and any further :class:`ExportFile` the caller
+passes: ``odohil report`` passes the filter formats of odohil/session/exports.py).
 """
 
 from __future__ import annotations
@@ -25,7 +25,6 @@ from odohil.session.report.data import (
 )
 from odohil.session.report.exports import (
     ExportFile,
-    covariance_yaml,
     parameters_json,
     standard_exports,
 )
@@ -36,7 +35,6 @@ __all__ = [
     "ExportFile",
     "SessionReport",
     "TrialPoint",
-    "covariance_yaml",
     "load_report",
     "parameters_json",
     "standard_exports",

@@ -13,7 +13,6 @@ from collections.abc import Mapping, Sequence
 
 from odohil import units
 from odohil.science.estimators import EstimateResult
-from odohil.science.parameters import PAPER_UNITS
 from odohil.session.report.data import SessionReport, TrialPoint, to_paper
 from odohil.session.report.exports import ExportFile
 from odohil.session.report.plots import Plot
@@ -67,7 +66,11 @@ def render_html(report: SessionReport, plots: Sequence[Plot], exports: Sequence[
         if suff.suggestions:
             parts.append("<ul>")
             for s in suff.suggestions:
-                more = "not reachable" if s.more_trials is None else f"{s.more_trials} more trials"
+                more = (
+                    "not reachable"
+                    if s.more_trials is None
+                    else units.plural(s.more_trials, "more trial")
+                )
                 parts.append(f"<li>{e(s.parameter)}: {e(s.design_label)}, {e(more)}</li>")
             parts.append("</ul>")
     parts.append('<h2 id="trials">Trials pointed out</h2>')
@@ -141,7 +144,7 @@ def _validations(report: SessionReport, by_key: Mapping[str, Plot]) -> str:
         status = "PASS" if r.passed else "FAIL"
         parts.append(
             f'<p class="{"good" if r.passed else "bad"}">{e(v.path)} ({where}): {status}, '
-            f"{r.n_trials} trials, each test at level {r.alpha / 4:g}.</p>"
+            f"{units.plural(r.n_trials, 'trial')}, each test at level {r.alpha / 4:g}.</p>"
         )
         parts.append(
             "<table><tr><th>test</th><th>NEES</th><th>dof</th><th>p-value</th>"
@@ -193,7 +196,7 @@ def _session(report: SessionReport) -> str:
     plan = state.plan.to_text() if state.plan else "none"
     return (
         f"<p>Plan <code>{e(plan)}</code>; {len(state.completed)} of "
-        f"{state.plan.n_trials if state.plan else 0} trials completed"
+        f"{units.plural(state.plan.n_trials if state.plan else 0, 'trial')} completed"
         f"{' (session finished)' if state.finished else ' (session not finished)'}; "
         f"{state.voided} attempt(s) voided. Robot description: "
         f"<code>{e(str(state.header.get('robot_path') or 'journaled'))}</code>.</p>"
@@ -262,7 +265,7 @@ def _estimates_table(result: EstimateResult) -> str:
         rows.append(
             f"<tr><td class=l>{p.name}</td><td>{to_paper(p.name, p.value):.4g}</td>"
             f"<td>{_fmt(to_paper(p.name, p.stderr))}</td><td>[{_fmt(lo)}, {_fmt(hi)}]</td>"
-            f"<td class=l>{PAPER_UNITS[p.name]}</td></tr>"
+            f"<td class=l>{units.unit_column(p.name, 'paper')}</td></tr>"
         )
     rows.append("</table>")
     return "\n".join(rows)

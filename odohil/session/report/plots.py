@@ -28,7 +28,7 @@ from scipy import stats
 
 from odohil import units
 from odohil.science.estimators import ParameterEstimate
-from odohil.science.parameters import PAPER_UNITS, PARAMETER_NAMES
+from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.paths import FloatArray
 from odohil.session.report.data import DOWN_WEIGHT_BELOW, DesignReport, SessionReport, TrialPoint
 from odohil.session.report.data import to_paper as _to_paper
@@ -332,8 +332,7 @@ def _convergence_axes(ax: Axes, report: SessionReport, index: int, name: str) ->
         ax.axhline(final[0], color=RED, linestyle="--", linewidth=1.2,
                    label=f"final estimate ({report.result.method} fit)")  # fmt: skip
     ax.set_ylim(y_low, y_high)
-    unit = PAPER_UNITS[name]
-    ax.set_ylabel(f"{name} ({'no unit' if unit == '1' else unit})")
+    ax.set_ylabel(f"{name} ({units.parameter_unit(name, 'paper') or 'no unit'})")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
 
 
