@@ -4,6 +4,7 @@ odohil/science/validation.py)."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from pathlib import Path
@@ -11,6 +12,7 @@ from typing import Annotated, Any
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from odohil import units
@@ -31,6 +33,8 @@ from odohil.cli.run import (
     connect,
     interrupt_text,
     make_source,
+    open_mocap,
+    parse_measure,
     refuse_unredundant,
     report_stop,
     report_unconfirmed,
@@ -43,6 +47,7 @@ from odohil.errors import (
     MeasurementError,
     OdohilError,
     ParameterError,
+    RobotDescriptionError,
     StopUnconfirmedError,
 )
 from odohil.science.robot_description import RobotDescription, parse_robot_description
@@ -89,7 +94,7 @@ _HELP = (
 
 
 def _bad(console: Console, message: str) -> typer.Exit:
-    console.print(f"[red]error[/]: {message}", soft_wrap=True, highlight=False)
+    console.print(f"[red]error[/]: {escape(message)}", soft_wrap=True, highlight=False)
     return typer.Exit(EXIT_BAD_INPUT)
 
 
@@ -125,8 +130,8 @@ def validate(
         str | None,
         typer.Option(
             "--measure",
-            help="`fake` (the fake robot's true pose) or a file: a trial file for a "
-            "driven path (as run), a pose file for a square.",
+            help="`fake` (the fake robot's true pose), `tcp://HOST:PORT` (motion capture) "
+            "or a file: a trial file for a driven path (as run), a pose file for a square.",
         ),
     ] = None,
     port: Annotated[
@@ -228,10 +233,10 @@ def validate(
         tested = check_trials(measured, result, alpha)
     except typer.Exit:
         raise
-    except (ParameterError, JournalError, MeasurementError) as exc:
+    except (ParameterError, RobotDescriptionError, JournalError, MeasurementError) as exc:
         raise _bad(console, str(exc)) from None
     except OdohilError as exc:
-        console.print(f"[red]error[/]: {exc}", soft_wrap=True)
+        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_ERROR) from None
     data = _json(session, vpath, folder, measured, calibration, tested)
     if as_json:
@@ -280,12 +285,16 @@ def _drive_or_reload(
     if trials is None:
         raise ParameterError("--trials N is needed to drive a validation path (N in 1..10000)")
     if measure is None:
-        raise ParameterError("--measure is needed to drive: `fake` or a trial file (CSV)")
+        raise ParameterError(
+            "--measure is needed to drive: `fake`, `tcp://HOST:PORT` or a trial file (CSV)"
+        )
     plan = check_session_plan(Plan.of([(vpath.design, trials)]))
-    refuse_unredundant(description, plan, console)
+    option = parse_measure(measure)
+    kind, trial_file = option.kind, option.trial_file
+    if kind != "tcp":  # the tape's cross distances must tell the designs apart
+        refuse_unredundant(description, plan, console)
     check_floor(plan, description)
     line = resolve_line(description, port, baud, robot_path or "the session's robot description")
-    kind, trial_file = ("fake", None) if measure == "fake" else ("file", measure)
     if trial_file:
         check_trial_file(trial_file, description, plan)
     if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
@@ -298,13 +307,19 @@ def _drive_or_reload(
         "validation_of": str(session.resolve()),
         "validation_path": vpath.text,
     }
-    journal, state = start_session(
-        folder, toml, plan, measure=kind, settings=settings, robot_path=robot_path
-    )
-    console.print(f"validation session {folder}")
-    console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
-    with session_exit_codes(console), journal, connect(line, truth_socket) as (robot, truth):
-        source = make_source(kind, description, truth, seed, trial_file)
+    if option.mocap_url:
+        settings["mocap_url"] = option.mocap_url
+    with contextlib.ExitStack() as stack:
+        mocap = stack.enter_context(open_mocap(option.mocap_url, description, console))
+        journal, state = start_session(
+            folder, toml, plan, measure=kind, settings=settings, robot_path=robot_path
+        )
+        console.print(f"validation session {folder}")
+        console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
+        stack.enter_context(session_exit_codes(console))
+        stack.enter_context(journal)
+        robot, truth = stack.enter_context(connect(line, truth_socket))
+        source = make_source(kind, description, truth, seed, trial_file, mocap)
         observer = ProgressObserver(console, state)
         engine = SessionEngine(
             journal,

@@ -402,7 +402,8 @@ class SessionEngine:
             reason = "interrupted"
         else:
             reason = "error"
-        message = str(exc) or type(exc).__name__
+        # Never an exception's class name in the journal: it is read by people.
+        message = str(exc) or ("Ctrl-C" if reason == "interrupted" else "an error with no message")
         with signals_held():
             try:
                 sample = self.robot.stop_and_confirm(self.motion.stop_timeout_s)

@@ -208,3 +208,18 @@ def test_trial_file_and_square_pose_file_are_read_without_a_robot(
                   "--trials", "9")  # fmt: skip
     assert done.returncode == 2
     assert "--trials 9" in done.stderr
+
+
+def test_motion_capture_is_checked_before_anything_moves(session: Path, tmp_path: Path) -> None:
+    """`--measure tcp://HOST:PORT` goes to the motion-capture source, checked
+    before any validation session or port: here the calibration's robot
+    description has no [measurement] pose_sigma, so it is bad input."""
+    out = tmp_path / "mocap-validation"
+    done = in_process(
+        "validate", str(session), "--path", VALIDATION_PATH, "--trials", "2",
+        "--port", "fakerobot://?seed=1&time_scale=2000", "--measure", "tcp://127.0.0.1:9",
+        "--out", str(out),
+    )  # fmt: skip
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert "[measurement] pose_sigma" in done.stderr
+    assert not out.exists()
