@@ -35,7 +35,7 @@ from odohil.cli.exit_codes import (
     EXIT_UNTRUSTED,
     exit_for_signal,
 )
-from odohil.cli.line import Line, register_fake_urls, resolve_line
+from odohil.cli.line import FAKE_URL_SCHEMES, Line, register_fake_urls, resolve_line
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
@@ -695,7 +695,7 @@ def run(
         }
         if option.mocap_url:
             settings["mocap_url"] = option.mocap_url
-        if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
+        if kind == "fake" and not truth_socket and not line.port.startswith(FAKE_URL_SCHEMES):
             try:
                 make_source(kind, description, None, seed, trial_file)  # says what is missing
             except OdohilError as exc:

@@ -20,6 +20,7 @@ from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.robot_description import parse_robot_description
 from odohil.session.robot_file import load_robot_description
 from odohil.session.robots import open_robot
+from odohil.session.state import load_session
 
 fakes.register_url_handlers()
 
@@ -140,5 +141,22 @@ def test_turn_trials_of_a_robot_whose_turns_carry_error_are_not_trusted(turn_tri
     create2 = odohil("estimate", turn_trials, "--robot", "create2", "--json")
     assert create2.returncode == 3, create2.stderr
     verdict = json.loads(create2.stdout)["verdict"]
+    assert verdict["status"] == "doubtful"
+    assert any("turn trials on a robot whose turns carry error" in r for r in verdict["reasons"])
+
+
+@pytest.mark.slow
+def test_run_with_allow_turns_defaults_to_reverse_and_is_not_trusted(tmp_path: Path) -> None:
+    done = odohil(
+        "run", "--robot", "create2", "--port", FAKE, "--measure", "fake", "--allow-turns",
+        "--plan", "k=1,l=0.5,n=6,variant=turn;k=0.5,l=0.5,n=6", "--session", tmp_path / "s",
+        "--json", timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 3, done.stderr
+    assert "warning: turn designs on a robot whose turns carry error" in done.stderr
+    plan = load_session(tmp_path / "s").state.plan
+    assert plan is not None
+    assert [item.design.variant for item in plan.items] == ["turn", "reverse"]
+    verdict = json.loads(done.stdout)["verdict"]
     assert verdict["status"] == "doubtful"
     assert any("turn trials on a robot whose turns carry error" in r for r in verdict["reasons"])
