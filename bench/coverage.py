@@ -53,6 +53,7 @@ class Replication:
     covered: np.ndarray | None
     verdict: str
     failure: str = ""
+    outside_4sigma: np.ndarray | None = None
 
 
 def tape_noise(rng: np.random.Generator, law: str, sigma: float, size: int) -> np.ndarray:
@@ -94,7 +95,14 @@ def run_chunk(args: tuple[int, str, str, int, int]) -> list[Replication]:
         values = np.array([p.value for p in result.parameters])
         low = np.array([p.ci95[0] for p in result.parameters])
         high = np.array([p.ci95[1] for p in result.parameters])
-        out.append(Replication(values, (low <= truth) & (truth <= high), result.verdict.status))
+        outside = np.array(
+            [not p.contains(t) for p, t in zip(result.parameters, truth, strict=True)]
+        )
+        out.append(
+            Replication(
+                values, (low <= truth) & (truth <= high), result.verdict.status, "", outside
+            )
+        )
     return out
 
 
@@ -110,10 +118,12 @@ def summary(reps: list[Replication]) -> str:
         cover_se = np.sqrt(cover * (1 - cover) / len(ok))
         bias = (values.mean(axis=0) / truth - 1) * 100
         bias_se = values.std(axis=0, ddof=1) / math.sqrt(len(ok)) / np.abs(truth) * 100
+        outside = np.array([r.outside_4sigma for r in ok], dtype=float).sum(axis=0)
         for i, name in enumerate(PARAMETER_NAMES):
             lines.append(
                 f"{name}: coverage {cover[i]:.3f} +- {cover_se[i]:.3f}, "
-                f"bias {bias[i]:+.2f} +- {bias_se[i]:.2f} %"
+                f"bias {bias[i]:+.2f} +- {bias_se[i]:.2f} %, "
+                f"outside the 4-sigma interval {int(outside[i])}"
             )
     verdicts = {v: sum(r.verdict == v for r in reps) for v in ("trusted", "doubtful", "failed")}
     errors = [r.failure for r in reps if r.failure]
@@ -130,24 +140,38 @@ def main() -> None:
     parser.add_argument("--method", default="robust")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--seed", type=int, default=20261123)
+    parser.add_argument(
+        "--max-seconds",
+        type=float,
+        default=None,
+        help="stop after this wall time and report what is done (jobs run in shuffled order)",
+    )
     args = parser.parse_args()
     print(f"command: python bench/coverage.py {' '.join(sys.argv[1:])}")
     print(f"load average before: {os.getloadavg()[0]:.2f}; {args.workers} workers", flush=True)
     seeds = iter(np.random.SeedSequence(args.seed).generate_state(100_000))
     start = time.perf_counter()
+    cells = [(law, int(n)) for law in args.noise.split(",") for n in args.n.split(",")]
+    jobs = []
+    for law, n in cells:
+        left = args.replications
+        while left > 0:
+            jobs.append((n, law, args.method, min(CHUNK, left), int(next(seeds))))
+            left -= CHUNK
+    order = np.random.default_rng(args.seed).permutation(len(jobs))
+    jobs = [jobs[i] for i in order]
+    results: dict[tuple[str, int], list[Replication]] = {cell: [] for cell in cells}
     with multiprocessing.Pool(args.workers) as pool:
-        for law in args.noise.split(","):
-            for n in (int(v) for v in args.n.split(",")):
-                jobs = []
-                left = args.replications
-                while left > 0:
-                    jobs.append((n, law, args.method, min(CHUNK, left), int(next(seeds))))
-                    left -= CHUNK
-                reps: list[Replication] = []
-                for chunk in pool.imap_unordered(run_chunk, jobs):
-                    reps.extend(chunk)
-                print(f"\n## {law} tape noise, n = {n} per design ({len(reps)} replications)")
-                print(summary(reps), flush=True)
+        for job, chunk in zip(jobs, pool.imap(run_chunk, jobs), strict=False):
+            results[(job[1], job[0])].extend(chunk)
+            if args.max_seconds is not None and time.perf_counter() - start > args.max_seconds:
+                print(f"stopped at --max-seconds {args.max_seconds:g}", flush=True)
+                pool.terminate()
+                break
+    for law, n in cells:
+        reps = results[(law, n)]
+        print(f"\n## {law} tape noise, n = {n} per design ({len(reps)} replications)")
+        print(summary(reps), flush=True)
     elapsed = time.perf_counter() - start
     print(f"\nwall clock {elapsed:.0f} s, load average after: {os.getloadavg()[0]:.2f}")
 

@@ -14,6 +14,7 @@ the maximum of each.
 
 from __future__ import annotations
 
+import os
 import statistics
 import time
 
@@ -41,12 +42,15 @@ def main() -> None:
         estimator.add(trial)
     times = []
     live = []
+    cpu = []
     for trial in trials[200:240]:
         start = time.perf_counter()
+        start_cpu = time.process_time()
         estimator.add(trial)
         times.append(time.perf_counter() - start)
         estimator.result().to_json_dict()
         live.append(time.perf_counter() - start)
+        cpu.append(time.process_time() - start_cpu)
     fit = estimator.fit
     assert fit is not None
     print(f"trials: {estimator.n_trials}, groups: {len(estimator.groups)}")
@@ -58,6 +62,11 @@ def main() -> None:
         f"live update (fit + result JSON with verdict): median "
         f"{1e3 * statistics.median(live):.1f} ms, max {1e3 * max(live):.1f} ms"
     )
+    print(
+        f"live update CPU time (this process only; wall time grows with the machine's "
+        f"load): median {1e3 * statistics.median(cpu):.1f} ms, max {1e3 * max(cpu):.1f} ms"
+    )
+    print(f"load average: {os.getloadavg()[0]:.2f}")
     print(f"estimate (paper units): {fit.params.to_paper_units()}")
 
 

@@ -3,7 +3,8 @@
 A pose is (x m, y m, theta rad): a frame's origin and heading in another
 frame. ``compose(a, b)`` is b (given in a's frame) seen from where a is
 given; ``relative_pose(a, c)`` is c seen from a's frame, so that
-``compose(a, relative_pose(a, c)) == c``. Headings are not wrapped here: a
+``compose(a, relative_pose(a, c)) == c``; :func:`relative_pose_jacobians`
+gives its derivatives by both poses (covariance propagation). Headings are not wrapped here: a
 heading difference keeps the winding the two headings carry (the fake's true
 heading and the encoders' both count whole turns), and a caller that wants
 it in (-pi, pi] wraps it with :func:`odohil.units.wrap_angle`.
@@ -54,6 +55,24 @@ def relative_pose(start: Sequence[float] | FloatArray, end: Sequence[float] | Fl
     c, s = math.cos(t0), math.sin(t0)
     dx, dy = x1 - x0, y1 - y0
     return (c * dx + s * dy, -s * dx + c * dy, t1 - t0)
+
+
+def relative_pose_jacobians(
+    start: Sequence[float] | FloatArray, end: Sequence[float] | FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """The Jacobians of :func:`relative_pose` by ``start`` and by ``end``,
+    each 3x3 (rows: x, y, theta of the relative pose; columns: x, y, theta of
+    the pose differentiated), to propagate two poses' covariances:
+    ``cov = J0 C_start J0^T + J1 C_end J1^T``. With c, s = cos, sin of the
+    start heading and (dx, dy) the relative position:
+    J0 = [[-c, -s, dy], [s, -c, -dx], [0, 0, -1]], J1 = [[c, s, 0], [-s, c, 0], [0, 0, 1]].
+    """
+    dx, dy, _ = relative_pose(start, end)
+    theta0 = float(_pose(start)[2])
+    c, s = math.cos(theta0), math.sin(theta0)
+    by_start = np.array([[-c, -s, dy], [s, -c, -dx], [0.0, 0.0, -1.0]], dtype=np.float64)
+    by_end = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]], dtype=np.float64)
+    return by_start, by_end
 
 
 def inverse_pose(pose: Sequence[float] | FloatArray) -> FloatArray:

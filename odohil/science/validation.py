@@ -48,6 +48,7 @@ from odohil.errors import ParameterError
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import EncoderPath, FloatArray
+from odohil.units import wrap_angles
 
 AXES = ("x", "y", "theta")
 """The pose-change components, in order: x m, y m, Delta rad."""
@@ -180,11 +181,6 @@ class ValidationResult:
         }
 
 
-def _wrap(angles: FloatArray) -> FloatArray:
-    wrapped: FloatArray = np.remainder(angles + math.pi, 2.0 * math.pi) - math.pi
-    return wrapped
-
-
 def _sqrt_psd(matrix: FloatArray) -> FloatArray:
     """L with L L^T = matrix (symmetric PSD; tiny negative eigenvalues clipped)."""
     sym = 0.5 * (matrix + matrix.T)
@@ -288,7 +284,7 @@ def validation_test(
     else:
         loadings = np.zeros((n, 3, 4))
     residuals = poses - means
-    residuals[:, 2] = _wrap(residuals[:, 2])
+    residuals[:, 2] = wrap_angles(residuals[:, 2])
     level = alpha / N_TESTS
     overall, trial_nees = _woodbury_nees(residuals, blocks, loadings)
     tests = [_test("overall", overall, 3 * n, level)]

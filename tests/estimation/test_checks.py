@@ -104,7 +104,8 @@ def test_paper_plan_is_sufficient_but_for_e_t_and_json_has_the_documented_shape(
     }
     assert list(data["parameters"]) == ["E_R", "E_T", "K_theta", "K_rho"]
     for entry in data["parameters"].values():
-        assert set(entry) == {"value", "stderr", "ci95", "unit"}
+        assert set(entry) >= {"value", "stderr", "ci95", "unit", "ci_4sigma", "interval"}
+        assert entry["ci_4sigma"][0] < entry["ci95"][0] < entry["ci95"][1] < entry["ci_4sigma"][1]
         assert entry["ci95"][0] < entry["value"] < entry["ci95"][1]
     corr = np.array(data["correlation"])
     assert np.allclose(corr, corr.T)

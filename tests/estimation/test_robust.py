@@ -107,11 +107,21 @@ def test_identical_rows_fail() -> None:
         assert result.to_json_dict()["verdict"]["status"] == "failed"
 
 
-def test_ambiguous_trials_left_out_make_the_verdict_doubtful() -> None:
-    result = estimate(exact(10, np.random.default_rng(10)), ambiguous=[4, 17])
+def test_many_ambiguous_trials_left_out_make_the_verdict_doubtful() -> None:
+    result = estimate(exact(10, np.random.default_rng(10)), ambiguous=[4, 17, 21])
     assert result.verdict.status == "doubtful"
     assert "ambiguous" in result.verdict.reasons[0]
-    assert "4, 17" in result.verdict.reasons[0]
+    assert "4, 17, 21" in result.verdict.reasons[0]
+
+
+def test_a_few_ambiguous_trials_left_out_are_listed_but_leave_the_verdict_trusted() -> None:
+    """Issue 8: with one cross distance, 11 % of clean sessions were called
+    doubtful only because a trial or two was ambiguous. Leaving up to 10 % of
+    the trials out keeps the estimate right within its uncertainty
+    (bench/operator_faults.py, BENCHMARKS.md); they are listed in the notes."""
+    result = estimate(exact(10, np.random.default_rng(10)), ambiguous=[4, 17])
+    assert result.verdict.status == "trusted"
+    assert any("ambiguous" in n and "4, 17" in n for n in result.notes)
 
 
 def test_paper_method_is_checked_at_the_maximum_likelihood_fit() -> None:

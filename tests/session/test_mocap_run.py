@@ -20,6 +20,7 @@ from fakes.nomad.truth import TruthClient
 from odohil.science.parameters import ErrorParameters
 from odohil.session import state as ev
 from odohil.session.journal import JOURNAL_NAME, read_journal
+from odohil.session.mocap.still import StillCriteria
 from tests.session.helpers import ROBOT_TOML
 from tests.session.mocap_server import FrameServer, republish_truth
 
@@ -119,7 +120,10 @@ def test_motion_capture_run_brackets_the_fake_robots_parameters(
     assert header["settings"]["mocap_url"] == mocap.url
     starts = [r.data["start"] for r in records if r.kind == ev.TRIAL_START]
     assert len(starts) == 40
-    assert all(s["n_poses"] >= 20 and len(s["pose"]) == 3 for s in starts)
+    # Each still pose is a median of at least the window's minimum of frames (a
+    # loaded machine may deliver fewer than the sender's 100 Hz x 0.5 s).
+    least = StillCriteria().min_poses
+    assert all(s["n_poses"] >= least and len(s["pose"]) == 3 for s in starts)
 
 
 def test_a_silent_stream_is_refused_before_anything_moves(

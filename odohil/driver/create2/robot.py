@@ -66,9 +66,11 @@ from odohil.protocol.create2 import commands
 from odohil.protocol.create2.commands import MAX_SPEED_MM_S
 from odohil.protocol.create2.numbers import encoder_delta
 from odohil.protocol.create2.opcodes import BAUD_RATES, DEFAULT_BAUD, Mode
+from odohil.science import frames
 from odohil.science.diff_drive import DiffDriveGeometry, odometry_step
 from odohil.science.paths import Design, Leg, Turn
 from odohil.science.robot_description import RobotSettings
+from odohil.units import wrap_angle
 
 OPEN_WAIT_S = 1.0
 """Wait after opening the port before the first byte, s (C17; libcreate)."""
@@ -103,12 +105,6 @@ busy host; the next step's target makes up for it)."""
 MIN_STEP_COUNTS = 10
 """Shortest step the backend drives, counts (4.4 mm at the Create 2's constants)."""
 STOP_CONFIRM_TIMEOUT_S = 2.0
-
-
-def _wrap(angle: float) -> float:
-    """Angle reduced to (-pi, pi], rad."""
-    wrapped = math.remainder(angle, 2.0 * math.pi)
-    return math.pi if wrapped == -math.pi else wrapped
 
 
 @dataclass(frozen=True)
@@ -268,16 +264,13 @@ class Create2Robot:
         return reading
 
     def _sample(self, reading: Reading, moved: bool) -> OdometrySample:
-        ox, oy, oth = self._origin
-        x, y, th = self._pose
-        c, s = math.cos(oth), math.sin(oth)
-        dx, dy = x - ox, y - oy
+        x, y, turned = frames.relative_pose(self._origin, self._pose)
         return OdometrySample(
             host_time_s=reading.host_time_s,
             robot_time_s=reading.host_time_s,
-            x_m=c * dx + s * dy,
-            y_m=-s * dx + c * dy,
-            theta_rad=_wrap(th - oth),
+            x_m=x,
+            y_m=y,
+            theta_rad=wrap_angle(turned),
             moving=moved or self._commanded,
             wire=(
                 f"L={reading.left_counts} R={reading.right_counts} counts, "
@@ -633,6 +626,7 @@ def _rate(history: list[tuple[float, float]], previous: float) -> float:
 
 def _relative(start: OdometrySample, end: OdometrySample) -> tuple[float, float, float]:
     """``end`` in the frame of ``start``: (x m, y m, heading change rad in (-pi, pi])."""
-    dx, dy = end.x_m - start.x_m, end.y_m - start.y_m
-    c, s = math.cos(start.theta_rad), math.sin(start.theta_rad)
-    return (c * dx + s * dy, -s * dx + c * dy, _wrap(end.theta_rad - start.theta_rad))
+    x, y, turned = frames.relative_pose(
+        (start.x_m, start.y_m, start.theta_rad), (end.x_m, end.y_m, end.theta_rad)
+    )
+    return (x, y, wrap_angle(turned))

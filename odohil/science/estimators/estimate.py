@@ -8,11 +8,12 @@ from dataclasses import replace
 from typing import Literal
 
 import numpy as np
-from scipy import stats
+from scipy import special, stats
 
 from odohil import units
 from odohil.errors import MeasurementError
 from odohil.science.estimators.checks import Criteria, model_check, sufficiency
+from odohil.science.estimators.intervals import profile_interval, satterthwaite_dof, t_interval
 from odohil.science.estimators.joint import JointFit, joint_estimate, start_phi
 from odohil.science.estimators.observations import (
     DesignSummary,
@@ -23,10 +24,20 @@ from odohil.science.estimators.observations import (
     summarise,
 )
 from odohil.science.estimators.paper import PaperEstimate, paper_estimate
-from odohil.science.estimators.result import EstimateResult, ParameterEstimate, TrialDiagnostic
-from odohil.science.estimators.robust import EPSILON, OUTLIER_WEIGHT, robust_fit
+from odohil.science.estimators.result import (
+    EstimateResult,
+    ParameterEstimate,
+    TrialDiagnostic,
+)
+from odohil.science.estimators.robust import (
+    EPSILON,
+    INFLATION,
+    OUTLIER_WEIGHT,
+    robust_fit,
+    weighted_groups,
+)
 from odohil.science.estimators.verdict import judge
-from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
+from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
 from odohil.science.paths import FloatArray
 
 Method = Literal["robust", "joint", "paper"]
@@ -57,34 +68,75 @@ def joint_start(paper: PaperEstimate) -> FloatArray:
 
 def interval_quantile(n_trials: int) -> float:
     """The 97.5 % Student-t quantile with 3 n - 4 degrees of freedom (at
-    least 1): the intervals' multiplier in place of 1.96 at small n (K_theta
-    and K_rho may get a larger one, see :func:`_quantile`)."""
-    return float(stats.t.ppf(0.975, max(1, 3 * n_trials - 4)))
+    least 1): the Wald intervals' multiplier in place of 1.96 at small n
+    (K_theta and K_rho may get a larger one, see :func:`_quantile`)."""
+    return float(stats.t.ppf(0.975, interval_dof(n_trials)))
+
+
+def interval_dof(n_trials: int) -> int:
+    """3 n - 4 (at least 1): the Wald intervals' t degrees of freedom."""
+    return max(1, 3 * n_trials - 4)
 
 
 def _estimates(
-    params: ErrorParameters, cov: FloatArray, quantile: float
+    params: ErrorParameters, cov: FloatArray, n_trials: int
 ) -> tuple[tuple[ParameterEstimate, ...], FloatArray]:
+    """The Wald intervals (the cheap rule of the live estimate, of the paper
+    method and of the Gaussian fit reported beside the robust one)."""
     diag = np.diag(cov)
     stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
-    estimates = tuple(
-        ParameterEstimate.build(name, value, float(se), _quantile(name, value, float(se), quantile))
-        for name, value, se in zip(PARAMETER_NAMES, params.as_tuple(), stderr, strict=True)
-    )
-    return estimates, stderr
+    base = interval_dof(n_trials)
+    estimates = []
+    for name, value, se in zip(PARAMETER_NAMES, params.as_tuple(), stderr, strict=True):
+        dof = _dof(name, value, float(se), base)
+        q = float(special.stdtrit(dof, 0.975))  # the t quantile (50x faster than stats)
+        estimates.append(ParameterEstimate.build(name, value, float(se), q, dof))
+    return tuple(estimates), stderr
 
 
-def _quantile(name: str, value: float, stderr: float, base: float) -> float:
-    """The interval multiplier: ``base`` for E_R and E_T; for a variance rate
-    the Student-t quantile with the Satterthwaite degrees of freedom of its own
-    precision, 2 (K / stderr)^2 (a variance estimated from nu squares has
-    relative standard error sqrt(2 / nu)), when that is the larger."""
+def _dof(name: str, value: float, stderr: float, base: float) -> float:
+    """The t degrees of freedom of a Wald interval: ``base`` (3 n - 4) for E_R
+    and E_T; for a variance rate the Satterthwaite degrees of freedom of its
+    own precision, 2 (K / stderr)^2 (a variance estimated from nu squares has
+    relative standard error sqrt(2 / nu)), when that is the smaller."""
     if name not in ("K_theta", "K_rho") or not (value > 0 and math.isfinite(stderr)):
         return base
     if stderr <= 0:
         return base
-    dof = 2.0 * (value / stderr) ** 2
-    return max(base, float(stats.t.ppf(0.975, max(dof, 1.0))))
+    return min(base, max(2.0 * (value / stderr) ** 2, 1.0))
+
+
+def _honest_estimates(groups: Sequence[TrialGroup], fit: JointFit) -> tuple[ParameterEstimate, ...]:
+    """The intervals of a maximum-likelihood fit: profile likelihood for the
+    variance rates, Satterthwaite t for E_R and E_T
+    (odohil/science/estimators/intervals.py)."""
+    cov = np.array(fit.covariance, dtype=np.float64)
+    diag = np.diag(cov)
+    stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
+    out = []
+    for index, (name, value) in enumerate(zip(PARAMETER_NAMES, fit.params.as_tuple(), strict=True)):
+        se = float(stderr[index])
+        if not math.isfinite(se):
+            out.append(ParameterEstimate.build(name, value, se))
+            continue
+        if index < 2:
+            dof = satterthwaite_dof(groups, fit, index)
+            interval = t_interval(value, se, dof, "Student t, Satterthwaite degrees of freedom")
+        else:
+            interval = profile_interval(groups, fit, index)
+        out.append(
+            ParameterEstimate(
+                name,
+                value,
+                se,
+                interval.ci95,
+                SI_UNITS[name],
+                interval.ci_4sigma,
+                interval.method,
+                interval.dof,
+            )
+        )
+    return tuple(out)
 
 
 def build_result(
@@ -103,16 +155,20 @@ def build_result(
     trials: tuple[TrialDiagnostic, ...] = (),
     excluded: tuple[int, ...] = (),
     ambiguous: Sequence[int] = (),
+    intervals: tuple[ParameterEstimate, ...] = (),
     turns_exact: bool = True,
 ) -> EstimateResult:
     """Assemble the result, run both checks and give the verdict.
 
     ``check_params``: where the model check is evaluated (the maximum-likelihood
     fit; ``params`` when None). ``named_outliers``: input positions the robust
-    fit named outliers.
+    fit named outliers. ``intervals``: the parameters with their intervals
+    (else the Wald rule of :func:`_estimates`).
     """
     cov = np.array(covariance, dtype=np.float64)
-    estimates, stderr = _estimates(params, cov, interval_quantile(len(observations)))
+    estimates, stderr = _estimates(params, cov, len(observations))
+    if intervals:
+        estimates = intervals
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(stderr, stderr)
     corr[~np.isfinite(corr)] = math.nan
@@ -121,7 +177,10 @@ def build_result(
     verdict = judge(
         observations,
         converged,
-        [float(v) for v in stderr],
+        [
+            float(v) if math.isfinite(e.ci95[1]) else math.inf
+            for v, e in zip(stderr, estimates, strict=True)
+        ],
         PARAMETER_NAMES,
         check.fits,
         [o.label() for o in check.outliers],
@@ -129,6 +188,12 @@ def build_result(
         ambiguous,
         turns_exact,
     )
+    if ambiguous:
+        notes = (
+            *notes,
+            f"{len(ambiguous)} ambiguous trial(s) left out (the floor marks fit two poses): "
+            + ", ".join(str(t) for t in ambiguous),
+        )
     return EstimateResult(
         method=method,
         n_trials=len(observations),
@@ -254,11 +319,12 @@ def estimate(
             notes,
             criteria,
             converged=ml.converged,
+            intervals=_honest_estimates(groups, ml),
             **common,  # type: ignore[arg-type]
         )
     rob = robust_fit(observations, groups, ml)
     named = [int(i) for i in np.flatnonzero(rob.clean_probability < OUTLIER_WEIGHT)]
-    gaussian, _ = _estimates(ml.params, ml.covariance, interval_quantile(len(observations)))
+    gaussian, _ = _estimates(ml.params, ml.covariance, len(observations))
     diagnostics = tuple(
         TrialDiagnostic(
             trial_number(o, i),
@@ -292,5 +358,13 @@ def estimate(
         trials=diagnostics,
         excluded=excluded,
         ambiguous=ambiguous,
+        intervals=_honest_estimates(
+            weighted_groups(
+                observations,
+                rob.clean_probability + (1.0 - rob.clean_probability) / INFLATION,
+                {g.design: g.reference for g in groups},
+            ),
+            rob.fit,
+        ),
         turns_exact=turns_exact,
     )

@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -43,7 +44,7 @@ from odohil.science.estimators.observations import TrialGroup, align_heading
 from odohil.science.fisher import moment_derivatives
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import ErrorParameters
-from odohil.science.paths import Design, FloatArray
+from odohil.science.paths import Design, EncoderPath, FloatArray
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -92,6 +93,12 @@ def with_moments(point: ModelPoint, moved: ModelPoint) -> ModelPoint:
     return ModelPoint(moved.phi, moved.means, moved.covs, point.d_means, point.d_covs, point.anchor)
 
 
+@lru_cache(maxsize=64)
+def design_path(design: Design) -> EncoderPath:
+    """The design's encoder path (immutable; building it costs as much as the moments)."""
+    return design.path()
+
+
 def model_point(phi: FloatArray, designs: Iterable[Design], derivatives: bool) -> ModelPoint:
     """Evaluate the moments (and, if asked, their phi-derivatives) of each design."""
     params = from_phi(phi)
@@ -102,12 +109,12 @@ def model_point(phi: FloatArray, designs: Iterable[Design], derivatives: bool) -
     d_covs: dict[Design, FloatArray] = {}
     for design in designs:
         if derivatives:
-            d = moment_derivatives(design.path(), params)
+            d = moment_derivatives(design_path(design), params)
             means[design], covs[design] = d.mean, d.cov
             d_means[design] = d.d_mean * scale[:, None]
             d_covs[design] = d.d_cov * scale[:, None, None]
         else:
-            m = pose_moments(design.path(), params)
+            m = pose_moments(design_path(design), params)
             means[design], covs[design] = m.mean, m.cov
     here = np.array(phi, dtype=np.float64)
     return ModelPoint(

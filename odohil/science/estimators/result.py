@@ -6,10 +6,13 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from scipy import special
+
 from odohil.science.estimators.verdict import TRUSTED, Verdict
 from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
 
 Z95 = 1.959963984540054
+_FOUR_SIGMA_UPPER = float(special.ndtr(4.0))
 """The 97.5 % quantile of the standard normal."""
 
 
@@ -20,11 +23,22 @@ class ParameterEstimate:
     Attributes:
         name: E_R, E_T, K_theta or K_rho.
         value: the estimate.
-        stderr: its standard error (inf when the data do not determine it).
-        ci95: 95 % interval: symmetric for E_R and E_T; for K_theta and K_rho
-            symmetric in log K (exp(log K +- 1.96 stderr/K)), or [0, 1.96 stderr]
-            when the estimate is 0.
+        stderr: its Wald standard error: the square root of the diagonal of the
+            inverse expected information at the estimate (inf when the data do
+            not determine it). A scale, not the interval, for K_theta and K_rho.
+        ci95: the 95 % interval. From :func:`odohil.science.estimators.estimate`
+            (joint and robust methods): the Cox-Reid adjusted profile-likelihood
+            interval for K_theta and K_rho, and estimate +- t quantile x stderr
+            with Satterthwaite degrees of freedom for E_R and E_T
+            (odohil/science/estimators/intervals.py). Otherwise (the paper
+            method, the live estimate, :meth:`build`): symmetric for E_R and E_T;
+            for K_theta and K_rho symmetric in log K (exp(log K +- q stderr/K)),
+            or [0, q stderr] when the estimate is 0.
         unit: the SI unit.
+        ci_4sigma: the same rule at the 4-sigma-equivalent level 99.9937 %
+            (1 - 2 Phi(-4)): truth outside it is "confidently wrong".
+        interval: how the intervals were formed, for people.
+        dof: the t degrees of freedom of the intervals (None for a profile one).
     """
 
     name: str
@@ -32,22 +46,36 @@ class ParameterEstimate:
     stderr: float
     ci95: tuple[float, float]
     unit: str
+    ci_4sigma: tuple[float, float] = (-math.inf, math.inf)
+    interval: str = ""
+    dof: float | None = None
 
     @classmethod
     def build(
-        cls, name: str, value: float, stderr: float, quantile: float = Z95
+        cls,
+        name: str,
+        value: float,
+        stderr: float,
+        quantile: float = Z95,
+        dof: float | None = None,
     ) -> ParameterEstimate:
-        """With the interval rule above; ``quantile`` replaces 1.96 (e.g. a
-        Student-t quantile at small n)."""
-        if name in ("K_theta", "K_rho"):
-            if value > 0 and math.isfinite(stderr):
-                spread = math.exp(min(quantile * stderr / value, 700.0))
-                ci = (value / spread, value * spread)
-            else:
-                ci = (0.0, value + quantile * stderr)
-        else:
-            ci = (value - quantile * stderr, value + quantile * stderr)
-        return cls(name, value, stderr, ci, SI_UNITS[name])
+        """With the Wald rule above; ``quantile`` replaces 1.96 (e.g. a
+        Student-t quantile at small n); ``dof``: the t degrees of freedom it
+        came from (the 4-sigma-equivalent interval uses the t(dof) quantile of
+        that level, else 4)."""
+        wide_q = four_sigma_quantile(dof) if dof is not None else 4.0
+        ci = _wald(name, value, stderr, quantile)
+        wide = _wald(name, value, stderr, max(wide_q, quantile))
+        rule = "symmetric in log K" if name in ("K_theta", "K_rho") else "symmetric"
+        if dof is not None:
+            rule += f", Student t (nu = {dof:.1f})"
+        return cls(name, value, stderr, ci, SI_UNITS[name], wide, f"Wald, {rule}", dof)
+
+    def contains(self, truth: float, level: str = "4sigma") -> bool:
+        """Whether ``truth`` lies in the interval at ``level`` (``95`` or
+        ``4sigma``): outside the 4-sigma one is "confidently wrong"."""
+        low, high = self.ci95 if level == "95" else self.ci_4sigma
+        return low <= truth <= high
 
     @property
     def relative_stderr(self) -> float:
@@ -55,13 +83,31 @@ class ParameterEstimate:
         return self.stderr / abs(self.value) if self.value != 0 else math.inf
 
     def to_json_dict(self) -> dict[str, Any]:
-        """{"value", "stderr", "ci95", "unit"} (SI; inf written as null)."""
+        """{"value", "stderr", "ci95", "unit", "ci_4sigma", "interval", "dof"}
+        (SI; inf written as null)."""
         return {
             "value": _finite(self.value),
             "stderr": _finite(self.stderr),
             "ci95": [_finite(self.ci95[0]), _finite(self.ci95[1])],
             "unit": self.unit,
+            "ci_4sigma": [_finite(self.ci_4sigma[0]), _finite(self.ci_4sigma[1])],
+            "interval": self.interval,
+            "dof": None if self.dof is None else _finite(self.dof),
         }
+
+
+def four_sigma_quantile(dof: float) -> float:
+    """The t(dof) quantile of the 4-sigma-equivalent two-sided level."""
+    return float(special.stdtrit(max(dof, 1.0), _FOUR_SIGMA_UPPER))
+
+
+def _wald(name: str, value: float, stderr: float, q: float) -> tuple[float, float]:
+    if name in ("K_theta", "K_rho"):
+        if value > 0 and math.isfinite(stderr):
+            spread = math.exp(min(q * stderr / value, 700.0))
+            return (value / spread, value * spread)
+        return (0.0, value + q * stderr)
+    return (value - q * stderr, value + q * stderr)
 
 
 @dataclass(frozen=True)

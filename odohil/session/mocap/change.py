@@ -16,7 +16,9 @@ First-order propagation (c, s = cos theta0, sin theta0; d = (dx, dy)):
                             [ 0,  0,   1]]
     cov(change) = J0 C0 J0^T + J1 C1 J1^T
 
-(d(R^T)/d(theta0) (p1 - p0) = (dy, -dx).) The neglected terms are of order
+(d(R^T)/d(theta0) (p1 - p0) = (dy, -dx).) The transform and both Jacobians
+are odohil/science/frames.py's (``relative_pose``, ``relative_pose_jacobians``).
+The neglected terms are of order
 sigma_theta^2 |d| and sigma_theta sigma_xy; tests/session/test_mocap_change.py
 checks the formula against a Monte Carlo of the transform itself.
 """
@@ -28,6 +30,7 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
+from odohil.science import frames
 from odohil.units import wrap_angle
 
 FloatArray = npt.NDArray[np.float64]
@@ -49,14 +52,9 @@ def pose_change_with_covariance(
     Returns:
         ((dx m, dy m, dtheta rad in (-pi, pi]), covariance).
     """
-    x0, y0, th0 = (float(v) for v in start)
-    x1, y1, th1 = (float(v) for v in end)
-    c, s = float(np.cos(th0)), float(np.sin(th0))
-    wx, wy = x1 - x0, y1 - y0
-    dx, dy = c * wx + s * wy, -s * wx + c * wy
-    change = (dx, dy, wrap_angle(th1 - th0))
-    j0 = np.array([[-c, -s, dy], [s, -c, -dx], [0.0, 0.0, -1.0]])
-    j1 = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    dx, dy, turned = frames.relative_pose(start, end)
+    change = (dx, dy, wrap_angle(turned))
+    j0, j1 = frames.relative_pose_jacobians(start, end)
     c0 = np.asarray(start_cov, dtype=np.float64)
     c1 = np.asarray(end_cov, dtype=np.float64)
     cov = j0 @ c0 @ j0.T + j1 @ c1 @ j1.T

@@ -34,7 +34,7 @@ import numpy as np
 
 from odohil.errors import MeasurementError
 from odohil.session.mocap.stream import PoseStream, StreamedPose, StreamStatus
-from odohil.units import wrap_angle
+from odohil.units import angle_near, wrap_angle
 
 STALE_S = 1.0
 """A stream whose newest pose is older than this (host clock, s) is stale."""
@@ -179,7 +179,7 @@ def judge_window(
     sigma = np.array(pose_sigma, dtype=np.float64)
     xy = np.array([[p.x_m, p.y_m] for p in poses], dtype=np.float64)
     reference = poses[0].theta_rad
-    theta = reference + np.array([wrap_angle(p.theta_rad - reference) for p in poses])
+    theta = angle_near(np.array([p.theta_rad for p in poses], dtype=np.float64), reference)
     values = np.column_stack([xy, theta])
     steps = np.diff(values, axis=0)
     deviation = np.abs(steps - np.median(steps, axis=0))

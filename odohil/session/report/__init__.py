@@ -21,7 +21,6 @@ from odohil.session.report.data import (
     SessionReport,
     TrialPoint,
     load_report,
-    to_paper,
 )
 from odohil.session.report.exports import (
     ExportFile,
@@ -38,7 +37,6 @@ __all__ = [
     "load_report",
     "parameters_json",
     "standard_exports",
-    "to_paper",
     "write_report",
 ]
 

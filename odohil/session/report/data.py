@@ -20,6 +20,7 @@ from odohil import units
 from odohil.errors import MeasurementError
 from odohil.science.estimators import EstimateResult, IncrementalEstimator, estimate
 from odohil.science.estimators.estimate import leave_out
+from odohil.science.grouping import by_design
 from odohil.science.moments import pose_moments
 from odohil.science.observables import Observables, observables
 from odohil.science.paths import Design, FloatArray
@@ -30,15 +31,6 @@ from odohil.session.validation import ValidationReport, load_validations
 DOWN_WEIGHT_BELOW = 0.5
 """A trial whose robust-fit probability of being clean is below this is
 reported as an outlier the fit down-weights."""
-
-
-def to_paper(name: str, value: float) -> float:
-    """One parameter value (or standard error) from SI to the paper's units."""
-    if name == "E_R":
-        return units.rad_per_m_to_deg_per_m(value)
-    if name == "K_theta":
-        return units.rad2_per_m_to_deg2_per_m(value)
-    return value
 
 
 @dataclass(frozen=True)
@@ -209,11 +201,8 @@ def _designs(
         if len(distances) == len(fit_order):  # in the fit's input order
             d2 = {t: v for t, v in zip(fit_order, distances, strict=True) if t is not None}
         clean = {t.trial: t.clean_probability for t in result.trials}
-    by_design: dict[Design, list[CompletedTrial]] = {}
-    for trial in sorted(completed, key=lambda t: t.trial):
-        by_design.setdefault(trial.design, []).append(trial)
     out = []
-    for design, members in by_design.items():
+    for design, members in by_design(sorted(completed, key=lambda t: t.trial)).items():
         model_mean = model_cov = None
         if result is not None:
             moments = pose_moments(design.path(), result.params)
@@ -248,4 +237,4 @@ def _near_mean(
     if mean is None:
         return (x, y, heading)
     centre = float(mean[2])
-    return (x, y, centre + units.wrap_angle(heading - centre))
+    return (x, y, units.angle_near(heading, centre))

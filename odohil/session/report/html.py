@@ -13,9 +13,10 @@ from collections.abc import Mapping, Sequence
 
 from odohil import units
 from odohil.science.estimators import EstimateResult
-from odohil.session.report.data import SessionReport, TrialPoint, to_paper
+from odohil.session.report.data import SessionReport, TrialPoint
 from odohil.session.report.exports import ExportFile
 from odohil.session.report.plots import Plot
+from odohil.units import parameter_to_paper as to_paper
 
 _CSS = """
 body { font-family: sans-serif; margin: 1.5em auto; max-width: 1100px; color: #222;

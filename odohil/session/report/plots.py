@@ -31,8 +31,8 @@ from odohil.science.estimators import ParameterEstimate
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.paths import FloatArray
 from odohil.session.report.data import DOWN_WEIGHT_BELOW, DesignReport, SessionReport, TrialPoint
-from odohil.session.report.data import to_paper as _to_paper
 from odohil.session.validation import ValidationPlot
+from odohil.units import parameter_to_paper as _to_paper
 
 CHI2_95_2D = float(stats.chi2.ppf(0.95, 2))
 """Squared Mahalanobis radius of a 95 % ellipse in two dimensions."""

@@ -1,0 +1,271 @@
+"""Confidence intervals that stay honest at small n.
+
+Two levels are given for every parameter: 95 % (``ci95``) and the
+4-sigma-equivalent 1 - 2 Phi(-4) = 99.9937 % (``ci_4sigma``), the range outside
+which the truth counts as "confidently wrong" (bench/operator_faults.py).
+
+- **K_theta and K_rho: profile likelihood.** The variance rates are
+  estimated like variances: their sampling distribution is skewed (chi^2-like),
+  so an estimate that came out low also has a small Wald standard error, and a
+  symmetric interval around it misses the truth above. The interval is the set
+  of psi = log K whose profile deviance
+  D(psi) = 2 [NLL_CR(psi, lambda_psi) - NLL_CR(psi_hat, lambda_hat)]
+  stays below the chi^2(1) quantile of the level (1.96^2 at 95 %, 16 at the
+  4-sigma level), where NLL_CR is the Cox-Reid adjusted likelihood
+  (odohil/science/estimators/likelihood.py) and lambda_psi the other three
+  parameters re-fitted with psi held. The end points are found by a secant
+  search on the signed root r(psi) = sign(psi - psi_hat) sqrt(D), nearly
+  linear in psi. The nuisance re-fit is Fisher scoring with the model's
+  derivatives taken at the estimate (the moments, hence the likelihood, are
+  exact at every point). A bound the deviance never reaches within the
+  estimator's range of log K is open: 0 below, inf above.
+- **E_R and E_T: Student-t.** estimate +- t quantile x SE, with the
+  Satterthwaite degrees of freedom of the standard error itself:
+  nu = 2 SE^4 / Var(SE^2), Var(SE^2) by the delta method through the two
+  variance rates (SE^2 is a function of K_theta and K_rho, estimated with
+  their covariance). A standard error that rests on few effective squares gets
+  a wide quantile.
+
+The standard error printed beside every parameter (``stderr``) is the Wald one,
+the square root of the diagonal of the inverse expected information at the
+estimate (SI). For K_theta and K_rho it is a scale, not the interval: the
+interval is the profile one above.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from odohil.science.estimators.joint import JointFit, designs_of
+from odohil.science.estimators.likelihood import (
+    LikelihoodValue,
+    ModelPoint,
+    evaluate,
+    model_point,
+    with_moments,
+)
+from odohil.science.estimators.observations import TrialGroup
+from odohil.science.paths import FloatArray
+
+FOUR_SIGMA = 4.0
+"""The 'confidently wrong' distance, as a normal quantile."""
+LEVEL_95 = 0.95
+LEVEL_4SIGMA = 1.0 - 2.0 * float(stats.norm.sf(FOUR_SIGMA))
+"""0.999937: the two-sided level of +- 4 sigma."""
+_LOG_K_RANGE = (math.log(1e-14), math.log(1e2))
+_INNER_STEPS = 8
+_INNER_TOLERANCE = 1e-6
+"""The nuisance re-fit stops when its Newton decrement (about twice the NLL
+still to gain) is below this."""
+_SECANT_STEPS = 8
+_ROOT_TOLERANCE = 0.01
+"""A bound is accepted when |r(psi) - q| is below this (in units of the root)."""
+
+
+@dataclass(frozen=True)
+class Interval:
+    """One parameter's interval at the two levels, SI.
+
+    Attributes:
+        ci95: the 95 % interval.
+        ci_4sigma: the 99.9937 % (4-sigma-equivalent) interval.
+        method: how it was formed, for people (e.g. ``profile likelihood
+            (Cox-Reid adjusted)``, ``Student t (nu = 14.2)``).
+        dof: the t degrees of freedom (None for a profile interval).
+    """
+
+    ci95: tuple[float, float]
+    ci_4sigma: tuple[float, float]
+    method: str
+    dof: float | None = None
+
+
+def t_interval(value: float, stderr: float, dof: float, rule: str) -> Interval:
+    """value +- t quantile x stderr at both levels."""
+    if not math.isfinite(stderr):
+        return Interval((-math.inf, math.inf), (-math.inf, math.inf), rule, dof)
+    nu = max(dof, 1.0)
+    q95 = float(stats.t.ppf(0.5 + LEVEL_95 / 2, nu))
+    q4 = float(stats.t.ppf(0.5 + LEVEL_4SIGMA / 2, nu))
+    return Interval(
+        (value - q95 * stderr, value + q95 * stderr),
+        (value - q4 * stderr, value + q4 * stderr),
+        f"{rule} (nu = {nu:.1f})",
+        nu,
+    )
+
+
+def log_t_interval(value: float, stderr: float, dof: float, rule: str) -> Interval:
+    """A variance rate's interval symmetric in log K, t quantile with ``dof``
+    ([0, value + q stderr] when the estimate is 0)."""
+    nu = max(dof, 1.0)
+    out = []
+    for level in (LEVEL_95, LEVEL_4SIGMA):
+        q = float(stats.t.ppf(0.5 + level / 2, nu))
+        if value > 0 and math.isfinite(stderr):
+            spread = math.exp(min(q * stderr / value, 700.0))
+            out.append((value / spread, value * spread))
+        else:
+            out.append((0.0, value + q * stderr))
+    return Interval(out[0], out[1], f"{rule} (nu = {nu:.1f})", nu)
+
+
+def satterthwaite_dof(
+    groups: Sequence[TrialGroup], fit: JointFit, index: int, cox_reid: bool = True
+) -> float:
+    """nu = 2 SE^4 / Var(SE^2) of parameter ``index`` (0: E_R, 1: E_T), the
+    variance of SE^2 by the delta method through log K_theta and log K_rho."""
+    info = fit.value.information
+    if info is None:
+        return math.inf
+    try:
+        cov = np.linalg.inv(info)
+    except np.linalg.LinAlgError:
+        return math.inf
+    var = float(cov[index, index])
+    if not (var > 0 and math.isfinite(var)):
+        return math.inf
+    designs = designs_of(groups)
+    h = 0.05
+    grad = np.zeros(2)
+    for j, k in enumerate((2, 3)):
+        phi = fit.point.phi.copy()
+        phi[k] += h
+        moved = evaluate(groups, model_point(phi, designs, derivatives=True), cox_reid)
+        if moved.information is None:
+            return math.inf
+        try:
+            grad[j] = (float(np.linalg.inv(moved.information)[index, index]) - var) / h
+        except np.linalg.LinAlgError:
+            return math.inf
+    spread = float(grad @ cov[2:, 2:] @ grad)
+    if spread <= 0:
+        return math.inf
+    return min(2.0 * var**2 / spread, 1e6)
+
+
+class _Profile:
+    """The Cox-Reid adjusted profile NLL of one log K, with warm starts."""
+
+    def __init__(
+        self, groups: Sequence[TrialGroup], fit: JointFit, index: int, cox_reid: bool
+    ) -> None:
+        self.groups = [g for g in groups if g.n > 0]
+        self.designs = designs_of(self.groups)
+        self.index = index
+        self.free = [i for i in range(4) if i != index]
+        self.cox_reid = cox_reid
+        self.anchor: ModelPoint = model_point(fit.point.phi, self.designs, derivatives=True)
+        self.psi_hat = float(fit.point.phi[index])
+        self.evaluations = 0
+        base = self.refit(self.psi_hat, fit.point.phi)
+        self.reference = base[0]
+        self.last = fit.point.phi.copy()
+
+    def _value(self, phi: FloatArray) -> LikelihoodValue:
+        point = with_moments(self.anchor, model_point(phi, self.designs, derivatives=False))
+        return evaluate(self.groups, point, self.cox_reid)
+
+    def refit(self, psi: float, start: FloatArray) -> tuple[float, FloatArray]:
+        """(profile NLL, the phi reached) at log K = psi, from ``start``."""
+        phi = start.copy()
+        phi[self.index] = psi
+        value = self._value(phi)
+        if not math.isfinite(value.nll):
+            return math.inf, phi
+        free = self.free
+        for _ in range(_INNER_STEPS):
+            self.evaluations += 1
+            if value.gradient is None or value.information is None:
+                break
+            g = value.gradient[free]
+            info = value.information[np.ix_(free, free)]
+            try:
+                step = np.linalg.solve(info, -g)
+            except np.linalg.LinAlgError:
+                break
+            if float(-g @ step) < _INNER_TOLERANCE:
+                break
+            t = 1.0
+            while t > 0.05:
+                new = phi.copy()
+                new[free] += t * step
+                new[1] = max(new[1], -0.99)
+                for k in (2, 3):
+                    new[k] = float(np.clip(new[k], *_LOG_K_RANGE))
+                trial = self._value(new)
+                if trial.nll <= value.nll + 1e-9:
+                    break
+                t /= 2.0
+            else:
+                break
+            phi, value = new, trial
+        return value.nll, phi
+
+    def root(self, psi: float) -> float:
+        """Signed root of the deviance at psi."""
+        nll, phi = self.refit(psi, self.last)
+        if not math.isfinite(nll):
+            return math.copysign(math.inf, psi - self.psi_hat)
+        self.last = phi
+        deviance = max(0.0, 2.0 * (nll - self.reference))
+        return math.copysign(math.sqrt(deviance), psi - self.psi_hat)
+
+    def bound(self, q: float, side: float, guess: float) -> float:
+        """The psi on ``side`` (+1 or -1) where the signed root is side x q;
+        inf (open) when it is not reached within the range of log K."""
+        limit = _LOG_K_RANGE[1] if side > 0 else _LOG_K_RANGE[0]
+        self.last = self.anchor.phi.copy()
+        target = side * q
+        a, ra = self.psi_hat, 0.0
+        b = self.psi_hat + side * max(abs(guess), 1e-6)
+        for _ in range(_SECANT_STEPS):
+            b = float(np.clip(b, *_LOG_K_RANGE))
+            rb = self.root(b)
+            if abs(rb - target) < _ROOT_TOLERANCE:
+                return b
+            if b == limit and (rb - target) * side < 0:
+                return side * math.inf
+            if not math.isfinite(rb) or (rb - ra) * (b - a) <= 0:
+                # r must rise with psi: step half-way back toward the last good point
+                b = 0.5 * (a + b)
+                continue
+            slope = (rb - ra) / (b - a)
+            a, ra, b = b, rb, b + (target - rb) / slope
+        return b
+
+
+def profile_interval(
+    groups: Sequence[TrialGroup], fit: JointFit, index: int, cox_reid: bool = True
+) -> Interval:
+    """The profile-likelihood interval of K_theta (index 2) or K_rho (3) at
+    both levels (see the module docstring), SI."""
+    profile = _Profile(groups, fit, index, cox_reid)
+    info = fit.value.information
+    se_psi = math.inf
+    if info is not None:
+        try:
+            se_psi = math.sqrt(max(float(np.linalg.inv(info)[index, index]), 0.0))
+        except np.linalg.LinAlgError:
+            se_psi = math.inf
+    if not math.isfinite(se_psi) or se_psi == 0:
+        se_psi = 1.0
+    ends: list[tuple[float, float]] = []
+    for q in (float(stats.norm.isf((1 - LEVEL_95) / 2)), FOUR_SIGMA):
+        low = profile.bound(q, -1.0, q * se_psi)
+        high = profile.bound(q, 1.0, q * se_psi)
+        ends.append((_exp(low), _exp(high)))
+    return Interval(ends[0], ends[1], "profile likelihood (Cox-Reid adjusted)")
+
+
+def _exp(psi: float) -> float:
+    if psi == -math.inf or psi <= _LOG_K_RANGE[0]:
+        return 0.0
+    if psi == math.inf:
+        return math.inf
+    return math.exp(psi)
