@@ -1,8 +1,11 @@
 """pyserial URL handler ``fakecreate2://``: the fake iRobot Create 2 in process.
 
-URL: ``fakecreate2://?seed=1&time_scale=10&fault=cliff@0.5&E_R=-0.35&E_T=-0.015&K_theta=0.02&K_rho=5e-5&turn_scale=0.012&spin_k=2e-4&encoder_origin=65000&mode_offset=1&angle_bug=1&pacing=1``
+URL: ``fakecreate2://?seed=1&time_scale=10&fault=cliff@0.5&E_R=-0.35&E_T=-0.015&K_theta=0.02&K_rho=5e-5&turn_scale=0.012&spin_k=2e-4&encoder_origin=65000&mode_offset=1&angle_bug=1&pacing=1&max_gap_ms=15``
 (every option optional; ``fault`` may repeat; E_R, E_T, K_theta, K_rho in the
-paper's units; pacing off unless ``pacing=1``, then at the port's baud rate).
+paper's units; pacing off unless ``pacing=1``, then at the port's baud rate;
+``max_gap_ms``: the fake's clock skips any gap between two host calls longer
+than this, fakes/create2/clock.py, so a descheduled host cannot make a leg
+drive on; default: wall time).
 Opened with ``serial.serial_for_url`` once :mod:`fakes` is imported.
 
 The port is the fake Nomad's in-process port (fakes/protocol_fakerobot.py)
@@ -12,11 +15,13 @@ runs whenever the port is used.
 
 from __future__ import annotations
 
+import time
 import urllib.parse
 from typing import Any, cast
 
 from serial.serialutil import SerialException
 
+from fakes.create2.clock import LagAbsorbingClock
 from fakes.create2.config import CREATE2_TRUTH, build_config
 from fakes.create2.engine import Create2Engine
 from fakes.create2.truth import Create2Truth
@@ -53,6 +58,7 @@ class Serial(FakeNomadSerial):
         kwargs: dict[str, Any] = {}
         faults: list[str] = []
         self._pacing = False
+        max_gap_s: float | None = None
         try:
             for key, values in options.items():
                 value = values[-1]
@@ -68,6 +74,8 @@ class Serial(FakeNomadSerial):
                     kwargs["angle_bug"] = value not in ("", "0", "false", "no")
                 elif key == "fault":
                     faults.extend(values)
+                elif key == "max_gap_ms":
+                    max_gap_s = float(value) / 1000.0
                 elif key == "pacing":
                     self._pacing = value not in ("", "0", "false", "no")
                 elif key in _PAPER:
@@ -76,9 +84,10 @@ class Serial(FakeNomadSerial):
                     raise ValueError(f"unknown option {key!r}")
             params = ErrorParameters.from_paper_units(*(paper[k] for k in _PAPER))
             config = build_config(params=params, faults=faults, baud=self._baudrate, **kwargs)
+            clock = time.monotonic if max_gap_s is None else LagAbsorbingClock(max_gap_s)
         except (ValueError, OdohilError) as exc:
             raise SerialException(f"bad fakecreate2 URL {url!r}: {exc}") from exc
-        return cast(NomadEngine, Create2Engine(config))
+        return cast(NomadEngine, Create2Engine(config, clock))
 
 
 __all__ = ["Serial"]

@@ -90,9 +90,12 @@ class Serial(SerialBase):  # type: ignore[misc]
                 break
             wait = POLL_S
             engine = self._engine()
-            for t in (engine.next_output_wall(), self._pacer.next_release()):
-                if t is not None:
-                    wait = min(wait, max(0.0, t - now))
+            due = engine.next_output_wall()  # on the engine's clock
+            if due is not None:
+                wait = min(wait, max(0.0, due - engine.clock()))
+            release = self._pacer.next_release()
+            if release is not None:
+                wait = min(wait, max(0.0, release - now))
             if deadline is not None:
                 wait = min(wait, deadline - now)
             time.sleep(wait)
@@ -171,7 +174,7 @@ class Serial(SerialBase):  # type: ignore[misc]
     def _pump(self) -> None:
         engine = self._engine()
         now = time.monotonic()
-        for item in engine.take_output(now):
+        for item in engine.take_output(engine.clock()):  # due on the engine's clock
             if isinstance(item, Disconnect):
                 self._cut = True
                 self._rx.clear()

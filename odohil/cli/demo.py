@@ -19,6 +19,7 @@ from odohil import units
 from odohil.cli.line import resolve_line
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_line
+from odohil.cli.robot_option import robot_protocol
 from odohil.cli.run import (
     SnapshotTruth,
     connect,
@@ -67,7 +68,11 @@ def demo(
     units_choice: UnitsOption = UNITS_DEFAULT,
     robot_name: Annotated[
         str,
-        typer.Option("--robot", help="Which fake robot: nomad150 or create2 (docs/create2.md)."),
+        typer.Option(
+            "--robot",
+            help="Which fake robot: nomad150 or create2, or a robot description file whose "
+            "[robot] protocol is one of them (docs/create2.md).",
+        ),
     ] = "nomad150",
 ) -> None:
     """Calibrate the fake robot unattended and compare with its true parameters.
@@ -77,6 +82,7 @@ def demo(
     would, and the demo says so.
     """
     system = unit_system(units_choice)
+    robot_name = robot_protocol(robot_name)
     if robot_name == "create2":
         _demo_create2(seed, json_out, session, system)
         return
@@ -143,12 +149,16 @@ def demo(
     finish(outcome, json_out, console, extra=extra, truth=truth, system=system)
 
 
-CREATE2_PLAN = "k=1,l=2,n=18,variant=reverse;k=0.5,l=2,n=18,variant=reverse"
+CREATE2_PLAN = "k=1,l=2,n=12,variant=reverse;k=0.5,l=2,n=12,variant=reverse"
 """Turn-free designs (docs/create2.md): closed 4 m runs and one-way 2 m runs."""
 CREATE2_TIME_SCALE = 10.0
 """The fake Create 2's time scale: its legs end on 15 ms readings of the
 encoders and a stop sent by the host, so on a faster clock a late reading
 ends a leg centimetres long."""
+CREATE2_MAX_GAP_MS = 15.0
+"""The fake's clock advances at most one 15 ms tick between two calls of the
+driver (fakes/create2/clock.py): a host descheduled by a busy machine loses
+that time instead of letting the wheels drive through it."""
 
 
 def _demo_create2(
@@ -167,7 +177,7 @@ def _demo_create2(
     paper = DEMO_TRUTH.to_paper_units()
     toml = DEMO_ROBOT_TOML + '[robot]\nprotocol = "create2"\n'
     query = "&".join(
-        [f"seed={seed}", f"time_scale={CREATE2_TIME_SCALE!r}"]
+        [f"seed={seed}", f"time_scale={CREATE2_TIME_SCALE!r}", f"max_gap_ms={CREATE2_MAX_GAP_MS!r}"]
         + [f"{name}={paper[name]!r}" for name in ("E_R", "E_T", "K_theta", "K_rho")]
     )
     port = f"fakecreate2://?{query}"

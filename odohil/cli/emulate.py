@@ -24,6 +24,7 @@ from odohil.cli.options import (
     KThetaDeg2PerM,
     bounded,
 )
+from odohil.cli.robot_option import robot_protocol
 from odohil.driver.nomad.link import DEFAULT_BAUD
 from odohil.errors import OdohilError
 
@@ -37,7 +38,8 @@ def emulate(
     robot: str = typer.Option(
         "nomad150",
         "--robot",
-        help="Which fake: nomad150 or create2 (docs/create2.md; default line rate 115200).",
+        help="Which fake: nomad150 or create2 (docs/create2.md; default line rate 115200), "
+        "or a robot description file whose [robot] protocol is one of them.",
     ),
     seed: int | None = typer.Option(
         None, "--seed", callback=bounded("seed"), help="Seed of the odometry noise."
@@ -77,6 +79,7 @@ def emulate(
     if truth_socket is not None:
         _check_socket_path(truth_socket)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
+    robot = robot_protocol(robot)
     if robot == "create2":
         _emulate_create2(
             seed, (e_r, e_t, k_theta, k_rho), time_scale, baud, pacing, fault, truth_socket

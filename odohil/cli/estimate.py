@@ -17,6 +17,7 @@ from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_OK, EXIT_UNTRUSTED
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, unit_system
 from odohil.cli.render import parameters_table
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback, turns_exact_of
 from odohil.cli.verdict import gaussian_line, verdict_line
 from odohil.errors import OdohilError
 from odohil.science.estimators import Observation, estimate
@@ -68,7 +69,11 @@ def register(app: typer.Typer) -> None:
         ],
         robot: Annotated[
             Path | None,
-            typer.Option("--robot", help="Robot description (TOML); needed for raw marks."),
+            typer.Option(
+                "--robot",
+                callback=robot_callback,
+                help=ROBOT_HELP + " Needed for raw marks.",
+            ),
         ] = None,
         method: Annotated[
             MethodChoice,
@@ -104,7 +109,13 @@ def register(app: typer.Typer) -> None:
                 t.number if t.number is not None else position[t.line] + 1 for t in trials.ambiguous
             ]
             check_exclude(left_out, [o.trial for o in observations if o.trial is not None])
-            result = estimate(observations, method.value, exclude=left_out, ambiguous=ambiguous)
+            result = estimate(
+                observations,
+                method.value,
+                exclude=left_out,
+                ambiguous=ambiguous,
+                turns_exact=turns_exact_of(file, robot),
+            )
         except OdohilError as exc:
             err.print(f"[red]error:[/red] {exc}", highlight=False)
             raise typer.Exit(EXIT_BAD_INPUT) from exc

@@ -13,6 +13,7 @@ from odohil.cli.estimate import observation_of
 from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
 from odohil.cli.options import bounded
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback, turns_exact_of
 from odohil.cli.verdict import verdict_line
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult, estimate
@@ -66,7 +67,8 @@ def load_estimate(source: Path, robot: Path | None, exclude: frozenset[int]) -> 
         t.number if t.number is not None else position[t.line] + 1 for t in trials.ambiguous
     ]
     check_exclude(exclude, [o.trial for o in observations if o.trial is not None])
-    return estimate(observations, exclude=exclude, ambiguous=ambiguous)
+    turns_exact = turns_exact_of(source, robot)
+    return estimate(observations, exclude=exclude, ambiguous=ambiguous, turns_exact=turns_exact)
 
 
 def export(
@@ -122,7 +124,10 @@ def export(
         ),
     ] = False,
     robot: Annotated[
-        Path | None, typer.Option("--robot", help="Robot description (TOML); needed for raw marks.")
+        Path | None,
+        typer.Option(
+            "--robot", callback=robot_callback, help=ROBOT_HELP + " Needed for raw marks."
+        ),
     ] = None,
     exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
 ) -> None:

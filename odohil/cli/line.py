@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from odohil.errors import ParameterError
-from odohil.science.robot_description import RobotDescription
+from odohil.science.robot_description import RobotDescription, RobotSettings
 from odohil.session.robots import find_backend
 
 FAKE_URL_SCHEMES = ("fakerobot:", "fakecreate2:")
@@ -28,6 +28,8 @@ class Line:
         protocol: the robot backend's name (``[robot] protocol``).
         port: the port URL; port_from: where it came from.
         baud: the line speed; baud_from: where it came from.
+        robot: the description's ``[robot]`` settings, handed to the backend
+            (its kinematic constants).
     """
 
     protocol: str
@@ -35,6 +37,7 @@ class Line:
     port_from: str
     baud: int
     baud_from: str
+    robot: RobotSettings | None = None
 
     def describe(self) -> str:
         """E.g. ``nomad150 on /dev/ttyUSB0 (--port) at 9600 baud (robot.toml [serial])``."""
@@ -111,6 +114,7 @@ def resolve_line(
         found_port[1],
         int(found_baud[0]),
         found_baud[1],
+        description.robot,
     )
 
 

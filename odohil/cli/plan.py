@@ -22,6 +22,8 @@ from odohil.cli.options import (
     bounded,
     unit_system,
 )
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback
+from odohil.cli.run import warn_turns
 from odohil.errors import OdohilError
 from odohil.science.fisher import default_description
 from odohil.science.limits import RANGES
@@ -47,6 +49,7 @@ from odohil.science.planner import (
 from odohil.science.robot_description import MAX_FLOOR_M, RobotDescription
 from odohil.science.targets import TARGET_FRACTIONS
 from odohil.session.plan import parse_plan
+from odohil.session.preflight import default_variant
 from odohil.session.robot_file import load_robot_description
 
 DEFAULT_SIGMA_M = 0.001
@@ -251,7 +254,11 @@ def plan(
     ),
     robot: Annotated[
         Path | None,
-        typer.Option("--robot", help="Robot description (TOML): screws, sigma_m, cross pairs."),
+        typer.Option(
+            "--robot",
+            callback=robot_callback,
+            help=ROBOT_HELP + " Gives screws, sigma_m, cross pairs, turns_exact.",
+        ),
     ] = None,
     target_e_r: float | None = typer.Option(
         None,
@@ -329,9 +336,10 @@ def plan(
         prior = ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
         if evaluate is not None:
             try:
-                written = parse_plan(evaluate)
+                written = parse_plan(evaluate, default_variant(description))
             except OdohilError as exc:
                 raise typer.BadParameter(f"--evaluate: {exc}") from None
+            warn_turns(Console(stderr=True), written, description)
             result = evaluate_plan(
                 [(item.design, item.n_trials) for item in written.items],
                 prior,

@@ -35,9 +35,10 @@ from odohil.cli.exit_codes import (
     EXIT_UNTRUSTED,
     exit_for_signal,
 )
-from odohil.cli.line import Line, register_fake_urls, resolve_line
+from odohil.cli.line import FAKE_URL_SCHEMES, Line, register_fake_urls, resolve_line
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_table
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.verdict import verdict_line
 from odohil.errors import (
     InitError,
@@ -67,7 +68,7 @@ from odohil.session.journal import Journal, Record
 from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
 from odohil.session.plan import Plan
 from odohil.session.pose_source import PoseSource
-from odohil.session.preflight import check_new_session, check_trial_file
+from odohil.session.preflight import check_new_session, check_trial_file, turn_designs
 from odohil.session.robot import Robot
 from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
@@ -76,6 +77,7 @@ from odohil.session.start_pose import StartPose
 from odohil.session.state import (
     SessionState,
     ambiguous_trials,
+    description_of_header,
     load_session,
     session_observations,
 )
@@ -111,7 +113,7 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     The robot is closed (stopped) on exit.
     """
     register_fake_urls(line.port)
-    robot = open_robot(line.protocol, line.port, line.baud)
+    robot = open_robot(line.protocol, line.port, line.baud, line.robot)
     transport = getattr(robot, "transport", None)
     truth: Any = None
     try:
@@ -428,7 +430,25 @@ def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> Estima
         observations,
         exclude=[t for t in exclude if t in done],
         ambiguous=[t.trial for t in ambiguous_trials(state)],
+        turns_exact=description_of_header(state).robot.turns_exact,
     )
+
+
+ALLOW_TURNS_HELP = (
+    "Run `turn` designs on a robot whose turns carry error ([robot] turns_exact = false); "
+    "the estimate is then not trusted."
+)
+
+
+def warn_turns(console: Console, plan: Plan, description: RobotDescription) -> None:
+    """Warn when the plan turns in place on a robot whose turns carry error."""
+    turns = turn_designs(plan, description)
+    if turns:
+        console.print(
+            f"[yellow]warning:[/] turn designs on a robot whose turns carry error "
+            f"({', '.join(turns)}): the estimate will not be trusted; use variant=reverse",
+            soft_wrap=True,
+        )
 
 
 def report_stop(console: Console, outcome: StopOutcome | None, folder: Path) -> None:
@@ -598,7 +618,7 @@ def run(
         ),
     ] = None,
     *,
-    robot_file: Annotated[Path, typer.Option("--robot", help="Robot description (TOML).")],
+    robot_file: Annotated[Path, typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP)],
     plan_text: Annotated[str, typer.Option("--plan", help=_PLAN_HELP)],
     measure: Annotated[
         str,
@@ -641,6 +661,7 @@ def run(
     ] = False,
     exclude_text: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
     units_choice: UnitsOption = UNITS_DEFAULT,
+    allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
 ) -> None:
     """Run a calibration session unattended: n trials, no prompts, journaled.
 
@@ -650,8 +671,9 @@ def run(
     folder = session or default_session_folder()
     system = unit_system(units_choice)
     with session_exit_codes(console, json_out):
-        checked = check_new_session(plan_text, robot_file, folder)  # before anything moves
+        checked = check_new_session(plan_text, robot_file, folder, allow_turns)  # nothing moved
         plan, description, toml = checked.plan, checked.description, checked.toml
+        warn_turns(console, plan, description)
         exclude = checked_exclude(exclude_text, plan.n_trials, console)
         option = parse_measure(measure)
         kind, trial_file = option.kind, option.trial_file
@@ -673,7 +695,7 @@ def run(
         }
         if option.mocap_url:
             settings["mocap_url"] = option.mocap_url
-        if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
+        if kind == "fake" and not truth_socket and not line.port.startswith(FAKE_URL_SCHEMES):
             try:
                 make_source(kind, description, None, seed, trial_file)  # says what is missing
             except OdohilError as exc:

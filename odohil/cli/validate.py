@@ -27,6 +27,7 @@ from odohil.cli.exit_codes import (
 )
 from odohil.cli.line import resolve_line
 from odohil.cli.options import bounded
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
     ProgressObserver,
     connect,
@@ -138,7 +139,9 @@ def validate(
     ] = None,
     robot_file: Annotated[
         Path | None,
-        typer.Option("--robot", help="Robot description (TOML); default: the session's."),
+        typer.Option(
+            "--robot", callback=robot_callback, help=ROBOT_HELP + " Default: the session's."
+        ),
     ] = None,
     baud: Annotated[
         int | None, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")

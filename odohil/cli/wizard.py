@@ -43,12 +43,15 @@ from odohil.cli.exit_codes import (
 from odohil.cli.line import Line, register_fake_urls, resolve_line
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import Check, MotionProgress, check_line, estimate_panel
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
+    ALLOW_TURNS_HELP,
     MAY_STILL_MOVE,
     default_session_folder,
     final_estimate,
     interrupt_text,
     report_stop,
+    warn_turns,
 )
 from odohil.cli.verdict import verdict_line
 from odohil.driver.odometry import OdometrySample
@@ -74,7 +77,7 @@ from odohil.session.engine import (
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
-from odohil.session.preflight import check_session_folder
+from odohil.session.preflight import check_session_folder, check_turns, default_variant
 from odohil.session.robot import Robot
 from odohil.session.robot_file import load_robot_description
 from odohil.session.robots import open_robot
@@ -612,7 +615,11 @@ def _resume(console: Console, folder: Path, max_leg_m: float, port: str | None) 
 
 
 def _prepare(
-    console: Console, robot_file: Path | None, plan_text: str | None, max_leg_m: float
+    console: Console,
+    robot_file: Path | None,
+    plan_text: str | None,
+    max_leg_m: float,
+    allow_turns: bool = False,
 ) -> tuple[str, Plan]:
     if robot_file is None:
         _fail(console, Check("robot description", False, "a new session needs --robot FILE"))
@@ -623,9 +630,13 @@ def _prepare(
         _fail(console, Check("robot description", False, str(exc)))
     console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))
     try:
-        plan = check_session_plan(parse_plan(plan_text or DEFAULT_PLAN))  # wire range, caps
+        plan = check_session_plan(  # wire range, caps; the robot's default variant
+            parse_plan(plan_text or DEFAULT_PLAN, default_variant(description))
+        )
+        check_turns(plan, description, allow_turns)
     except OdohilError as exc:
         _fail(console, Check("plan feasible", False, str(exc)))
+    warn_turns(console, plan, description)
     for check in [*plan_checks(plan, max_leg_m), floor_check(plan, description)]:
         if not check.ok:
             _fail(console, check)
@@ -679,7 +690,7 @@ def _line(
 def _connect(console: Console, line: Line) -> Robot:
     try:
         register_fake_urls(line.port)
-        robot = open_robot(line.protocol, line.port, line.baud)
+        robot = open_robot(line.protocol, line.port, line.baud, line.robot)
     except OdohilError as exc:
         _fail(console, Check("robot answers", False, f"{line.describe()}: {exc}"))
     try:
@@ -711,7 +722,7 @@ def wizard(
     ] = None,
     robot_file: Annotated[
         Path | None,
-        typer.Option("--robot", help="Robot description TOML (new sessions)."),
+        typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP + " For new sessions."),
     ] = None,
     plan_text: Annotated[
         str | None,
@@ -739,6 +750,7 @@ def wizard(
         ),
     ] = DEFAULT_MAX_LEG_M,
     units_choice: UnitsOption = UNITS_DEFAULT,
+    allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
 ) -> None:
     """Guide a calibration session beside the robot, one trial at a time."""
     console = Console(highlight=False)
@@ -761,6 +773,7 @@ def wizard(
             plan_text,
             max_leg_m,
             unit_system(units_choice),
+            allow_turns,
         )
     if code not in (EXIT_OK, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
         console.print(
@@ -780,6 +793,7 @@ def _guided(
     plan_text: str | None,
     max_leg_m: float,
     system: units.UnitSystem,
+    allow_turns: bool = False,
 ) -> int:
     """Lock the session (resume or start it), then connect, then run."""
     try:
@@ -799,7 +813,7 @@ def _guided(
                 opened.journal.close()
                 raise
         else:
-            text, plan = _prepare(console, robot_file, plan_text, max_leg_m)
+            text, plan = _prepare(console, robot_file, plan_text, max_leg_m, allow_turns)
             assert robot_file is not None
             description = load_robot_description(robot_file)
             line = _line(console, description, port, baud, str(robot_file))

@@ -325,7 +325,9 @@ def plan_experiment(
         targets: wanted standard errors (SI) by parameter name; the others
             default to :func:`complete_targets`.
         max_designs: mixtures of at most this many designs (1 to 3).
-        designs: the candidate designs (default: :func:`design_grid`).
+        designs: the candidate designs (default: :func:`design_grid`, its
+            ``reverse`` designs only for a robot whose turns carry error,
+            ``[robot] turns_exact = false``).
         max_leg_m: longest leg allowed, metres (for the default grid).
         floor_m: free floor, metres: no plan covers more (see
             :attr:`Plan.excursion_m`). None: :data:`DEFAULT_FLOOR_M` for the
@@ -367,6 +369,8 @@ def plan_experiment(
         budget_m, max_trials if max_trials is not None else 10**6, seconds, min_trials_per_design
     )
     pool = list(designs) if designs is not None else design_grid(max_leg_m=max_leg_m)
+    if designs is None and description is not None and not description.robot.turns_exact:
+        pool = [d for d in pool if d.variant != "turn"]  # spins carry error: turn-free only
     pool = [d for d in pool if d.l_m <= floor]
     fitting = [
         d for d in pool if budget.fits([_Candidate(d, np.zeros((4, 4)), operator.trial_seconds(d))])

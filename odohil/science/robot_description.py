@@ -17,6 +17,9 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
     # create2 only (defaults: the Create 2's; docs/create2.md):
     # counts_per_rev = 508.8, wheel_diameter_m = 0.072, wheel_base_m = 0.235,
     # full_mode = false
+    # turns_exact: whether in-place turns carry no error (a synchronous drive);
+    # default true for nomad150, false for any other protocol (a differential
+    # drive's spins do): the planner, wizard and run then use turn-free designs
     [serial]                 # optional, for the driver
     port = "/dev/ttyUSB0"    # or any pyserial URL
     baud = 38400             # nomad150: 4800, 9600, 19200 or 38400
@@ -70,7 +73,18 @@ values of the centred positions); the pose from such marks is ill-conditioned.""
 _TOP_KEYS = ("robot", "screws", "measurement", "serial", "priors", "floor")
 DEFAULT_PROTOCOL = "nomad150"
 """The robot protocol (driver backend) when ``[robot] protocol`` is absent."""
-_ROBOT_KEYS = ("protocol", "counts_per_rev", "wheel_diameter_m", "wheel_base_m", "full_mode")
+_ROBOT_KEYS = (
+    "protocol",
+    "counts_per_rev",
+    "wheel_diameter_m",
+    "wheel_base_m",
+    "full_mode",
+    "turns_exact",
+)
+EXACT_TURN_PROTOCOLS: tuple[str, ...] = ("nomad150",)
+"""Protocols whose robots turn in place without error (synchronous drives): the
+default of ``[robot] turns_exact``. Any other protocol defaults to turns that
+carry error, so that an unknown robot is calibrated with turn-free designs."""
 _DRIVE_RANGES = {
     "counts_per_rev": (1.0, 1e6),
     "wheel_diameter_m": (0.005, 2.0),
@@ -130,6 +144,10 @@ class RobotSettings:
     the iRobot Create 2's); backends of other drives ignore them."""
     full_mode: bool = False
     """``full_mode``: the Create 2 drives in the OI's Full mode (no safety stops)."""
+    turns_exact: bool = True
+    """``turns_exact``: in-place turns carry no error (the paper's synchronous
+    drive). False for a differential drive: ``turn`` designs would fold the
+    spins' errors into E_R and K_theta, so plans default to ``reverse``."""
 
 
 @dataclass(frozen=True)
@@ -311,8 +329,14 @@ def _robot(table: dict[str, Any]) -> RobotSettings:
     full_mode = table.get("full_mode", False)
     if not isinstance(full_mode, bool):
         raise RobotDescriptionError(f"robot.full_mode must be true or false, got {full_mode!r}")
+    turns_exact = table.get("turns_exact", protocol.strip() in EXACT_TURN_PROTOCOLS)
+    if not isinstance(turns_exact, bool):
+        raise RobotDescriptionError(f"robot.turns_exact must be true or false, got {turns_exact!r}")
     return RobotSettings(
-        protocol=protocol.strip(), drive=DiffDriveGeometry(**constants), full_mode=full_mode
+        protocol=protocol.strip(),
+        drive=DiffDriveGeometry(**constants),
+        full_mode=full_mode,
+        turns_exact=turns_exact,
     )
 
 

@@ -8,7 +8,8 @@ list of ``key=value``::
 - ``k``: forth-and-back pairs, a multiple of 1/2 (``k=0.5`` is one straight run);
 - ``l``: leg length, metres;
 - ``n``: number of trials of this design, a positive integer;
-- ``variant`` (optional): ``turn`` (default, 180 degree turn at each end) or
+- ``variant`` (optional): ``turn`` (default, 180 degree turn at each end; the
+  caller may default to ``reverse``, see :func:`parse_plan`) or
   ``reverse`` (drive back without turning).
 
 Trials are numbered 1, 2, ... in plan order: the n trials of the first design,
@@ -183,8 +184,9 @@ def check_session_plan(plan: Plan) -> Plan:
     return plan
 
 
-def parse_plan(text: str) -> Plan:
-    """Parse the ``--plan`` syntax (see the module docstring).
+def parse_plan(text: str, default_variant: str = "turn") -> Plan:
+    """Parse the ``--plan`` syntax (see the module docstring); a design that
+    names no variant gets ``default_variant``.
 
     Raises:
         ParameterError: the message names the design (1-based) and the problem.
@@ -199,13 +201,13 @@ def parse_plan(text: str) -> Plan:
                 continue  # a trailing ';' is harmless
             raise ParameterError(f"plan design {number} is empty")
         try:
-            items.append(_parse_item(part))
+            items.append(_parse_item(part, default_variant))
         except ParameterError as exc:
             raise ParameterError(f"plan design {number} ({part!r}): {exc}") from None
     return Plan(tuple(items))
 
 
-def _parse_item(text: str) -> PlanItem:
+def _parse_item(text: str, default_variant: str) -> PlanItem:
     values: dict[str, str] = {}
     for field in text.split(","):
         key, sep, value = field.partition("=")
@@ -226,7 +228,7 @@ def _parse_item(text: str) -> PlanItem:
         n = int(values["n"])
     except ValueError:
         raise ParameterError(f"n must be a whole number, got {values['n']!r}") from None
-    variant = values.get("variant", "turn").lower()
+    variant = values.get("variant", default_variant).lower()
     if variant not in VARIANTS:
         raise ParameterError(f"variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
     return PlanItem(Design(k, l_m, variant), n)

@@ -33,24 +33,55 @@ class Checked:
     toml: str
 
 
-def check_new_session(plan_text: str, robot_file: Path, session: Path | None) -> Checked:
-    """Validate ``--plan``, ``--robot`` and ``--session`` of a new session.
+def check_new_session(
+    plan_text: str, robot_file: Path, session: Path | None, allow_turns: bool = False
+) -> Checked:
+    """Validate ``--plan``, ``--robot`` and ``--session`` of a new session; a
+    design without a variant gets the robot's default (:func:`default_variant`).
 
     Raises:
-        ParameterError: a bad plan or a ``--session`` that is not a folder.
+        ParameterError: a bad plan, a ``turn`` design the robot refuses
+            (:func:`check_turns`) or a ``--session`` that is not a folder.
         RobotDescriptionError: the robot description cannot be read or is invalid.
     """
-    try:
-        plan = check_session_plan(parse_plan(plan_text))
-    except ParameterError as exc:
-        raise ParameterError(f"--plan: {exc}") from None
-    check_session_folder(session)
     try:
         toml = robot_file.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise RobotDescriptionError(f"--robot: cannot read {robot_file}: {exc}") from None
     description = parse_robot_description(toml, source=str(robot_file))
+    try:
+        plan = check_session_plan(parse_plan(plan_text, default_variant(description)))
+    except ParameterError as exc:
+        raise ParameterError(f"--plan: {exc}") from None
+    check_turns(plan, description, allow_turns)
+    check_session_folder(session)
     return Checked(plan=plan, description=description, toml=toml)
+
+
+def default_variant(description: RobotDescription) -> str:
+    """``turn`` for a robot whose in-place turns are exact, else ``reverse``."""
+    return "turn" if description.robot.turns_exact else "reverse"
+
+
+def turn_designs(plan: Plan, description: RobotDescription) -> list[str]:
+    """Labels of the plan's ``turn`` designs when the robot's turns carry error
+    (``[robot] turns_exact = false``); empty otherwise."""
+    if description.robot.turns_exact:
+        return []
+    return [i.design.label() for i in plan.items if i.design.variant == "turn"]
+
+
+def check_turns(plan: Plan, description: RobotDescription, allow_turns: bool) -> None:
+    """Refuse ``turn`` designs on a robot whose turns carry error, unless
+    ``allow_turns`` (ParameterError naming ``--plan`` and ``--allow-turns``)."""
+    turns = turn_designs(plan, description)
+    if turns and not allow_turns:
+        raise ParameterError(
+            f"--plan asks for in-place turns ({', '.join(turns)}) but this robot's turns "
+            "carry error ([robot] turns_exact = false): turn trials bias E_R and K_theta "
+            "while looking consistent. Use variant=reverse (the default for this robot), "
+            "or give --allow-turns to run them anyway (the estimate is then not trusted)"
+        )
 
 
 def check_session_folder(session: Path | None) -> None:

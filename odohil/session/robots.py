@@ -5,9 +5,11 @@ is :data:`odohil.science.robot_description.DEFAULT_PROTOCOL`), the way
 python-can picks a bus by its interface name; the port URL says where it is.
 A backend is a class (or any object) with a ``default_baud`` (int), optionally
 ``baud_rates`` (the line speeds it accepts, checked before anything is sent),
-and an ``open(url, baud)`` that returns a connected ``Robot``
-(odohil/session/robot.py). Another package adds a robot by declaring an entry
-point in the group; nothing here names one.
+and an ``open(url, baud, robot)`` that returns a connected ``Robot``
+(odohil/session/robot.py); ``robot`` is the description's ``[robot]`` table
+(:class:`RobotSettings`: its constants), which a backend uses or ignores.
+Another package adds a robot by declaring an entry point in the group;
+nothing here names one.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ from importlib.metadata import entry_points
 from typing import Protocol, cast
 
 from odohil.errors import InitError, RobotDescriptionError
+from odohil.science.robot_description import RobotSettings
 from odohil.session.robot import Robot
 
 ENTRY_POINT_GROUP = "odohil.robots"
@@ -27,8 +30,9 @@ class RobotBackend(Protocol):
     default_baud: int
     """The line speed used when neither the command line nor the file gives one."""
 
-    def open(self, url: str, baud: int | None = None) -> Robot:
-        """Connect to the robot at ``url`` and check that it answers."""
+    def open(self, url: str, baud: int | None = None, robot: RobotSettings | None = None) -> Robot:
+        """Connect to the robot at ``url`` and check that it answers; ``robot``:
+        the description's ``[robot]`` settings (None: the backend's defaults)."""
         ...
 
 
@@ -59,7 +63,10 @@ def find_backend(protocol: str) -> RobotBackend:
         raise InitError(f"robot backend {protocol!r} ({entry.value}) cannot load: {exc}") from exc
 
 
-def open_robot(protocol: str, url: str, baud: int | None = None) -> Robot:
+def open_robot(
+    protocol: str, url: str, baud: int | None = None, robot: RobotSettings | None = None
+) -> Robot:
     """Connect through the backend named ``protocol`` at ``url`` (at ``baud``,
-    or the backend's default when None)."""
-    return find_backend(protocol).open(url, baud)
+    or the backend's default when None), handing it the description's
+    ``[robot]`` settings (None: the backend's defaults)."""
+    return find_backend(protocol).open(url, baud, robot)

@@ -93,7 +93,7 @@ def test_table_output_with_a_robot_description(tmp_path: Path) -> None:
     ("args", "message"),
     [
         (("--budget-m", "-5"), "budget"),
-        (("--budget-m", "100", "--sigma-m", "0.001", "--robot", "x.toml"), "not both"),
+        (("--budget-m", "100", "--sigma-m", "0.001", "--robot", "create2"), "not both"),
         (("--budget-m", "100", "--sigma-m", "-1"), "sigma-m"),
         (("--budget-m", "100", "--robot", "/no/such/robot.toml"), "cannot read"),
         (("--budget-m", "100", "--target-E-R", "0"), "target-E-R"),

@@ -30,10 +30,13 @@ def test_demo_create2_is_trusted_and_near_the_truth(tmp_path: Path) -> None:
     assert result["n_trials"] == parse_plan(CREATE2_PLAN).n_trials
     assert all(item.design.variant == "reverse" for item in parse_plan(CREATE2_PLAN).items)
     truth = DEMO_TRUTH.to_si_dict()
-    # Unlike the fake Nomad's, a Create 2 leg ends where the host's stop lands
-    # (within a count or two), so the true poses of a seed vary slightly from
-    # run to run: each estimate is checked within 4 standard errors, not the
-    # 95 % interval of one fixed run.
+    # The acceptance: every 95 % interval contains the fake's true value. The
+    # fake's clock is bounded between driver calls (max_gap_ms), so a busy
+    # machine cannot lengthen a leg; a leg's end still varies by a count or
+    # two from run to run, which moves each estimate by a fraction of its
+    # standard error.
     for name in PARAMETER_NAMES:
         entry = result["parameters"][name]
-        assert abs(entry["value"] - truth[name]) < 4 * entry["stderr"], (name, entry)
+        low, high = entry["ci95"]
+        assert low <= truth[name] <= high, (name, entry, truth[name])
+    assert result["verdict"]["status"] == "trusted"

@@ -81,9 +81,11 @@ class NomadBackend:
         self.tolerance_wire = tolerance_wire
 
     @classmethod
-    def open(cls, url: str, baud: int | None = None) -> NomadBackend:
+    def open(cls, url: str, baud: int | None = None, robot: object = None) -> NomadBackend:
         """Open ``url`` at ``baud`` (the Nomad's default when None) and check
-        that the robot answers ``gs``.
+        that the robot answers ``gs``. ``robot`` (the description's ``[robot]``
+        settings) is accepted and ignored: a synchronous drive needs no
+        kinematic constants here.
 
         Raises ParameterError for an unsupported baud, ConnectionFailedError
         when the port does not open or the robot does not answer.

@@ -156,6 +156,7 @@ def build_result(
     excluded: tuple[int, ...] = (),
     ambiguous: Sequence[int] = (),
     intervals: tuple[ParameterEstimate, ...] = (),
+    turns_exact: bool = True,
 ) -> EstimateResult:
     """Assemble the result, run both checks and give the verdict.
 
@@ -185,6 +186,7 @@ def build_result(
         [o.label() for o in check.outliers],
         check.verdict,
         ambiguous,
+        turns_exact,
     )
     if ambiguous:
         notes = (
@@ -257,6 +259,7 @@ def estimate(
     criteria: Criteria | None = None,
     exclude: Iterable[int] = (),
     ambiguous: Sequence[int] = (),
+    turns_exact: bool = True,
 ) -> EstimateResult:
     """Estimate the four parameters from trials.
 
@@ -270,6 +273,8 @@ def estimate(
         exclude: trial numbers to leave out (a view: nothing is deleted).
         ambiguous: trial numbers the caller already left out as ambiguous
             (they make the verdict doubtful).
+        turns_exact: False for a robot whose in-place turns carry error
+            (``[robot] turns_exact``): its ``turn`` trials make the verdict doubtful.
 
     Raises:
         MeasurementError: too few trials, no design that identifies E_R, or
@@ -285,7 +290,12 @@ def estimate(
     summaries = summarise(groups)
     paper = paper_estimate(summaries)
     ml = fit_joint(groups, paper)
-    common = {"excluded": excluded, "ambiguous": ambiguous, "check_params": ml.params}
+    common = {
+        "excluded": excluded,
+        "ambiguous": ambiguous,
+        "check_params": ml.params,
+        "turns_exact": turns_exact,
+    }
     if method == "paper":
         return build_result(
             "paper",
@@ -356,4 +366,5 @@ def estimate(
             ),
             rob.fit,
         ),
+        turns_exact=turns_exact,
     )

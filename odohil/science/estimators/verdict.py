@@ -3,9 +3,10 @@
 - failed: the fit did not converge, the data are degenerate (every trial of
   a design has the same exact pose), or a parameter has no information
   (infinite standard error);
-- doubtful: the model check fails, some trial is an outlier, or more than
+- doubtful: the model check fails, some trial is an outlier, more than
   :data:`AMBIGUOUS_TOLERATED` of the trials were left out by the session as
-  ambiguous;
+  ambiguous, or ``turn`` trials come from a robot whose turns carry error (a
+  differential drive);
 - trusted: none of these.
 
 A few ambiguous trials left out do not make an estimate doubtful: the
@@ -80,6 +81,12 @@ def degenerate_designs(observations: Sequence[Observation]) -> list[str]:
     return out
 
 
+def turn_designs(observations: Sequence[Observation]) -> list[str]:
+    """Labels of the designs with in-place turns (``turn`` variant) among the trials."""
+    designs = dict.fromkeys(o.design for o in observations)
+    return [d.label() for d in designs if d.variant == "turn"]
+
+
 def judge(
     observations: Sequence[Observation],
     converged: bool,
@@ -89,6 +96,7 @@ def judge(
     outliers: Sequence[str],
     check_verdict: str,
     ambiguous: Sequence[int] = (),
+    turns_exact: bool = True,
 ) -> Verdict:
     """The verdict from the fit's state and its checks (see the module docstring).
 
@@ -101,6 +109,9 @@ def judge(
         outliers: labels of the outlying trials.
         check_verdict: the model check's sentence.
         ambiguous: trial numbers the session left out as ambiguous.
+        turns_exact: whether the robot's in-place turns carry no error (the
+            paper's model); when False, ``turn`` trials make the verdict
+            doubtful: their spin errors fold into E_R and K_theta unseen.
     """
     failed: list[str] = []
     doubtful: list[str] = []
@@ -128,6 +139,12 @@ def judge(
             "ambiguous trials left out (the floor marks fit two poses): "
             + ", ".join(str(t) for t in ambiguous)
             + f" (more than {AMBIGUOUS_TOLERATED:.0%} of the trials)"
+        )
+    turned = turn_designs(observations) if not turns_exact else []
+    if turned:
+        doubtful.append(
+            f"turn trials on a robot whose turns carry error: {', '.join(turned)} (the spins' "
+            "errors bias E_R and K_theta; calibrate with variant=reverse)"
         )
     if failed:
         return Verdict("failed", tuple(failed + doubtful))
