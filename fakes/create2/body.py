@@ -67,7 +67,10 @@ class Create2Body:
         self.errors = errors
         self.params = errors.straight_parameters()
         self.geometry = geometry
-        self.rng = rng
+        self._motion_seed = int(rng.integers(2**63))
+        self.motions = 0
+        """Motions ended so far (wheels brought to rest from moving)."""
+        self.rng = self._motion_rng()
         self.segment_m = segment_m
         self.encoder_origin = encoder_origin
         self.left = Wheel(encoder_origin)
@@ -90,8 +93,19 @@ class Create2Body:
         if (right_mm_s, left_mm_s) == (self.right.speed_mm_s, self.left.speed_mm_s):
             return
         self._end_leg()
+        was_moving = self.moving
         self.right.speed_mm_s = right_mm_s
         self.left.speed_mm_s = left_mm_s
+        if was_moving and right_mm_s == 0.0 and left_mm_s == 0.0:
+            self.motions += 1
+            self.rng = self._motion_rng()
+
+    def _motion_rng(self) -> np.random.Generator:
+        """The noise of one motion (rest to rest), keyed on the seed and its
+        number: where the host stops a motion (a count or so later on a busy
+        machine) changes that motion's last segment, never the noise of the
+        motions after it, so a seed repeats its true poses."""
+        return np.random.default_rng([self._motion_seed, self.motions])
 
     def stop(self) -> None:
         """Both wheels stop at once."""
