@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import logging
 
 from fakes.create2.config import (
     CREATE2_TRUTH,
@@ -13,19 +12,15 @@ from fakes.create2.config import (
     build_config,
 )
 from fakes.create2.run import run_emulator
+from fakes.launch import add_serving_options, add_truth_options, parse_and_log
 from odohil.protocol.create2.opcodes import DEFAULT_BAUD
 from odohil.science.parameters import ErrorParameters
 
 
 def main(argv: list[str] | None = None) -> None:
     """Parse the options and serve until SIGINT/SIGTERM."""
-    paper = CREATE2_TRUTH.to_paper_units()
     parser = argparse.ArgumentParser(prog="python -m fakes.create2", description=__doc__)
-    parser.add_argument("--seed", type=int, default=None)
-    parser.add_argument("--E-R", dest="e_r", type=float, default=paper["E_R"], help="deg/m")
-    parser.add_argument("--E-T", dest="e_t", type=float, default=paper["E_T"], help="no unit")
-    parser.add_argument("--K-theta", dest="k_theta", type=float, default=paper["K_theta"])
-    parser.add_argument("--K-rho", dest="k_rho", type=float, default=paper["K_rho"], help="m")
+    add_truth_options(parser, CREATE2_TRUTH)
     parser.add_argument("--turn-scale", type=float, default=DEFAULT_TURN_SCALE)
     parser.add_argument("--spin-k", type=float, default=DEFAULT_SPIN_K, help="rad^2/rad")
     parser.add_argument("--time-scale", type=float, default=1.0)
@@ -36,11 +31,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--encoder-origin", type=int, default=0)
     parser.add_argument("--mode-offset", type=int, default=0)
     parser.add_argument("--angle-bug", action="store_true")
-    parser.add_argument("--truth-socket", default=None)
-    parser.add_argument("--no-pacing", action="store_true")
-    parser.add_argument("--verbose", action="store_true")
-    args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING)
+    add_serving_options(parser)
+    args = parse_and_log(parser, argv)
     config = build_config(
         seed=args.seed,
         params=ErrorParameters.from_paper_units(args.e_r, args.e_t, args.k_theta, args.k_rho),

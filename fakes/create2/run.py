@@ -3,15 +3,14 @@
 
 from __future__ import annotations
 
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 from typing import TextIO
 
 from fakes.create2.config import Create2Config
 from fakes.create2.engine import Create2Engine
 from fakes.create2.server import serve
+from fakes.launch import OnReady, run_announced
 
 
 def run_emulator(
@@ -23,25 +22,10 @@ def run_emulator(
 ) -> None:
     """Serve until SIGINT/SIGTERM, printing the pty device path and the truth
     socket path as the first two lines of ``out`` (as the fake Nomad does)."""
-    tmpdir: str | None = None
-    if truth_socket is None:
-        tmpdir = tempfile.mkdtemp(prefix="odohil-create2-")
-        path = Path(tmpdir) / "truth.sock"
-    else:
-        path = Path(truth_socket)
 
-    def ready(device: str, socket_path: str) -> None:
-        out.write(f"{device}\n{socket_path}\n")
-        out.flush()
-
-    try:
+    def serve_create2(path: Path, ready: OnReady) -> None:
         serve(
-            Create2Engine(config),
-            baud=config.baud,
-            pacing=pacing,
-            truth_path=path,
-            on_ready=ready,
+            Create2Engine(config), baud=config.baud, pacing=pacing, truth_path=path, on_ready=ready
         )
-    finally:
-        if tmpdir is not None:
-            shutil.rmtree(tmpdir, ignore_errors=True)
+
+    run_announced(serve_create2, truth_socket=truth_socket, tmp_prefix="odohil-create2-", out=out)

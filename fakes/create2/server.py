@@ -7,15 +7,13 @@ its interface; this one adds the test hook of the truth socket: a line
 
 from __future__ import annotations
 
-import signal
-import socket
+import contextlib
 from collections.abc import Callable
 from pathlib import Path
-from types import FrameType
 from typing import Any, cast
 
 from fakes.create2.engine import Create2Engine
-from fakes.nomad.server import PtyServer
+from fakes.nomad.server import PtyServer, serve_until_signalled
 from odohil.errors import ParameterError
 
 
@@ -26,32 +24,13 @@ class Create2PtyServer(PtyServer):
         super().__init__(cast(Any, engine), baud, pacing, truth_path)
         self.create2 = engine
 
-    def _serve_client(self, client: socket.socket) -> None:
-        try:
-            chunk = client.recv(4096)
-        except OSError:
-            chunk = b""
-        if not chunk:
-            client.close()
-            del self._clients[client]
-            return
-        buf = self._clients[client] + chunk
-        while b"\n" in buf:
-            line, _, buf = buf.partition(b"\n")
-            words = line.decode(errors="replace").split()
-            if len(words) == 2 and words[0] == "event":
-                try:
-                    self.create2.event(words[1])
-                except ParameterError as exc:
-                    words = [str(exc)]
-            reply = self.create2.truth().to_json() + "\n"
-            try:
-                client.sendall(reply.encode())
-            except OSError:
-                client.close()
-                del self._clients[client]
-                return
-        self._clients[client] = buf
+    def _truth_reply(self, line: str) -> str:
+        words = line.split()
+        if len(words) == 2 and words[0] == "event":
+            # an unknown event injects nothing; the reply is the state as it is
+            with contextlib.suppress(ParameterError):
+                self.create2.event(words[1])
+        return self.create2.truth().to_json()
 
 
 def serve(
@@ -63,17 +42,4 @@ def serve(
     on_ready: Callable[[str, str], None],
 ) -> None:
     """Run a :class:`Create2PtyServer` until SIGINT or SIGTERM; ``on_ready(device, socket)``."""
-    server = Create2PtyServer(engine, baud, pacing, truth_path)
-
-    def _handler(signum: int, frame: FrameType | None) -> None:
-        server.stop()
-
-    previous = {sig: signal.signal(sig, _handler) for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        server.start()
-        on_ready(server.device, str(truth_path))
-        server.run()
-    finally:
-        server.close()
-        for sig, old in previous.items():
-            signal.signal(sig, old)
+    serve_until_signalled(Create2PtyServer(engine, baud, pacing, truth_path), on_ready)

@@ -9,13 +9,11 @@ NAME (fakes/create2/config.py ``EVENTS``); any other line only asks.
 from __future__ import annotations
 
 import json
-import socket
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from types import TracebackType
 from typing import Any
 
-from odohil.errors import ConnectionFailedError, OdohilTimeoutError
+from fakes.truth_channel import TruthChannelClient
 
 
 @dataclass(frozen=True)
@@ -90,7 +88,7 @@ class Create2Truth:
         return (self.true_x_m, self.true_y_m, self.true_theta_rad)
 
 
-class Create2TruthClient:
+class Create2TruthClient(TruthChannelClient[Create2Truth]):
     """Client of the fake Create 2's truth socket; a context manager.
 
     Args:
@@ -99,66 +97,16 @@ class Create2TruthClient:
     """
 
     def __init__(self, path: str | Path, timeout_s: float = 5.0) -> None:
-        self.path = str(path)
-        self.timeout_s = timeout_s
-        self._sock: socket.socket | None = None
-        self._buf = b""
-
-    def __enter__(self) -> Create2TruthClient:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
-    def open(self) -> None:
-        """Connect (ConnectionFailedError if nobody listens)."""
-        sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        sock.settimeout(self.timeout_s)
-        try:
-            sock.connect(self.path)
-        except OSError as exc:
-            sock.close()
-            raise ConnectionFailedError(
-                f"no fake Create 2 truth socket at {self.path}: {exc}"
-            ) from exc
-        self._sock = sock
-
-    def close(self) -> None:
-        """Disconnect."""
-        if self._sock is not None:
-            self._sock.close()
-            self._sock = None
+        super().__init__(path, timeout_s, parse=Create2Truth.from_json, robot="fake Create 2")
 
     def snapshot(self) -> Create2Truth:
         """The robot's true state now."""
-        return self._ask(b"truth\n")
+        return self.ask(b"truth\n")
 
     def event(self, name: str) -> Create2Truth:
         """Inject a safety event (config ``EVENTS``); the state after it."""
-        return self._ask(f"event {name}\n".encode())
+        return self.ask(f"event {name}\n".encode())
 
     def true_pose(self) -> tuple[float, float, float]:
         """(x m, y m, theta rad) now (the session's TruthReader protocol)."""
         return self.snapshot().true_pose()
-
-    def _ask(self, line: bytes) -> Create2Truth:
-        if self._sock is None:
-            self.open()
-        assert self._sock is not None
-        try:
-            self._sock.sendall(line)
-            while b"\n" not in self._buf:
-                chunk = self._sock.recv(65536)
-                if not chunk:
-                    raise ConnectionFailedError("the fake Create 2 closed the truth socket")
-                self._buf += chunk
-        except TimeoutError as exc:
-            raise OdohilTimeoutError(f"truth socket silent for {self.timeout_s} s") from exc
-        reply, _, self._buf = self._buf.partition(b"\n")
-        return Create2Truth.from_json(reply.decode())

@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import logging
 
+from fakes.launch import add_serving_options, add_truth_options, parse_and_log
 from fakes.nomad.config import build_config
 from fakes.nomad.pacing import DEFAULT_BAUD
 from fakes.nomad.run import run_emulator
@@ -13,23 +13,13 @@ from odohil.science.parameters import NOMAD150
 
 def main(argv: list[str] | None = None) -> None:
     """Parse the options and serve until SIGINT/SIGTERM."""
-    paper = NOMAD150.to_paper_units()
     parser = argparse.ArgumentParser(prog="python -m fakes.nomad", description=__doc__)
-    parser.add_argument("--seed", type=int, default=None)
-    parser.add_argument("--E-R", dest="e_r", type=float, default=paper["E_R"], help="deg/m")
-    parser.add_argument("--E-T", dest="e_t", type=float, default=paper["E_T"], help="no unit")
-    parser.add_argument(
-        "--K-theta", dest="k_theta", type=float, default=paper["K_theta"], help="deg^2/m"
-    )
-    parser.add_argument("--K-rho", dest="k_rho", type=float, default=paper["K_rho"], help="m")
+    add_truth_options(parser, NOMAD150)
     parser.add_argument("--time-scale", type=float, default=1.0)
     parser.add_argument("--baud", type=int, default=DEFAULT_BAUD)
     parser.add_argument("--fault", action="append", default=[], help="NAME[:CODE][@N]")
-    parser.add_argument("--truth-socket", default=None)
-    parser.add_argument("--no-pacing", action="store_true")
-    parser.add_argument("--verbose", action="store_true")
-    args = parser.parse_args(argv)
-    logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING)
+    add_serving_options(parser)
+    args = parse_and_log(parser, argv)
     config = build_config(
         seed=args.seed,
         e_r_deg_per_m=args.e_r,

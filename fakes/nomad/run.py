@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import shutil
 import sys
-import tempfile
 from pathlib import Path
 from typing import TextIO
 
+from fakes.launch import OnReady, run_announced
 from fakes.nomad.config import EmulatorConfig
 from fakes.nomad.engine import NomadEngine
 from fakes.nomad.server import serve
@@ -27,19 +26,8 @@ def run_emulator(
     socket path as the second, then flushes. Without ``truth_socket`` the
     socket goes into a fresh temporary directory, removed at exit.
     """
-    tmpdir: str | None = None
-    if truth_socket is None:
-        tmpdir = tempfile.mkdtemp(prefix="odohil-fake-")
-        path = Path(tmpdir) / "truth.sock"
-    else:
-        path = Path(truth_socket)
 
-    def ready(device: str, socket_path: str) -> None:
-        out.write(f"{device}\n{socket_path}\n")
-        out.flush()
-
-    try:
+    def serve_nomad(path: Path, ready: OnReady) -> None:
         serve(NomadEngine(config), baud=baud, pacing=pacing, truth_path=path, on_ready=ready)
-    finally:
-        if tmpdir is not None:
-            shutil.rmtree(tmpdir, ignore_errors=True)
+
+    run_announced(serve_nomad, truth_socket=truth_socket, tmp_prefix="odohil-fake-", out=out)

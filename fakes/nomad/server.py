@@ -198,15 +198,42 @@ class PtyServer:
             return
         buf = self._clients[client] + chunk
         while b"\n" in buf:
-            _, _, buf = buf.partition(b"\n")
-            line = self.engine.truth().to_json() + "\n"
+            line, _, buf = buf.partition(b"\n")
+            reply = self._truth_reply(line.decode(errors="replace")) + "\n"
             try:
-                client.sendall(line.encode())
+                client.sendall(reply.encode())
             except OSError:
                 client.close()
                 del self._clients[client]
                 return
         self._clients[client] = buf
+
+    def _truth_reply(self, line: str) -> str:
+        """The JSON line (no newline) answering one truth-socket request line.
+
+        The fake Nomad ignores what the line says; a subclass may act on it.
+        """
+        return self.engine.truth().to_json()
+
+
+def serve_until_signalled(server: PtyServer, on_ready: Callable[[str, str], None]) -> None:
+    """Run ``server`` until SIGINT or SIGTERM; ``on_ready(device, socket)`` once open.
+
+    Shared by every fake robot's pty server (fakes/create2/server.py too).
+    """
+
+    def _handler(signum: int, frame: FrameType | None) -> None:
+        server.stop()
+
+    previous = {sig: signal.signal(sig, _handler) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        server.start()
+        on_ready(server.device, str(server.truth_path))
+        server.run()
+    finally:
+        server.close()
+        for sig, old in previous.items():
+            signal.signal(sig, old)
 
 
 def serve(
@@ -218,17 +245,4 @@ def serve(
     on_ready: Callable[[str, str], None],
 ) -> None:
     """Run a :class:`PtyServer` until SIGINT or SIGTERM; ``on_ready(device, socket)`` once open."""
-    server = PtyServer(engine, baud, pacing, truth_path)
-
-    def _handler(signum: int, frame: FrameType | None) -> None:
-        server.stop()
-
-    previous = {sig: signal.signal(sig, _handler) for sig in (signal.SIGINT, signal.SIGTERM)}
-    try:
-        server.start()
-        on_ready(server.device, str(truth_path))
-        server.run()
-    finally:
-        server.close()
-        for sig, old in previous.items():
-            signal.signal(sig, old)
+    serve_until_signalled(PtyServer(engine, baud, pacing, truth_path), on_ready)

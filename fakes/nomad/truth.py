@@ -9,14 +9,12 @@ UNIX-domain socket: the client writes one line (its content is ignored; send
 from __future__ import annotations
 
 import json
-import socket
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from types import TracebackType
 from typing import Any
 
+from fakes.truth_channel import TruthChannelClient
 from odohil import units
-from odohil.errors import ConnectionFailedError, OdohilTimeoutError
 
 
 @dataclass(frozen=True)
@@ -96,7 +94,7 @@ class TruthSnapshot:
         return cls(**raw)
 
 
-class TruthClient:
+class TruthClient(TruthChannelClient[TruthSnapshot]):
     """Client of the emulator's truth socket; use as a context manager.
 
     Args:
@@ -105,55 +103,8 @@ class TruthClient:
     """
 
     def __init__(self, path: str | Path, timeout_s: float = 5.0) -> None:
-        self.path = str(path)
-        self.timeout_s = timeout_s
-        self._sock: socket.socket | None = None
-        self._buf = b""
-
-    def __enter__(self) -> TruthClient:
-        self.open()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
-
-    def open(self) -> None:
-        """Connect to the socket (ConnectionFailedError if nobody listens)."""
-        sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        sock.settimeout(self.timeout_s)
-        try:
-            sock.connect(self.path)
-        except OSError as exc:
-            sock.close()
-            raise ConnectionFailedError(
-                f"no fake robot truth socket at {self.path}: {exc}"
-            ) from exc
-        self._sock = sock
-
-    def close(self) -> None:
-        """Disconnect."""
-        if self._sock is not None:
-            self._sock.close()
-            self._sock = None
+        super().__init__(path, timeout_s, parse=TruthSnapshot.from_json, robot="fake robot")
 
     def snapshot(self) -> TruthSnapshot:
         """The robot's true pose and log, now."""
-        if self._sock is None:
-            self.open()
-        assert self._sock is not None
-        try:
-            self._sock.sendall(b"truth\n")
-            while b"\n" not in self._buf:
-                chunk = self._sock.recv(65536)
-                if not chunk:
-                    raise ConnectionFailedError("the fake robot closed the truth socket")
-                self._buf += chunk
-        except TimeoutError as exc:
-            raise OdohilTimeoutError(f"truth socket silent for {self.timeout_s} s") from exc
-        line, _, self._buf = self._buf.partition(b"\n")
-        return TruthSnapshot.from_json(line.decode())
+        return self.ask(b"truth\n")

@@ -10,74 +10,65 @@ two readings.
 
 from __future__ import annotations
 
-from odohil.errors import ParameterError
+from odohil.protocol.numbers import (
+    S16_MAX as S16_MAX,
+)
+from odohil.protocol.numbers import (
+    U8_MAX as U8_MAX,
+)
+from odohil.protocol.numbers import (
+    U16_MAX as U16_MAX,
+)
+from odohil.protocol.numbers import (
+    decode_twos,
+    decode_unsigned,
+    encode_twos,
+    encode_unsigned,
+)
 
 S16_MIN = -0x8000
-S16_MAX = 0x7FFF
-U16_MAX = 0xFFFF
-U8_MAX = 0xFF
 COUNTS_MODULUS = 0x10000
 """Encoder counts roll over at this many counts."""
 
 
-def _check(value: int, low: int, high: int, what: str) -> None:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ParameterError(f"{what} needs an int, got {value!r}")
-    if not low <= value <= high:
-        raise ParameterError(f"{what} out of range [{low}, {high}]: {value}")
-
-
-def _need(data: bytes, size: int, what: str) -> None:
-    if len(data) != size:
-        raise ParameterError(f"{what} needs exactly {size} bytes, got {len(data)}")
-
-
 def encode_u8(value: int) -> bytes:
     """One unsigned byte, 0..255."""
-    _check(value, 0, U8_MAX, "u8")
-    return bytes((value,))
+    return encode_unsigned(value, 1, "big", "u8")
 
 
 def encode_s8(value: int) -> bytes:
     """One two's complement byte, -128..127."""
-    _check(value, -0x80, 0x7F, "s8")
-    return bytes((value & 0xFF,))
+    return encode_twos(value, 1, "big", "s8")
 
 
 def encode_s16(value: int) -> bytes:
     """Two's complement 16 bits, high byte first; -32768..32767."""
-    _check(value, S16_MIN, S16_MAX, "s16")
-    return (value & U16_MAX).to_bytes(2, "big")
+    return encode_twos(value, 2, "big", "s16")
 
 
 def encode_u16(value: int) -> bytes:
     """Unsigned 16 bits, high byte first; 0..65535."""
-    _check(value, 0, U16_MAX, "u16")
-    return value.to_bytes(2, "big")
+    return encode_unsigned(value, 2, "big", "u16")
 
 
 def decode_u8(data: bytes) -> int:
     """One unsigned byte."""
-    _need(data, 1, "u8")
-    return data[0]
+    return decode_unsigned(data, 1, "big", "u8")
 
 
 def decode_s8(data: bytes) -> int:
     """One two's complement byte."""
-    _need(data, 1, "s8")
-    return data[0] - 0x100 if data[0] & 0x80 else data[0]
+    return decode_twos(data, 1, "big", "s8")
 
 
 def decode_u16(data: bytes) -> int:
     """Unsigned 16 bits, high byte first."""
-    _need(data, 2, "u16")
-    return int.from_bytes(data, "big")
+    return decode_unsigned(data, 2, "big", "u16")
 
 
 def decode_s16(data: bytes) -> int:
     """Two's complement 16 bits, high byte first."""
-    _need(data, 2, "s16")
-    return int.from_bytes(data, "big", signed=True)
+    return decode_twos(data, 2, "big", "s16")
 
 
 def to_signed16(value: int) -> int:
