@@ -65,6 +65,7 @@ from odohil.science.pose_selection import (  # noqa: E402
 )
 from odohil.science.robot_description import RobotDescription  # noqa: E402
 from odohil.science.simulator import simulate  # noqa: E402
+from odohil.units import wrap_angle  # noqa: E402
 
 MAX_REJECTIONS = 3
 MAX_REMEASURES = 2
@@ -79,7 +80,7 @@ TYPO_KEPT_M = 0.005
 
 def _pose_miss(chosen: np.ndarray, cov: np.ndarray, true: np.ndarray) -> float:
     delta = np.asarray(chosen, dtype=np.float64) - np.asarray(true, dtype=np.float64)
-    delta[2] = math.remainder(float(delta[2]), 2.0 * math.pi)
+    delta[2] = wrap_angle(float(delta[2]))
     return float(delta @ np.linalg.pinv(cov) @ delta)
 
 
