@@ -323,6 +323,38 @@ def execute(
 
     The engine journals ``stopped`` and stops the robot before an error gets here.
     """
+    ran = run_engine(
+        journal, state, robot, source, connection, console, motion, start_check, exclude,
+        system, measurer,
+    )  # fmt: skip
+    if isinstance(ran, Outcome):
+        return ran
+    try:
+        fitted = final_estimate(ran, exclude)
+    except OdohilError as exc:
+        console.print(f"[red]no estimate[/]: {exc}")
+        return Outcome(EXIT_ERROR, None)
+    if not fitted.verdict.trusted:
+        console.print(verdict_line(fitted.verdict), highlight=False)
+    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted)
+
+
+def run_engine(
+    journal: Journal,
+    state: SessionState,
+    robot: Robot,
+    source: PoseSource,
+    connection: Mapping[str, Any],
+    console: Console,
+    motion: MotionSettings | None = None,
+    start_check: StartCheck | None = None,
+    exclude: frozenset[int] = frozenset(),
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+    measurer: str = "the simulated operator",
+) -> SessionState | Outcome:
+    """Run the engine with a progress bar: the session's final state, or the
+    :class:`Outcome` of a run that ended early (its failure mapped to an exit
+    code, the robot's stop and the journal checked on the way out)."""
     folder = journal.folder
     observer = ProgressObserver(console, state, system, measurer)
     engine = SessionEngine(
@@ -365,14 +397,7 @@ def execute(
         observer.progress.stop()
         if (summary := observer.remeasure_summary()) is not None:
             console.print(summary, soft_wrap=True, highlight=False)
-    try:
-        fitted = final_estimate(final, exclude)
-    except OdohilError as exc:
-        console.print(f"[red]no estimate[/]: {exc}")
-        return Outcome(EXIT_ERROR, None)
-    if not fitted.verdict.trusted:
-        console.print(verdict_line(fitted.verdict), highlight=False)
-    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted)
+    return final
 
 
 def interrupt_text(exc: BaseException) -> str:

@@ -21,25 +21,20 @@ from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
     EXIT_ERROR,
     EXIT_OK,
-    EXIT_STOP_UNCONFIRMED,
     EXIT_UNTRUSTED,
-    exit_for_signal,
 )
 from odohil.cli.line import resolve_line
 from odohil.cli.options import bounded
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
-    ProgressObserver,
+    Outcome,
     connect,
-    interrupt_text,
     make_source,
     open_mocap,
     parse_measure,
     refuse_unredundant,
-    report_stop,
-    report_unconfirmed,
+    run_engine,
     session_exit_codes,
-    show_start,
 )
 from odohil.cli.verdict import verdict_line
 from odohil.errors import (
@@ -48,15 +43,13 @@ from odohil.errors import (
     OdohilError,
     ParameterError,
     RobotDescriptionError,
-    StopUnconfirmedError,
 )
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult, predict_path
-from odohil.session.engine import SessionEngine, start_session
+from odohil.session.engine import start_session
 from odohil.session.floor_space import check_floor
 from odohil.session.plan import Plan, check_session_plan
 from odohil.session.preflight import check_trial_file
-from odohil.session.signals import signal_of
 from odohil.session.state import description_of_header, load_session
 from odohil.session.validation import (
     PATH_SYNTAX,
@@ -320,36 +313,10 @@ def _drive_or_reload(
         stack.enter_context(journal)
         robot, truth = stack.enter_context(connect(line, truth_socket))
         source = make_source(kind, description, truth, seed, trial_file, mocap)
-        observer = ProgressObserver(console, state)
-        engine = SessionEngine(
-            journal,
-            state,
-            robot,
-            source,
-            observer=observer,
-            connection=settings,
-            start_check=show_start(console),
-        )
-        observer.progress.start()
-        try:
-            final = engine.run()
-        except StopUnconfirmedError as exc:
-            observer.progress.stop()
-            report_unconfirmed(console, exc, engine.stop_outcome, folder)
-            raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
-        except KeyboardInterrupt as exc:
-            observer.progress.stop()
-            console.print(f"[yellow]interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
-            report_stop(console, engine.stop_outcome, folder)
-            raise typer.Exit(exit_for_signal(signal_of(exc))) from None
-        except OdohilError as exc:
-            observer.progress.stop()
-            console.print(f"[red]error[/]: {exc}", soft_wrap=True)
-            report_stop(console, engine.stop_outcome, folder)
-            raise typer.Exit(EXIT_ERROR) from None
-        finally:
-            observer.progress.stop()
-    return trials_of_session(final, source=str(folder))
+        ran = run_engine(journal, state, robot, source, settings, console)
+        if isinstance(ran, Outcome):
+            raise typer.Exit(ran.exit_code)
+    return trials_of_session(ran, source=str(folder))
 
 
 def _json(
