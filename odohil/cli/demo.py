@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import tempfile
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -21,6 +21,7 @@ from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_line
 from odohil.cli.robot_option import robot_protocol
 from odohil.cli.run import (
+    Outcome,
     SnapshotTruth,
     connect,
     execute,
@@ -29,10 +30,13 @@ from odohil.cli.run import (
     session_input,
 )
 from odohil.science.parameters import SI_UNITS, ErrorParameters
-from odohil.science.robot_description import parse_robot_description
+from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.engine import start_session
+from odohil.session.journal import Journal
 from odohil.session.plan import parse_plan
+from odohil.session.robot import Robot
 from odohil.session.sources import FakeTruthSource, TapeSource
+from odohil.session.state import SessionState
 
 DEMO_TRUTH = ErrorParameters.from_paper_units(-1.0, -0.05, 0.3, 9e-4)
 """The fake robot's true parameters: the Nomad 150's (-0.202 deg/m, -0.02,
@@ -131,18 +135,46 @@ def demo(
                     )
                 line = resolve_line(description, emulator.device, 38400)
                 with journal, connect(line, emulator.truth_socket) as (robot, reader):
-                    tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
-                    source = TapeSource(tape, description)
-                    outcome = execute(
-                        journal,
-                        state,
-                        robot,
-                        source,
-                        settings,
-                        console,
-                        system=system,
-                        measurer="the simulated operator",
+                    outcome = _calibrate(
+                        journal, state, robot, reader, description, seed, settings, console, system
                     )
+    _finish(outcome, truth, json_out, console, system)
+
+
+def _calibrate(
+    journal: Journal,
+    state: SessionState,
+    robot: Robot,
+    reader: Any,
+    description: RobotDescription,
+    seed: int,
+    settings: dict[str, Any],
+    console: Console,
+    system: units.UnitSystem,
+) -> Outcome:
+    """The session, measured by the fake's truth as a tape with ``seed``'s noise."""
+    tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
+    source = TapeSource(tape, description)
+    return execute(
+        journal,
+        state,
+        robot,
+        source,
+        settings,
+        console,
+        system=system,
+        measurer="the simulated operator",
+    )
+
+
+def _finish(
+    outcome: Outcome,
+    truth: dict[str, float],
+    json_out: bool,
+    console: Console,
+    system: units.UnitSystem,
+) -> None:
+    """Print (or --json) the estimate beside the fake's true values, SI in JSON."""
     extra = {
         "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
     }
@@ -198,22 +230,10 @@ def _demo_create2(
                 folder, toml, parse_plan(CREATE2_PLAN), measure="fake", settings=settings
             )
         with journal, connect(line, None) as (robot, reader):
-            tape = FakeTruthSource(SnapshotTruth(reader), description, seed=seed)
-            source = TapeSource(tape, description)
-            outcome = execute(
-                journal,
-                state,
-                robot,
-                source,
-                settings,
-                console,
-                system=system,
-                measurer="the simulated operator",
+            outcome = _calibrate(
+                journal, state, robot, reader, description, seed, settings, console, system
             )
-    extra = {
-        "truth": {name: {"value": value, "unit": SI_UNITS[name]} for name, value in truth.items()}
-    }
-    finish(outcome, json_out, console, extra=extra, truth=truth, system=system)
+    _finish(outcome, truth, json_out, console, system)
 
 
 def register(app: typer.Typer) -> None:
