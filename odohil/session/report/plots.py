@@ -196,6 +196,32 @@ def ellipse_axes(cov: FloatArray, radius2: float = CHI2_95_2D) -> tuple[float, f
     )
 
 
+def _region_and_mean(
+    ax: Axes, mean_m: FloatArray, cov_m2: FloatArray, region: str, mean: str
+) -> None:
+    """A 95 % ellipse (``cov_m2``, m^2) and its mean (``mean_m``, m), drawn in mm."""
+    width, height, angle = ellipse_axes(1e6 * cov_m2)
+    centre = (1e3 * float(mean_m[0]), 1e3 * float(mean_m[1]))
+    ax.add_patch(
+        Ellipse(
+            centre, width, height, angle=angle, facecolor=RED, alpha=0.15,
+            edgecolor=RED, linewidth=1.2, label=region,
+        )
+    )  # fmt: skip
+    ax.plot(*centre, marker="+", markersize=11, markeredgewidth=2, color=DARK,
+            linestyle="none", label=mean)  # fmt: skip
+
+
+def _finish_end_points(fig: Figure, ax: Axes, title: str, count: int) -> None:
+    """Equal mm axes in the start frame, the title with its trial count, the legend below."""
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.autoscale_view()
+    ax.set_title(f"{title} ({units.plural(count, 'trial')})")
+    ax.set_xlabel("x of the end point, start frame (mm)")
+    ax.set_ylabel("y of the end point, start frame (mm)")
+    _legend_outside(fig, ax, below=True)
+
+
 def end_points_figure(design: DesignReport) -> Figure:
     """One design's trial end points (mm, start frame) with the model's mean and
     95 % ellipse at the estimate (pose spread plus measurement error)."""
@@ -203,26 +229,12 @@ def end_points_figure(design: DesignReport) -> Figure:
     with mpl.rc_context(_RC):
         ax = fig.add_subplot()
         if design.model_mean is not None and design.model_cov is not None:
-            cov_mm2 = 1e6 * (design.model_cov[:2, :2] + design.measurement_cov[:2, :2])
-            width, height, angle = ellipse_axes(cov_mm2)
-            centre = (1e3 * float(design.model_mean[0]), 1e3 * float(design.model_mean[1]))
-            ax.add_patch(
-                Ellipse(
-                    centre, width, height, angle=angle, facecolor=RED, alpha=0.15,
-                    edgecolor=RED, linewidth=1.2, label="model's 95 % region",
-                )
-            )  # fmt: skip
-            ax.plot(*centre, marker="+", markersize=11, markeredgewidth=2, color=DARK,
-                    linestyle="none", label="model mean")  # fmt: skip
+            cov = design.model_cov[:2, :2] + design.measurement_cov[:2, :2]
+            _region_and_mean(ax, design.model_mean, cov, "model's 95 % region", "model mean")
         poses = np.array([t.pose for t in design.trials], dtype=np.float64).reshape(-1, 3)
         _mark_trials(ax, design.trials, list(1e3 * poses[:, 0]), 1e3 * poses[:, 1])
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.autoscale_view()
-        count = len(design.trials)
-        ax.set_title(f"End points, {design.design.label()} ({count} trial{'s' * (count != 1)})")
-        ax.set_xlabel("x of the end point, start frame (mm)")
-        ax.set_ylabel("y of the end point, start frame (mm)")
-        _legend_outside(fig, ax, below=True)
+        title = f"End points, {design.design.label()}"
+        _finish_end_points(fig, ax, title, len(design.trials))
     return fig
 
 
@@ -234,26 +246,11 @@ def validation_figure(data: ValidationPlot) -> Figure:
     ellipse = data.ellipse
     with mpl.rc_context(_RC):
         ax = fig.add_subplot()
-        width, height, angle = ellipse_axes(1e6 * ellipse.cov)
-        centre = (1e3 * float(ellipse.mean[0]), 1e3 * float(ellipse.mean[1]))
-        ax.add_patch(
-            Ellipse(
-                centre, width, height, angle=angle, facecolor=RED, alpha=0.15,
-                edgecolor=RED, linewidth=1.2, label="predicted 95 % region",
-            )
-        )  # fmt: skip
-        ax.plot(*centre, marker="+", markersize=11, markeredgewidth=2, color=DARK,
-                linestyle="none", label="predicted mean")  # fmt: skip
+        _region_and_mean(ax, ellipse.mean, ellipse.cov, "predicted 95 % region", "predicted mean")
         points = 1e3 * ellipse.points
         ax.plot(points[:, 0], points[:, 1], marker="o", linestyle="none", color=DARK,
                 markersize=5, label="validation trials")  # fmt: skip
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.autoscale_view()
-        count = len(data.numbers)
-        ax.set_title(f"Validation, {data.label} ({count} trial{'s' * (count != 1)})")
-        ax.set_xlabel("x of the end point, start frame (mm)")
-        ax.set_ylabel("y of the end point, start frame (mm)")
-        _legend_outside(fig, ax, below=True)
+        _finish_end_points(fig, ax, f"Validation, {data.label}", len(data.numbers))
     return fig
 
 
