@@ -36,6 +36,7 @@ from odohil.science.estimators.robust import (
     robust_fit,
     weighted_groups,
 )
+from odohil.science.estimators.scores import sandwich_ratio, trial_scores
 from odohil.science.estimators.verdict import judge
 from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
 from odohil.science.paths import FloatArray
@@ -106,10 +107,18 @@ def _dof(name: str, value: float, stderr: float, base: float) -> float:
     return min(base, max(2.0 * (value / stderr) ** 2, 1.0))
 
 
-def _honest_estimates(groups: Sequence[TrialGroup], fit: JointFit) -> tuple[ParameterEstimate, ...]:
-    """The intervals of a maximum-likelihood fit: profile likelihood for the
-    variance rates, Satterthwaite t for E_R and E_T
+def _honest_estimates(
+    groups: Sequence[TrialGroup],
+    fit: JointFit,
+    observations: Sequence[Observation],
+    weights: FloatArray,
+) -> tuple[ParameterEstimate, ...]:
+    """The intervals of a maximum-likelihood fit of ``observations`` with
+    per-trial ``weights`` (``groups`` their weighted groups): profile
+    likelihood for the variance rates, widened by their sandwich ratio when it
+    exceeds 1, Satterthwaite t for E_R and E_T
     (odohil/science/estimators/intervals.py)."""
+    ratio = sandwich_ratio(*trial_scores(observations, fit.point.phi, weights))
     cov = np.array(fit.covariance, dtype=np.float64)
     diag = np.diag(cov)
     stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
@@ -123,7 +132,7 @@ def _honest_estimates(groups: Sequence[TrialGroup], fit: JointFit) -> tuple[Para
             dof = satterthwaite_dof(groups, fit, index)
             interval = t_interval(value, se, dof, "Student t, Satterthwaite degrees of freedom")
         else:
-            interval = profile_interval(groups, fit, index)
+            interval = profile_interval(groups, fit, index, widen=float(ratio[index]))
         out.append(
             ParameterEstimate(
                 name,
@@ -319,11 +328,12 @@ def estimate(
             notes,
             criteria,
             converged=ml.converged,
-            intervals=_honest_estimates(groups, ml),
+            intervals=_honest_estimates(groups, ml, observations, np.ones(len(observations))),
             **common,  # type: ignore[arg-type]
         )
     rob = robust_fit(observations, groups, ml)
     named = [int(i) for i in np.flatnonzero(rob.clean_probability < OUTLIER_WEIGHT)]
+    weights = rob.clean_probability + (1.0 - rob.clean_probability) / INFLATION
     gaussian, _ = _estimates(ml.params, ml.covariance, len(observations))
     diagnostics = tuple(
         TrialDiagnostic(
@@ -359,12 +369,10 @@ def estimate(
         excluded=excluded,
         ambiguous=ambiguous,
         intervals=_honest_estimates(
-            weighted_groups(
-                observations,
-                rob.clean_probability + (1.0 - rob.clean_probability) / INFLATION,
-                {g.design: g.reference for g in groups},
-            ),
+            weighted_groups(observations, weights, {g.design: g.reference for g in groups}),
             rob.fit,
+            observations,
+            weights,
         ),
         turns_exact=turns_exact,
     )

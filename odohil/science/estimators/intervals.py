@@ -19,6 +19,11 @@ which the truth counts as "confidently wrong" (bench/operator_faults.py).
   derivatives taken at the estimate (the moments, hence the likelihood, are
   exact at every point). A bound the deviance never reaches within the
   estimator's range of log K is open: 0 below, inf above.
+  When the trials spread more than the Gaussian likelihood says (heavy-tailed
+  tape errors), the threshold is multiplied by the sandwich ratio
+  (J^-1 K J^-1)_kk / (J^-1)_kk of odohil/science/estimators/scores.py, never
+  by less than 1: under misspecification the profile deviance is that ratio
+  times a chi^2(1) (Royall 1986), so the interval widens with it.
 - **E_R and E_T: Student-t.** estimate +- t quantile x SE, with the
   Satterthwaite degrees of freedom of the standard error itself:
   nu = 2 SE^4 / Var(SE^2), Var(SE^2) by the delta method through the two
@@ -241,10 +246,18 @@ class _Profile:
 
 
 def profile_interval(
-    groups: Sequence[TrialGroup], fit: JointFit, index: int, cox_reid: bool = True
+    groups: Sequence[TrialGroup],
+    fit: JointFit,
+    index: int,
+    cox_reid: bool = True,
+    widen: float = 1.0,
 ) -> Interval:
     """The profile-likelihood interval of K_theta (index 2) or K_rho (3) at
-    both levels (see the module docstring), SI."""
+    both levels (see the module docstring), SI. ``widen`` (at least 1)
+    multiplies the deviance threshold: the sandwich ratio of
+    odohil/science/estimators/scores.py when the data spread more than the
+    model says."""
+    widen = max(widen, 1.0) if math.isfinite(widen) else 1.0
     profile = _Profile(groups, fit, index, cox_reid)
     info = fit.value.information
     se_psi = math.inf
@@ -256,11 +269,15 @@ def profile_interval(
     if not math.isfinite(se_psi) or se_psi == 0:
         se_psi = 1.0
     ends: list[tuple[float, float]] = []
-    for q in (float(stats.norm.isf((1 - LEVEL_95) / 2)), FOUR_SIGMA):
+    for level_q in (float(stats.norm.isf((1 - LEVEL_95) / 2)), FOUR_SIGMA):
+        q = level_q * math.sqrt(widen)
         low = profile.bound(q, -1.0, q * se_psi)
         high = profile.bound(q, 1.0, q * se_psi)
         ends.append((_exp(low), _exp(high)))
-    return Interval(ends[0], ends[1], "profile likelihood (Cox-Reid adjusted)")
+    rule = "profile likelihood (Cox-Reid adjusted)"
+    if widen > 1.0:
+        rule = f"profile likelihood (Cox-Reid adjusted, widened by the sandwich ratio {widen:.2f})"
+    return Interval(ends[0], ends[1], rule)
 
 
 def _exp(psi: float) -> float:

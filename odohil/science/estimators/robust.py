@@ -32,9 +32,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from odohil.science.estimators.checks import mahalanobis2
-from odohil.science.estimators.joint import JointFit, covariance_si, designs_of, refine
-from odohil.science.estimators.likelihood import evaluate, model_point, phi_jacobian
-from odohil.science.estimators.observations import Observation, TrialGroup, align_heading
+from odohil.science.estimators.joint import JointFit, refine
+from odohil.science.estimators.likelihood import phi_jacobian
+from odohil.science.estimators.observations import Observation, TrialGroup
+from odohil.science.estimators.scores import trial_scores
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design, FloatArray
@@ -188,35 +189,12 @@ def influence(observations: Sequence[Observation], fit: JointFit, r: FloatArray)
     out = np.zeros((n, 4))
     if not np.all(np.isfinite(fit.covariance)) or n == 0:
         return out
-    designs = designs_of([TrialGroup(o.design, 0.0, n=1) for o in observations])
-    point = model_point(fit.point.phi, designs, derivatives=True)
-    assert point.d_means is not None
-    assert point.d_covs is not None
     weights = r + (1.0 - r) / INFLATION
-    scores = np.zeros((n, 4))
-    for i, obs in enumerate(observations):
-        mean = align_heading(point.means[obs.design], float(obs.pose_change[2]))
-        cov = point.covs[obs.design] + obs.measurement_cov
-        inv = np.linalg.inv(0.5 * (cov + cov.T))
-        resid = obs.pose_change - mean
-        d_mu = point.d_means[obs.design]
-        d_cov = point.d_covs[obs.design]
-        w = np.einsum("ij,ajk->aik", inv, d_cov)
-        inv_rr = weights[i] * inv @ np.outer(resid, resid)
-        scores[i] = -weights[i] * d_mu @ inv @ resid + 0.5 * (
-            np.einsum("aii->a", w) - np.einsum("aij,ji->a", w, inv_rr)
-        )
-    value = evaluate(_single_groups(observations, weights), point)  # weighted information
-    assert value.information is not None
-    cov_phi = np.linalg.pinv(value.information)
+    scores, information = trial_scores(observations, fit.point.phi, weights)
+    cov_phi = np.linalg.pinv(information)
     jac = phi_jacobian(fit.params)
     shift = (scores @ cov_phi.T) @ jac.T
-    stderr = np.sqrt(np.clip(np.diag(covariance_si(point, value)), 0.0, None))
+    stderr = np.sqrt(np.clip(np.diag(jac @ cov_phi @ jac.T), 0.0, None))
     with np.errstate(divide="ignore", invalid="ignore"):
         out = np.where(stderr > 0, shift / stderr, 0.0)
     return out
-
-
-def _single_groups(observations: Sequence[Observation], weights: FloatArray) -> list[TrialGroup]:
-    references = {o.design: float(o.pose_change[2]) for o in observations}
-    return weighted_groups(observations, weights, references)
