@@ -23,8 +23,10 @@ runs them (odohil/session/engine.py):
 - the final estimate by the default method, with its verdict.
 
 Per configuration: the verdicts, the **confidently-wrong rate** (verdict
-trusted, yet some parameter more than 4 of its reported standard errors from
-the truth), the 95 % coverage per parameter, and the trials re-measured, lost,
+trusted, yet some parameter's truth outside the 4-sigma-equivalent interval
+reported beside it, ``ci_4sigma``; counted beside it, the literal rule of more
+than 4 printed Wald standard errors, and that rule on the log scale for
+K_theta and K_rho), the 95 % coverage per parameter, and the trials re-measured, lost,
 ambiguous. Clean configurations (no typos) give the **false-alarm rate**
 (verdict not trusted on clean data). ``--coverage-experiments`` adds the
 coverage and K_theta bias of the paper's designs at each ``--coverage-n``.
