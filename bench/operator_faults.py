@@ -6,8 +6,10 @@ Usage: ``python bench/operator_faults.py [--experiments 200] [--workers 2]
 Simulated experiments through the full floor-marks path, the way a session
 runs them (odohil/session/engine.py):
 
-- the true pose change of each trial from the discrete model (Nomad 150
-  values), its floor-mark distances from the forward model plus tape noise
+- the trials in the order and direction a session drives them (one-way
+  trials alternate forwards and backwards, odohil/science/paths.py's
+  floor_choreography); the true pose change of each from the discrete model
+  (Nomad 150 values), its floor-mark distances from the forward model plus tape noise
   (Gaussian, or Student-t with 3 degrees of freedom scaled to the same SD),
   each distance mistyped at a given rate (+-1, +-2, +-5 or +-10 cm, or two
   adjacent digits of the millimetre reading transposed);
@@ -58,7 +60,7 @@ from odohil.science.estimators import IncrementalEstimator, Observation, estimat
 from odohil.science.fisher import default_description  # noqa: E402
 from odohil.science.floor_marks import MarkDistances, marks_from_pose  # noqa: E402
 from odohil.science.parameters import NOMAD150, PARAMETER_NAMES, ErrorParameters  # noqa: E402
-from odohil.science.paths import Design  # noqa: E402
+from odohil.science.paths import Design, floor_choreography  # noqa: E402
 from odohil.science.pose_selection import (  # noqa: E402
     ParameterBelief,
     predictive_pose,
@@ -224,13 +226,18 @@ def run_experiment(
     operator = Operator(config, description.sigma_m, rng)
     outcome = Outcome(config.name, n_per_design)
     designs = [Design(k, l_m) for k, l_m in config.designs]
-    poses = {d: simulate(d.path(), truth, n_per_design, seed=rng).pose_change for d in designs}
+    choreography = floor_choreography([(d, n_per_design) for d in designs])
+    driven = [choreography.trial(t)[0] for t in range(1, choreography.n_trials + 1)]
+    poses = {
+        d: list(simulate(d.path(), truth, driven.count(d), seed=rng).pose_change)
+        for d in dict.fromkeys(driven)
+    }
     estimator = IncrementalEstimator()
     observations: list[Observation] = []
     trial = 0
-    for design in designs:
+    for design in driven:  # as a session drives them: one-way trials alternate direction
         odometry = design.path().encoder_end_pose()
-        for pose in poses[design]:
+        for pose in (poses[design].pop(0),):
             trial += 1
             exact = marks_from_pose(description, pose).as_array()
             readings = [operator.read(float(d)) for d in exact]

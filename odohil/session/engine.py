@@ -583,7 +583,7 @@ class SessionEngine:
         opened = self.state.open_trial
         assert opened is not None
         assert opened.encoder_end_pose is not None
-        design = self.plan.items[opened.design_index].design
+        design = self.plan.design_of(opened.trial)  # as driven: one-way trials alternate
         self._predicted = predictive_pose(design, self._belief(), opened.encoder_end_pose)
         try:
             ctx = self._context(opened, self._predicted)
