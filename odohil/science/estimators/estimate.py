@@ -108,17 +108,12 @@ def _dof(name: str, value: float, stderr: float, base: float) -> float:
 
 
 def _honest_estimates(
-    groups: Sequence[TrialGroup],
-    fit: JointFit,
-    observations: Sequence[Observation],
-    weights: FloatArray,
+    groups: Sequence[TrialGroup], fit: JointFit, ratio: FloatArray
 ) -> tuple[ParameterEstimate, ...]:
-    """The intervals of a maximum-likelihood fit of ``observations`` with
-    per-trial ``weights`` (``groups`` their weighted groups): profile
-    likelihood for the variance rates, widened by their sandwich ratio when it
-    exceeds 1, Satterthwaite t for E_R and E_T
-    (odohil/science/estimators/intervals.py)."""
-    ratio = sandwich_ratio(*trial_scores(observations, fit.point.phi, weights))
+    """The intervals of a maximum-likelihood fit of ``groups``: profile
+    likelihood for the variance rates, widened by their sandwich ratio
+    (``ratio``, odohil/science/estimators/scores.py) when it exceeds 1,
+    Satterthwaite t for E_R and E_T (odohil/science/estimators/intervals.py)."""
     cov = np.array(fit.covariance, dtype=np.float64)
     diag = np.diag(cov)
     stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
@@ -319,6 +314,8 @@ def estimate(
     state = f"converged in {ml.iterations} steps" if ml.converged else "DID NOT CONVERGE"
     if method == "joint":
         notes = (f"joint maximum likelihood (Cox-Reid adjusted), paper-method start: {state}",)
+        unweighted = np.ones(len(observations))
+        ratio = sandwich_ratio(*trial_scores(observations, ml.point.phi, unweighted))
         return build_result(
             "joint",
             observations,
@@ -328,7 +325,7 @@ def estimate(
             notes,
             criteria,
             converged=ml.converged,
-            intervals=_honest_estimates(groups, ml, observations, np.ones(len(observations))),
+            intervals=_honest_estimates(groups, ml, ratio),
             **common,  # type: ignore[arg-type]
         )
     rob = robust_fit(observations, groups, ml)
@@ -371,8 +368,7 @@ def estimate(
         intervals=_honest_estimates(
             weighted_groups(observations, weights, {g.design: g.reference for g in groups}),
             rob.fit,
-            observations,
-            weights,
+            sandwich_ratio(rob.scores, rob.information),
         ),
         turns_exact=turns_exact,
     )

@@ -64,6 +64,9 @@ class RobustFit:
             clean component, r_i.
         influence: (n, 4) per trial, the change of each parameter (SI order
             E_R, E_T, K_theta, K_rho) when it is left out, in standard errors.
+        scores: (n, 4) per trial, its weighted score in phi at the fit
+            (odohil/science/estimators/scores.py).
+        information: (4, 4) the weighted expected information in phi at the fit.
         em_iterations: EM iterations taken.
         converged: EM and the last M-step both converged.
     """
@@ -71,6 +74,8 @@ class RobustFit:
     fit: JointFit
     clean_probability: FloatArray
     influence: FloatArray
+    scores: FloatArray
+    information: FloatArray
     em_iterations: int
     converged: bool
 
@@ -178,19 +183,25 @@ def _em(
         if moved < _EM_TOLERANCE and new.converged:
             converged = True
             break
+    weights = r + (1.0 - r) / INFLATION
+    scores, information = trial_scores(observations, fit.point.phi, weights)
     return RobustFit(
-        fit, r, influence(observations, fit, r), iterations, converged and fit.converged
+        fit,
+        r,
+        influence(scores, information, fit),
+        scores,
+        information,
+        iterations,
+        converged and fit.converged,
     )
 
 
-def influence(observations: Sequence[Observation], fit: JointFit, r: FloatArray) -> FloatArray:
-    """Per trial, I^-1 g_i in standard errors (see the module docstring)."""
-    n = len(observations)
-    out = np.zeros((n, 4))
-    if not np.all(np.isfinite(fit.covariance)) or n == 0:
+def influence(scores: FloatArray, information: FloatArray, fit: JointFit) -> FloatArray:
+    """Per trial, I^-1 g_i in standard errors (see the module docstring), from
+    the trials' scores and the information at ``fit``."""
+    out = np.zeros(scores.shape)
+    if not np.all(np.isfinite(fit.covariance)) or scores.shape[0] == 0:
         return out
-    weights = r + (1.0 - r) / INFLATION
-    scores, information = trial_scores(observations, fit.point.phi, weights)
     cov_phi = np.linalg.pinv(information)
     jac = phi_jacobian(fit.params)
     shift = (scores @ cov_phi.T) @ jac.T
