@@ -55,15 +55,24 @@ class Leg:
             raise ParameterError(f"a leg needs a finite non-zero length, got {self.length_m!r} m")
 
 
+TurnKind = Literal["spin", "arc"]
+TURN_KINDS: tuple[TurnKind, ...] = ("spin", "arc")
+
+
 @dataclass(frozen=True)
 class Turn:
     """An in-place turn (no distance driven), counter-clockwise positive.
 
     Attributes:
         angle_rad: encoder heading change in radians.
+        kind: ``"spin"`` for a turn in place (the wheels opposite), ``"arc"``
+            for the heading change of a curve cut into short legs and turns;
+            a differential drive's turn-scale error differs between the two
+            (docs/recording.md), an exact-turn model ignores it.
     """
 
     angle_rad: float
+    kind: TurnKind = "spin"
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.angle_rad):
