@@ -2,30 +2,42 @@
 
 A trial of a recorded log starts and ends with the robot standing still, so
 that its start and end poses can be taken from the ground truth averaged over
-the rest (motion capture jitters, a still robot's mean does not). "Still"
-needs both the odometry and the ground truth (:func:`still_mask`):
+the rest (motion capture jitters, a still robot's mean does not).
 
-- over :data:`REST_WINDOW_S` before *and* after a sample, neither moves more
-  than :data:`REST_SPEED_M_PER_S` x the window in position nor
-  :data:`REST_TURN_RAD_PER_S` x the window in heading. Looking both ways
-  keeps a rest from reaching into the motion that follows it (a rest judged
-  only on the past would end after the robot had already moved).
+Cutting at rest (a log without a given cut) needs both the odometry and the
+ground truth still (:func:`still_mask`): the mean pose over
+:data:`REST_WINDOW_S` before a sample and the mean over the same time after
+it differ by less than :data:`REST_SPEED_M_PER_S` (position) and
+:data:`REST_TURN_RAD_PER_S` (heading) times the time between the two
+windows' centres. Means, so that jitter averages out; both ways, so that a
+rest neither reaches into the motion that follows it nor begins before the
+motion before it has ended. A rest that separates two trials lasts at least
+:data:`MIN_REST_S`.
+
+When the cut is given (a ``trial`` column, one file per trial) only the
+rests at the trial's two ends are needed (:func:`edge_rests`): the samples
+from the first (back from the last) whose *odometry* stays within
+:data:`EDGE_MOVE_M` and :data:`EDGE_TURN_RAD` of it, for at least
+:data:`MIN_EDGE_REST_S`. The odometry alone decides there because encoders
+report exact zeros at rest, while the optiodom ground truth jitters up to
+14 mrad peak to peak in the last half second of some runs.
 
 The thresholds, in SI, and why (``ImportOptions`` in odohil/session/logs/
-lets a user change them):
+lets a user change the durations):
 
-- 0.006 m/s and 0.04 rad/s over 0.25 s (1.5 mm and 10 mrad): an encoder
-  twitch of one count (0.09 mm on the optiodom robot, 0.44 mm on a Create 2)
-  and motion-capture jitter (0.06 mm and 0.7 mrad at rest in the optiodom
-  data; a few tenths of a mm and 2-3 mrad on a poorer system) stay inside
-  them; the slowest motion of the data set (0.047 m/s straight, 0.31 rad/s in
-  place) is 8 times faster.
-- A rest between two trials must last :data:`MIN_REST_S` = 1.0 s, so that a
-  pause at the corner of a square (0.1-0.3 s in the optiodom data) does not
-  cut it; docs/recording.md asks for 2 s. At the start and end of a trial cut
-  by a ``trial`` column (or one file per trial) :data:`MIN_EDGE_REST_S` =
-  0.2 s suffices (4 samples at 20 Hz): the cut is known, only the pose needs
-  averaging.
+- 0.006 m/s and 0.08 rad/s over 0.25 s windows (1.5 mm and 20 mrad between
+  the window means): an encoder twitch of one count (0.09 mm on the optiodom
+  robot, 0.44 mm on a Create 2) and motion-capture jitter (0.06 mm and
+  0.7 mrad at rest in most optiodom samples, 7 mrad in its worst; a few tenths
+  of a mm elsewhere) stay well inside them; the slowest motion of the data
+  set (0.047 m/s straight, 0.31 rad/s in place) is 4 to 8 times faster.
+- :data:`MIN_REST_S` = 1.0 s between trials, so that a pause at the corner of
+  a square (0.1-0.3 s in the optiodom data) does not cut it;
+  docs/recording.md asks for 2 s.
+- :data:`MIN_EDGE_REST_S` = 0.2 s at the ends of a given cut (4 samples at
+  20 Hz; the optiodom runs rest 0.2-1.3 s at their ends): the cut is known,
+  only the pose needs averaging. 1.5 mm and 10 mrad for the odometry there:
+  a few counts of twitch.
 
 The pose change (:func:`measured_change`) is the end rest's mean pose in the
 frame of the start rest's mean pose, x and y in metres, its heading change
@@ -96,11 +108,16 @@ def still_mask(
     ahead = np.searchsorted(t, t + window_s, side="right")
     before = (sums[index + 1] - sums[back]) / (index + 1 - back)[:, None]
     after = (sums[ahead] - sums[index]) / (ahead - index)[:, None]
+    times = np.concatenate([[0.0], np.cumsum(t - t[0])])
+    # the time between the two windows' centres (shorter at the recording's ends)
+    span = (times[ahead] - times[index]) / (ahead - index) - (
+        times[index + 1] - times[back]
+    ) / (index + 1 - back)
     gaps = (missing[index + 1] - missing[back]) + (missing[ahead] - missing[index])
     d_xy = np.hypot(after[:, 0] - before[:, 0], after[:, 1] - before[:, 1])
     d_theta = np.abs(after[:, 2] - before[:, 2])
     result: BoolArray = (
-        (gaps == 0) & (d_xy <= speed_m_per_s * window_s) & (d_theta <= turn_rad_per_s * window_s)
+        (gaps == 0) & (d_xy <= speed_m_per_s * span) & (d_theta <= turn_rad_per_s * span)
     )
     return result
 

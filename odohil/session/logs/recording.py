@@ -104,9 +104,11 @@ class Recording:
             odometry's frame; headings may be wrapped.
         truth: (n, 3) ground-truth poses in any world frame; NaN where missing.
         where: (n,) the line (or message) number of each sample.
-        unit: what :attr:`where` counts (``line`` or ``message``).
+        unit: what :attr:`where` counts (``line``, ``odometry message``).
         trial: (n,) the given trial label of each sample ("" between trials),
             or None to cut at rest.
+        odometry_field, truth_field: how messages name the odometry and the
+            ground truth (the format's own names).
     """
 
     source: str
@@ -116,6 +118,8 @@ class Recording:
     where: IntArray
     unit: str = "line"
     trial: tuple[str, ...] | None = None
+    odometry_field: str = "odo_x_m/odo_y_m/odo_theta_rad"
+    truth_field: str = "true_x_m/true_y_m/true_theta_rad"
 
     def at(self, index: int) -> str:
         """``SOURCE line N`` of sample ``index``."""
@@ -148,7 +152,7 @@ def _truth_in(rec: Recording, first: int, last: int, what: str) -> FloatArray:
     poses = poses[np.all(np.isfinite(poses), axis=1)]
     if len(poses) == 0:
         raise RecordingError(
-            f"{rec.at(first)}-{int(rec.where[last])}: true_x_m/true_y_m/true_theta_rad: "
+            f"{rec.at(first)}-{int(rec.where[last])}: {rec.truth_field}: "
             f"no ground truth during the rest at the {what} of a trial"
         )
     return poses
@@ -157,7 +161,7 @@ def _truth_in(rec: Recording, first: int, last: int, what: str) -> FloatArray:
 def _check_gaps(rec: Recording, first: int, last: int, max_gap_s: float) -> None:
     present = np.flatnonzero(np.all(np.isfinite(rec.truth[first : last + 1]), axis=1)) + first
     if len(present) == 0:
-        raise RecordingError(f"{rec.at(first)}: true_x_m: no ground truth in the trial")
+        raise RecordingError(f"{rec.at(first)}: {rec.truth_field}: no ground truth in the trial")
     times = rec.t_s[present]
     edges = np.concatenate([[rec.t_s[first]], times, [rec.t_s[last]]])
     gaps = np.diff(edges)
@@ -166,7 +170,7 @@ def _check_gaps(rec: Recording, first: int, last: int, max_gap_s: float) -> None
         before = first if worst == 0 else int(present[worst - 1])
         after = last if worst == len(present) else int(present[worst])
         raise RecordingError(
-            f"{rec.at(before)}: true_x_m/true_y_m/true_theta_rad: a gap in the ground truth "
+            f"{rec.at(before)}: {rec.truth_field}: a gap in the ground truth "
             f"of {gaps[worst]:.3g} s (to {rec.unit} {int(rec.where[after])}); "
             f"at most {max_gap_s:g} s allowed (--max-truth-gap)"
         )
@@ -187,7 +191,7 @@ def _trial(
             rec.odometry[first : last + 1], options.bounds, name=f"{rec.source} trial {number}"
         )
     except (MeasurementError, ParameterError) as exc:
-        raise RecordingError(f"{rec.at(first)}: odometry: {exc}") from None
+        raise RecordingError(f"{rec.at(first)}: {rec.odometry_field}: {exc}") from None
     start_poses = _truth_in(rec, start[0], start[1], "start")
     end_poses = _truth_in(rec, end[0], end[1], "end")
     change, cov = measured_change(
@@ -253,7 +257,7 @@ def trials_of(
             for rest, what, index in ((start, "start", first), (end, "end", last)):
                 if rest is None:
                     raise RecordingError(
-                        f"{rec.at(index)}: odo_x_m/odo_y_m/odo_theta_rad: trial {label!r} is "
+                        f"{rec.at(index)}: {rec.odometry_field}: trial {label!r} is "
                         f"not at rest at its {what} (the odometry must stay still for "
                         f"{options.min_edge_rest_s:g} s; --min-edge-rest)"
                     )
@@ -274,7 +278,8 @@ def trials_of(
     windows = rest_windows(rec.t_s, still, options.min_rest_s)
     if not windows:
         raise RecordingError(
-            f"{rec.source}: odo_x_m/true_x_m: the robot is never at rest (odometry and ground "
+            f"{rec.source}: {rec.odometry_field}, {rec.truth_field}: the robot is never at rest "
+            f"(odometry and ground "
             f"truth both still for {options.min_rest_s:g} s; --min-rest), so no trial can be cut"
         )
     for start, end in itertools.pairwise(windows):
@@ -286,3 +291,58 @@ def trials_of(
             "only once (a trial is the motion between two rests)"
         )
     return trials
+
+
+def associate(
+    source: str,
+    odometry_t_s: FloatArray,
+    odometry: FloatArray,
+    odometry_where: IntArray,
+    truth_t_s: FloatArray,
+    truth: FloatArray,
+    options: ImportOptions,
+    *,
+    unit: str,
+    odometry_field: str,
+    truth_field: str,
+) -> Recording:
+    """Odometry and ground truth on two clocks made one recording, the way
+    the evo tool associates trajectories: each odometry stamp takes the
+    ground-truth pose of the nearest stamp (after adding
+    ``options.time_offset_s`` to the ground truth's), if it lies within
+    ``options.max_time_diff_s``; else the ground truth is missing there (a
+    gap). Odometry outside the ground truth's time span is left out (odometry
+    poses are cumulative, nothing is lost).
+
+    Raises:
+        RecordingError: the two clocks do not overlap (the message gives both spans).
+    """
+    t_odo = np.asarray(odometry_t_s, dtype=np.float64)
+    t_truth = np.asarray(truth_t_s, dtype=np.float64) + options.time_offset_s
+    slack = options.max_time_diff_s
+    inside = (t_odo >= t_truth[0] - slack) & (t_odo <= t_truth[-1] + slack)
+    if inside.sum() < 2:
+        raise RecordingError(
+            f"{source}: the clocks do not overlap: odometry {t_odo[0]:.6f}-{t_odo[-1]:.6f} s, "
+            f"ground truth {t_truth[0]:.6f}-{t_truth[-1]:.6f} s (after --time-offset "
+            f"{options.time_offset_s:g} s); check the stamps or give --time-offset"
+        )
+    t = t_odo[inside]
+    right = np.clip(np.searchsorted(t_truth, t), 1, len(t_truth) - 1)
+    left = right - 1
+    nearest = np.where(np.abs(t_truth[left] - t) <= np.abs(t_truth[right] - t), left, right)
+    if len(t_truth) == 1:
+        nearest = np.zeros(len(t), dtype=np.int64)
+    matched = np.abs(t_truth[nearest] - t) <= slack
+    poses = np.asarray(truth, dtype=np.float64)[nearest].copy()
+    poses[~matched] = np.nan
+    return Recording(
+        source=source,
+        t_s=t,
+        odometry=np.asarray(odometry, dtype=np.float64)[inside],
+        truth=poses,
+        where=np.asarray(odometry_where, dtype=np.int64)[inside],
+        unit=unit,
+        odometry_field=odometry_field,
+        truth_field=truth_field,
+    )
