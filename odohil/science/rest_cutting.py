@@ -110,9 +110,9 @@ def still_mask(
     after = (sums[ahead] - sums[index]) / (ahead - index)[:, None]
     times = np.concatenate([[0.0], np.cumsum(t - t[0])])
     # the time between the two windows' centres (shorter at the recording's ends)
-    span = (times[ahead] - times[index]) / (ahead - index) - (
-        times[index + 1] - times[back]
-    ) / (index + 1 - back)
+    span = (times[ahead] - times[index]) / (ahead - index) - (times[index + 1] - times[back]) / (
+        index + 1 - back
+    )
     gaps = (missing[index + 1] - missing[back]) + (missing[ahead] - missing[index])
     d_xy = np.hypot(after[:, 0] - before[:, 0], after[:, 1] - before[:, 1])
     d_theta = np.abs(after[:, 2] - before[:, 2])

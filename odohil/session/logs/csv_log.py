@@ -182,7 +182,9 @@ def write_csv_log(path: Path, recording: Recording) -> None:
             truth = recording.truth[index]
             row = [repr(float(recording.t_s[index]))]
             row += [repr(float(v)) for v in recording.odometry[index]]
-            row += ["", "", ""] if not np.all(np.isfinite(truth)) else [repr(float(v)) for v in truth]
+            row += (
+                ["", "", ""] if not np.all(np.isfinite(truth)) else [repr(float(v)) for v in truth]
+            )
             if recording.trial is not None:
                 row.append(recording.trial[index])
             writer.writerow(row)

@@ -310,12 +310,14 @@ def associate(
     the evo tool associates trajectories: each odometry stamp takes the
     ground-truth pose of the nearest stamp (after adding
     ``options.time_offset_s`` to the ground truth's), if it lies within
-    ``options.max_time_diff_s``; else the ground truth is missing there (a
-    gap). Odometry outside the ground truth's time span is left out (odometry
-    poses are cumulative, nothing is lost).
+    ``options.max_time_diff_s``; odometry samples without one are left out
+    (odometry poses are cumulative, nothing is lost; a stretch without ground
+    truth shows as a time gap between the samples kept, which
+    :func:`trials_of` refuses when it is longer than ``max_truth_gap_s``).
 
     Raises:
-        RecordingError: the two clocks do not overlap (the message gives both spans).
+        RecordingError: the two clocks do not overlap (the message gives both
+            spans), or no stamps are close enough to associate.
     """
     t_odo = np.asarray(odometry_t_s, dtype=np.float64)
     t_truth = np.asarray(truth_t_s, dtype=np.float64) + options.time_offset_s
@@ -334,14 +336,17 @@ def associate(
     if len(t_truth) == 1:
         nearest = np.zeros(len(t), dtype=np.int64)
     matched = np.abs(t_truth[nearest] - t) <= slack
-    poses = np.asarray(truth, dtype=np.float64)[nearest].copy()
-    poses[~matched] = np.nan
+    if matched.sum() < 2:
+        raise RecordingError(
+            f"{source}: no odometry stamp lies within --max-time-diff "
+            f"{options.max_time_diff_s:g} s of a ground-truth stamp"
+        )
     return Recording(
         source=source,
-        t_s=t,
-        odometry=np.asarray(odometry, dtype=np.float64)[inside],
-        truth=poses,
-        where=np.asarray(odometry_where, dtype=np.int64)[inside],
+        t_s=t[matched],
+        odometry=np.asarray(odometry, dtype=np.float64)[inside][matched],
+        truth=np.asarray(truth, dtype=np.float64)[nearest[matched]],
+        where=np.asarray(odometry_where, dtype=np.int64)[inside][matched],
         unit=unit,
         odometry_field=odometry_field,
         truth_field=truth_field,

@@ -106,7 +106,7 @@ def read_topics(
                 stamps, poses, numbers = found[connection.topic]
                 number = len(numbers) + 1
                 try:
-                    message = reader.deserialize(raw, connection.msgtype)
+                    message: Any = reader.deserialize(raw, connection.msgtype)
                     stamp = message.header.stamp
                     stamps.append(float(stamp.sec) + 1e-9 * float(stamp.nanosec))
                     poses.append(_pose(message, connection.msgtype))

@@ -72,7 +72,9 @@ def read_tum(path: Path) -> tuple[FloatArray, FloatArray, IntArray]:
             except ValueError:
                 value = math.nan
             if not math.isfinite(value):
-                raise RecordingError(f"{path} line {number}: {name}: not a finite number: {field!r}")
+                raise RecordingError(
+                    f"{path} line {number}: {name}: not a finite number: {field!r}"
+                )
             values.append(value)
         t, x, y, _, qx, qy, qz, qw = values
         norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
