@@ -53,6 +53,15 @@ DEFAULT_MAX_TIME_DIFF_S = 0.01
 SCATTER_FLOOR = (1e-5, 1e-5, 1e-4)
 """Smallest standard deviation of a rest pose from its scatter: x m, y m, theta rad."""
 
+OPTION_NAMES = {
+    "max_time_diff_s": "--max-time-diff",
+    "time_offset_s": "--time-offset",
+    "min_rest_s": "--min-rest",
+    "min_edge_rest_s": "--min-edge-rest",
+    "max_truth_gap_s": "--max-truth-gap",
+}
+"""The command-line option of each timing field (``odohil import``), for messages."""
+
 
 @dataclass(frozen=True)
 class ImportOptions:
@@ -85,12 +94,17 @@ class ImportOptions:
     bounds: CompressionBounds = field(default_factory=CompressionBounds)
 
     def __post_init__(self) -> None:
-        for name in ("max_time_diff_s", "min_rest_s", "min_edge_rest_s", "max_truth_gap_s"):
+        for name, option in OPTION_NAMES.items():
             value = getattr(self, name)
-            if not (math.isfinite(value) and value > 0):
-                raise ParameterError(f"{name} must be a positive number of seconds, got {value!r}")
-        if not math.isfinite(self.time_offset_s):
-            raise ParameterError(f"time_offset_s must be finite, got {self.time_offset_s!r}")
+            if name == "time_offset_s":
+                if not math.isfinite(value):
+                    raise ParameterError(
+                        f"{option} must be a finite number of seconds, got {value!r}"
+                    )
+            elif not (math.isfinite(value) and value > 0):
+                raise ParameterError(
+                    f"{option} must be a positive number of seconds, got {value!r}"
+                )
 
 
 @dataclass(frozen=True)
