@@ -149,8 +149,8 @@ def check_increasing(t_s: FloatArray, where: IntArray, source: str, field: str, 
     if len(bad):
         i = int(bad[0]) + 1
         raise RecordingError(
-            f"{source} {unit} {int(where[i])}: {field} must increase, got {t[i]!r} "
-            f"after {t[i - 1]!r} ({unit} {int(where[i - 1])})"
+            f"{source} {unit} {int(where[i])}: {field} must increase, got {float(t[i])!r} "
+            f"after {float(t[i - 1])!r} ({unit} {int(where[i - 1])})"
         )
 
 
