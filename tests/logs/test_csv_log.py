@@ -179,8 +179,21 @@ def test_a_robot_never_at_rest_is_refused(tmp_path: Path) -> None:
 
 def test_a_log_that_only_rests_has_no_trial(tmp_path: Path) -> None:
     log = synth_log([rest(5.0)])
-    with pytest.raises(RecordingError, match=r"log.csv line 2-\d+: no trial in the log"):
+    with pytest.raises(
+        RecordingError, match=r"log.csv line 2-\d+: no trial in the log: the odometry never moves"
+    ):
         read_recording([_write(tmp_path, log)], _robot(tmp_path), CSV)
+
+
+def test_a_robot_pushed_between_rests_is_no_trial(tmp_path: Path) -> None:
+    log = synth_log([rest(2.0), rest(1.0), rest(2.0), Motion(5.0, v=0.2), rest(2.0)])
+    # someone moves the robot 5 cm along the world x axis during 2-3 s: the wheels stay still
+    push = np.clip(log.t_s - log.t_s[0] - 2.0, 0.0, 1.0) * 0.05
+    log.truth[:, 0] += push
+    trials = read_recording([_write(tmp_path, log)], _robot(tmp_path), CSV)
+    assert len(trials) == 1
+    assert trials[0].family == "straight"
+    assert abs(trials[0].pose_change[0] - log.true_changes[0][0]) < 0.001
 
 
 def test_a_gap_in_the_ground_truth_names_where_it_starts(tmp_path: Path) -> None:
