@@ -240,6 +240,13 @@ def test_a_trial_label_that_comes_back_is_refused(tmp_path: Path) -> None:
         read_recording([_write(tmp_path, log, labels)], _robot(tmp_path), CSV)
 
 
+def test_a_labelled_trial_whose_odometry_never_moves_is_refused(tmp_path: Path) -> None:
+    log = synth_log([rest(3.0)])
+    path = _write(tmp_path, log, ("x",) * len(log.t_s))
+    with pytest.raises(RecordingError, match=r"line 2-\d+: odo_x_m.*trial 'x' never moves"):
+        read_recording([path], _robot(tmp_path), CSV)
+
+
 def test_a_log_without_any_labelled_row_has_no_trial(tmp_path: Path) -> None:
     log = synth_log(varied_motions()[:3])
     with pytest.raises(RecordingError, match=r"trial: no row names a trial"):

@@ -266,6 +266,11 @@ def trials_of(
         if not cuts:
             raise RecordingError(f"{rec.source}: trial: no row names a trial; no trial in the log")
         for label, first, last in cuts:
+            if not _odometry_moved(rec, first, last):
+                raise RecordingError(
+                    f"{rec.at(first)}-{int(rec.where[last])}: {rec.odometry_field}: the odometry "
+                    f"of trial {label!r} never moves; no trial"
+                )
             start, end = edge_rests(
                 rec.t_s[first : last + 1], rec.odometry[first : last + 1], options.min_edge_rest_s
             )
