@@ -14,7 +14,7 @@ from odohil.errors import RecordingError
 from odohil.science.robot_description import RobotDescription
 from odohil.session.logs import ImportOptions, read_recording
 from odohil.session.logs.csv_log import write_csv_log
-from odohil.session.logs.optiodom import read_run
+from odohil.session.logs.optiodom import joined_runs, read_run
 from odohil.session.logs.recording import Recording
 from odohil.session.robot_file import load_robot_description
 from tests.logs.data import OPTIODOM, needs_optiodom, optiodom_robot
@@ -114,6 +114,19 @@ def test_wheel_counts_with_two_wheel_diameters_give_the_odometry(tmp_path: Path)
     for a, b in zip(by_ticks, by_poses, strict=True):
         np.testing.assert_allclose(a.path.encoder_end_pose(), b.path.encoder_end_pose(), atol=1e-9)
         np.testing.assert_allclose(a.pose_change, b.pose_change, atol=1e-12)
+
+
+@needs_optiodom
+def test_joined_runs_written_as_a_log_csv_read_back_to_the_same_trials(tmp_path: Path) -> None:
+    runs = sorted((OPTIODOM / "ivanjko").glob("*/*_run-0[1-3].csv"))
+    path = tmp_path / "straight.csv"
+    write_csv_log(path, joined_runs(runs))
+    direct = read_recording(runs, optiodom_robot(), ImportOptions(format="optiodom"))
+    from_csv = read_recording([path], optiodom_robot(), CSV)
+    assert len(from_csv) == len(direct) == 12
+    for a, b in zip(direct, from_csv, strict=True):
+        np.testing.assert_array_equal(a.pose_change, b.pose_change)
+        assert a.path.steps == b.path.steps
 
 
 @needs_optiodom
