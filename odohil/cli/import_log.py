@@ -31,7 +31,7 @@ from odohil.cli.recording_options import (
 )
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.errors import OdohilError
-from odohil.session.logs import read_recording
+from odohil.session.logs import guess_format, read_recording
 from odohil.session.path_trial_file import summary_rows, write_path_trials
 from odohil.session.robot_file import load_robot_description
 
@@ -89,7 +89,8 @@ def import_log(
     except (OdohilError, OSError) as exc:
         err.print(f"[red]error:[/red] {exc}", highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None
-    table = Table(title=f"{written} trials from {len(logs)} log path(s)")
+    read_as = options.format or guess_format(logs)
+    table = Table(title=f"{written} trials from {len(logs)} log path(s), read as {read_as}")
     table.add_column("family")
     table.add_column("direction")
     table.add_column("trials", justify="right")
