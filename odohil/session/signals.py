@@ -3,8 +3,8 @@
 Every signal whose default action ends the process takes the same way out.
 SIGINT (Ctrl-C) is Python's :class:`KeyboardInterrupt`; :func:`signals_raise`
 makes every other one (:data:`RAISED_SIGNALS`: SIGTERM, SIGHUP, SIGQUIT,
-SIGUSR1, SIGUSR2, SIGALRM, SIGPIPE, SIGXCPU, SIGXFSZ, SIGVTALRM, SIGPROF,
-SIGPWR, the real-time signals... as this platform has them) raise
+SIGUSR1, SIGUSR2, SIGALRM, SIGPIPE, SIGXCPU, SIGVTALRM, SIGPROF, SIGPWR, the
+real-time signals... as this platform has them) raise
 :class:`SignalReceived`, a :class:`KeyboardInterrupt` too. So the engine sends
 the robot's stop, waits for the robot to report that it stopped, journals,
 and the command exits with 128 + the signal number. While the robot is being
@@ -21,8 +21,8 @@ driver's guardian process instead (odohil/driver/guardian.py, docs/sessions.md).
 
 A signal someone else already handles (a profiler's SIGPROF, a test runner's
 SIGALRM) or ignores (``nohup``'s SIGHUP) is left to them; only signals at their
-default action are taken over, and SIGPIPE and SIGXFSZ, which Python itself
-ignores at start-up.
+default action are taken over, and SIGPIPE, which Python itself ignores at
+start-up (SIGXFSZ, which it ignores too, stays so: see :data:`_PYTHON_IGNORES`).
 """
 
 from __future__ import annotations
@@ -51,10 +51,12 @@ and the two that cannot be caught (POSIX and BSD names; those the platform has).
 _FAULTS = ("SIGSEGV", "SIGBUS", "SIGFPE", "SIGILL")
 """Raised by a faulting instruction: a Python handler returns and the instruction
 faults again, so they keep their default action (the guardian covers the crash)."""
-_PYTHON_IGNORES = tuple(
-    getattr(signal, name) for name in ("SIGPIPE", "SIGXFSZ") if hasattr(signal, name)
-)
-"""Ignored by Python at start-up, not by whoever started odohil: taken over too."""
+_PYTHON_IGNORES = (signal.SIGPIPE,)
+"""Ignored by Python at start-up, not by whoever started odohil: taken over too.
+Python also ignores SIGXFSZ; that one stays ignored: the kernel sends it to a
+process whose own write passes its file-size limit, and that write then fails
+with EFBIG, an error that takes the stop path already and says more ("the
+journal could not be written: File too large") than the signal would."""
 
 
 def _ending_signals() -> tuple[int, ...]:
@@ -118,7 +120,7 @@ def _ours_to_take(signum: int) -> bool:
 @contextlib.contextmanager
 def signals_raise() -> Iterator[None]:
     """Within: every signal of :data:`RAISED_SIGNALS` at its default action (and
-    SIGPIPE, SIGXFSZ) raises :class:`SignalReceived` (main thread only; the
+    SIGPIPE) raises :class:`SignalReceived` (main thread only; the
     previous handlers come back afterwards)."""
     if threading.current_thread() is not threading.main_thread():
         yield
