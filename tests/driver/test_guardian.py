@@ -1,5 +1,6 @@
 """The guardian (odohil/driver/guardian.py): the robot's stop when the driving
-process dies, and not one byte while it lives.
+process dies (kill -9, which is also what the out-of-memory killer sends, or an
+interpreter crash), and not one byte while it lives.
 
 A real process opens a real pty or ``socket://`` line and starts a guardian,
 as a backend's ``arm`` does; the test holds the other end of the line and
@@ -9,6 +10,7 @@ kills the process (the process is the point: kill -9 cannot be caught).
 from __future__ import annotations
 
 import os
+import resource
 import select
 import signal
 import socket
@@ -40,6 +42,10 @@ for line in sys.stdin:
         guardian.release()
         port.close()
         print("released", flush=True)
+    elif line.strip() == "crash":
+        import ctypes
+
+        ctypes.string_at(0)  # a segmentation fault: the interpreter crashes
 """
 
 
@@ -68,6 +74,12 @@ def _read_for(fd: int, seconds: float) -> bytes:
     return got
 
 
+def _no_core_dump() -> None:
+    """A crash's core dump delays the kernel's closing of its descriptors (and so
+    the stop) by as long as it takes to write; none here."""
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+
+
 @contextmanager
 def _driver(url: str) -> Iterator[tuple[subprocess.Popen[str], int]]:
     """A process that opens ``url`` and starts a guardian; (it, the guardian's pid)."""
@@ -76,6 +88,7 @@ def _driver(url: str) -> Iterator[tuple[subprocess.Popen[str], int]]:
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
+        preexec_fn=_no_core_dump,
     )
     try:
         assert child.stdout is not None
@@ -126,12 +139,19 @@ def _gone_within(pid: int, seconds: float) -> bool:
     return True
 
 
-def _kill_and_expect_stop(child: subprocess.Popen[str], guardian: int, line: int) -> float:
-    """Silent while the driver lives; the stop within 0.5 s of kill -9; the guardian gone.
-    The time from the kill to the stop bytes, s."""
+def _kill_and_expect_stop(
+    child: subprocess.Popen[str], guardian: int, line: int, how: str = "kill -9"
+) -> float:
+    """Silent while the driver lives; the stop within 0.5 s of kill -9 (or a
+    crash); the guardian gone. The time from the kill to the stop bytes, s."""
     assert _read_for(line, 0.3) == b""  # the driver lives: not a byte
     killed = time.monotonic()
-    child.send_signal(signal.SIGKILL)
+    if how == "kill -9":
+        child.send_signal(signal.SIGKILL)
+    else:
+        assert child.stdin is not None
+        child.stdin.write("crash\n")
+        child.stdin.flush()
     got = b""
     while len(got) < len(STOP) and time.monotonic() - killed < 0.5:
         got += _read_for(line, 0.02)
@@ -139,6 +159,8 @@ def _kill_and_expect_stop(child: subprocess.Popen[str], guardian: int, line: int
     assert got == STOP, got
     assert after < 0.5
     assert _gone_within(guardian, 1.0), "the guardian outlived the session"
+    if how == "crash":
+        assert child.wait(5) == -signal.SIGSEGV
     return after
 
 
@@ -146,6 +168,11 @@ def test_kill_9_on_a_pty_sends_the_stop_within_half_a_second() -> None:
     with _pty() as (device, master), _driver(device) as (child, guardian):
         _kill_and_expect_stop(child, guardian, master)
         assert _read_for(master, 0.2) == b""  # once, then nothing
+
+
+def test_an_interpreter_crash_sends_the_stop_within_half_a_second() -> None:
+    with _pty() as (device, master), _driver(device) as (child, guardian):
+        _kill_and_expect_stop(child, guardian, master, how="crash")
 
 
 def test_kill_9_on_a_socket_sends_the_stop_within_half_a_second() -> None:

@@ -325,6 +325,7 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
     signalled = time.monotonic()
     process.send_signal(signum)
     _, err = process.communicate(timeout=30)
+    record_property("exit_seen_after_signal_s", round(time.monotonic() - signalled, 4))
     if signum == signal.SIGKILL:
         assert process.returncode == -signal.SIGKILL, (case, err)
     else:
