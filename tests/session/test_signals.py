@@ -328,9 +328,11 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
     record_property("exit_seen_after_signal_s", round(time.monotonic() - signalled, 4))
     if signum == signal.SIGKILL:
         assert process.returncode == -signal.SIGKILL, (case, err)
+        assert "odohil guardian: " in err, (case, err)  # it says what it did
     else:
         assert process.returncode == 128 + signum, (case, err)
         assert "robot stopped" in err, (case, err)
+        assert "odohil guardian" not in err, (case, err)  # released cleanly: not a byte
 
     # a stop reached the robot within 0.5 s of the signal...
     deadline = signalled + STOP_WITHIN_S + 0.2
