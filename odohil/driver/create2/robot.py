@@ -248,7 +248,9 @@ class Create2Robot:
         self.close()
 
     def close(self) -> None:
-        """Stop, pause any stream, leave the OI Off (C13), close. Idempotent."""
+        """Stop, pause any stream, leave the OI Off (C13), close, release the
+        guardian. Idempotent. If the close itself fails, the guardian stays: it
+        stops the robot when this process ends."""
         if not self._link.closed:
             with contextlib.suppress(OdohilError):
                 self._link.send(CLOSE_BYTES)

@@ -186,9 +186,9 @@ class NomadBackend:
         return odometry_sample(self.nomad.stop_and_confirm(timeout_s))
 
     def close(self) -> None:
-        """``st`` (best effort), close the port, release the guardian. Idempotent."""
-        try:
-            self.nomad.close()
-        finally:
-            if self.guardian is not None:
-                self.guardian.release()
+        """``st`` (best effort), close the port, release the guardian. Idempotent.
+        If the close itself fails, the guardian stays: it stops the robot when
+        this process ends."""
+        self.nomad.close()
+        if self.guardian is not None:
+            self.guardian.release()
