@@ -67,8 +67,8 @@ def _subpackages(layer: str) -> set[str]:
     return {p.parent.name for p in (ROOT / "odohil" / layer).glob("*/__init__.py")}
 
 
-SHARED_DRIVER_MODULES = {"__init__", "odometry", "port"}
-"""What the driver layer shares between its backends."""
+SHARED_DRIVER_MODULES = {"__init__", "odometry", "port", "guardian"}
+"""What the driver layer shares between its backends (guardian: the stop if odohil dies)."""
 
 SHARED_PROTOCOL_MODULES = {"__init__", "numbers"}
 """What the protocol layer shares between its robot protocols (wire integers)."""

@@ -71,7 +71,7 @@ from odohil.session.pose_source import PoseSource
 from odohil.session.preflight import check_new_session, check_trial_file, turn_designs
 from odohil.session.robot import Robot
 from odohil.session.robots import open_robot
-from odohil.session.signals import signal_of, signals_raise
+from odohil.session.signals import signal_name, signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, TapeSource, TruthReader
 from odohil.session.start_pose import StartPose
 from odohil.session.state import (
@@ -118,9 +118,7 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     truth: Any = None
     try:
         if truth_socket:
-            from fakes.nomad.truth import TruthClient
-
-            client = TruthClient(truth_socket)
+            client = _truth_client(line.protocol, truth_socket)
             client.open()
             truth = client
         elif hasattr(transport, "truth"):
@@ -132,6 +130,18 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
         finally:
             if truth is not None and hasattr(truth, "close") and truth is not transport:
                 truth.close()
+
+
+def _truth_client(protocol: str, path: str) -> Any:
+    """The client of the truth socket of the fake that speaks ``protocol``
+    (each fake's snapshot is its own JSON)."""
+    if protocol == "create2":
+        from fakes.create2.truth import Create2TruthClient
+
+        return Create2TruthClient(path)
+    from fakes.nomad.truth import TruthClient
+
+    return TruthClient(path)
 
 
 def make_source(
@@ -386,7 +396,7 @@ def run_engine(
             engine,
             exclude,
             interrupt_text(exc),
-            signal=signal.Signals(signum).name,
+            signal=signal_name(signum),
         )
     except OdohilError as exc:
         observer.progress.stop()
@@ -406,7 +416,7 @@ def interrupt_text(exc: BaseException) -> str:
     signum = signal_of(exc)
     if signum == signal.SIGINT:
         return "Ctrl-C"
-    return str(exc) or f"{signal.Signals(signum).name} received"
+    return str(exc) or f"{signal_name(signum)} received"
 
 
 def ended(
@@ -563,7 +573,8 @@ def ctrl_c_in_words() -> Iterator[None]:
 
 @contextlib.contextmanager
 def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[None]:
-    """Make SIGTERM, SIGHUP and SIGQUIT end the command as Ctrl-C does, and turn
+    """Make every signal that ends a process (odohil/session/signals.py) end the
+    command as Ctrl-C does, and turn
     what escapes into its exit status: a signal 128 + N, an unconfirmed stop 4,
     a session that cannot be opened or is in use 2, any other odohil or OS
     error 1 (the robot was already stopped and the journal written below).
@@ -578,7 +589,7 @@ def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[Non
             signum = signal_of(exc)
             document = {
                 "status": "interrupted",
-                "signal": signal.Signals(signum).name,
+                "signal": signal_name(signum),
                 "message": interrupt_text(exc) + " before the session ran: nothing moved",
                 "stop_confirmed": None,
                 "partial_estimate": None,

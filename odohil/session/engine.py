@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import signal
 from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -67,7 +66,7 @@ from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
 from odohil.session.pose_source import MeasuredPose, PoseSource, TrialContext
 from odohil.session.robot import Robot, SampleCallback
-from odohil.session.signals import SignalReceived, signals_held
+from odohil.session.signals import SignalReceived, signal_name, signals_held
 from odohil.session.sources import MeasurementSource, as_pose_source
 from odohil.session.start_pose import StartPose, check_start
 from odohil.session.state import (
@@ -397,7 +396,7 @@ class SessionEngine:
         the stop is bounded by ``stop_timeout_s`` and each record by its fsync.
         """
         if isinstance(exc, SignalReceived):
-            reason = signal.Signals(exc.signum).name
+            reason = signal_name(exc.signum)
         elif isinstance(exc, KeyboardInterrupt):
             reason = "interrupted"
         else:

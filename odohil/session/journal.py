@@ -41,6 +41,7 @@ from types import FrameType, TracebackType
 from typing import Any
 
 from odohil.errors import JournalError
+from odohil.session.signals import HANDLED_SIGNALS
 
 JOURNAL_NAME = "journal.jsonl"
 """File name of the journal inside a session folder."""
@@ -361,8 +362,8 @@ class Journal:
             )
         when = time.time()
         line = encode_record(self._next_seq, kind, data, when)
-        # Ctrl-C (or SIGTERM, SIGHUP, SIGQUIT) is held back until the record is whole and on
-        # disk, so that the record and the sequence count never disagree.
+        # Ctrl-C (or any other signal that ends a session) is held back until the record
+        # is whole and on disk, so that the record and the sequence count never disagree.
         with _signals_deferred():
             try:
                 view = memoryview(line)
@@ -400,14 +401,12 @@ class Journal:
         self.close()
 
 
-_DEFERRED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
-
-
 @contextlib.contextmanager
 def _signals_deferred() -> Iterator[None]:
-    """Hold SIGINT, SIGTERM, SIGHUP and SIGQUIT back (main thread only); on exit the previous
-    handlers get what arrived. A thread signal mask would not do: the kernel
-    may hand the signal to another thread, and Python still raises it here."""
+    """Hold every signal that ends a session (odohil/session/signals.py) back
+    (main thread only); on exit the previous handlers get what arrived. A
+    thread signal mask would not do: the kernel may hand the signal to another
+    thread, and Python still raises it here."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -416,14 +415,18 @@ def _signals_deferred() -> Iterator[None]:
     def hold(signum: int, frame: FrameType | None) -> None:
         received.append((signum, frame))
 
-    previous = {signum: signal.signal(signum, hold) for signum in _DEFERRED_SIGNALS}
+    previous = {
+        signum: signal.signal(signum, hold)
+        for signum in HANDLED_SIGNALS
+        if signal.getsignal(signum) not in (signal.SIG_IGN, None)
+    }
     try:
         yield
     finally:
         for restored, handler in previous.items():
             signal.signal(restored, handler)
         for got, frame in received:
-            before = previous[signal.Signals(got)]
+            before = previous[got]
             if callable(before):
                 before(got, frame)
             elif before != signal.SIG_IGN:

@@ -1,12 +1,28 @@
 """The signals that end a session, as exceptions the engine can stop the robot on.
 
-SIGINT (Ctrl-C) is Python's :class:`KeyboardInterrupt`. :func:`signals_raise`
-makes SIGTERM, SIGHUP (a dropped SSH session) and SIGQUIT raise
-:class:`SignalReceived`, a :class:`KeyboardInterrupt` too, so every way out
-takes the same path: the engine sends ``st``, waits for the robot to report
-that it stopped, journals, and the command exits with 128 + the signal number.
-While the robot is being stopped, :func:`signals_held` holds further signals
-back so that none of them skips the stop.
+Every signal whose default action ends the process takes the same way out.
+SIGINT (Ctrl-C) is Python's :class:`KeyboardInterrupt`; :func:`signals_raise`
+makes every other one (:data:`RAISED_SIGNALS`: SIGTERM, SIGHUP, SIGQUIT,
+SIGUSR1, SIGUSR2, SIGALRM, SIGPIPE, SIGXCPU, SIGVTALRM, SIGPROF, SIGPWR, the
+real-time signals... as this platform has them) raise
+:class:`SignalReceived`, a :class:`KeyboardInterrupt` too. So the engine sends
+the robot's stop, waits for the robot to report that it stopped, journals,
+and the command exits with 128 + the signal number. While the robot is being
+stopped, :func:`signals_held` holds further signals back so that none of them
+skips the stop.
+
+The list is computed from the platform (:func:`signal.valid_signals`) less
+the signals whose default action does not end a process (ignore, stop,
+continue), SIGKILL and SIGSTOP (they cannot be caught), and the four a faulting
+instruction raises (SIGSEGV, SIGBUS, SIGFPE, SIGILL: a handler that returns
+runs the instruction again). Those, and every end no handler sees (kill -9,
+the out-of-memory killer, a crash of the interpreter), are covered by the
+driver's guardian process instead (odohil/driver/guardian.py, docs/sessions.md).
+
+A signal someone else already handles (a profiler's SIGPROF, a test runner's
+SIGALRM) or ignores (``nohup``'s SIGHUP) is left to them; only signals at their
+default action are taken over, and SIGPIPE, which Python itself ignores at
+start-up (SIGXFSZ, which it ignores too, stays so: see :data:`_PYTHON_IGNORES`).
 """
 
 from __future__ import annotations
@@ -17,10 +33,57 @@ import threading
 from collections.abc import Iterator
 from types import FrameType
 
-HANDLED_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
-"""Every signal that ends a session cleanly."""
-RAISED_SIGNALS = (signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
+_NOT_ENDING = (
+    "SIGKILL",
+    "SIGSTOP",
+    "SIGCHLD",
+    "SIGCLD",
+    "SIGCONT",
+    "SIGTSTP",
+    "SIGTTIN",
+    "SIGTTOU",
+    "SIGURG",
+    "SIGWINCH",
+    "SIGINFO",
+)
+"""Signals whose default action does not end a process (ignore, stop, continue),
+and the two that cannot be caught (POSIX and BSD names; those the platform has)."""
+_FAULTS = ("SIGSEGV", "SIGBUS", "SIGFPE", "SIGILL")
+"""Raised by a faulting instruction: a Python handler returns and the instruction
+faults again, so they keep their default action (the guardian covers the crash)."""
+_PYTHON_IGNORES = (signal.SIGPIPE,)
+"""Ignored by Python at start-up, not by whoever started odohil: taken over too.
+Python also ignores SIGXFSZ; that one stays ignored: the kernel sends it to a
+process whose own write passes its file-size limit, and that write then fails
+with EFBIG, an error that takes the stop path already and says more ("the
+journal could not be written: File too large") than the signal would."""
+
+
+def _ending_signals() -> tuple[int, ...]:
+    left_out = {
+        int(getattr(signal, name)) for name in (*_NOT_ENDING, *_FAULTS) if hasattr(signal, name)
+    }
+    return tuple(sorted(int(s) for s in signal.valid_signals() if int(s) not in left_out))
+
+
+ENDING_SIGNALS: tuple[int, ...] = _ending_signals()
+"""Every signal on this platform whose default action ends the process and that
+a handler can act on, SIGINT included."""
+HANDLED_SIGNALS = ENDING_SIGNALS
+"""Every signal that ends a session cleanly (held back during the stop)."""
+RAISED_SIGNALS = tuple(s for s in ENDING_SIGNALS if s != signal.SIGINT)
 """The signals :func:`signals_raise` turns into :class:`SignalReceived`."""
+
+
+def signal_name(signum: int) -> str:
+    """A signal's name: ``SIGTERM``; ``SIGRTMIN+3`` for a real-time signal."""
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        rtmin = getattr(signal, "SIGRTMIN", None)
+        if rtmin is not None and signum > rtmin:
+            return f"SIGRTMIN+{signum - int(rtmin)}"
+        return f"signal {signum}"
 
 
 class SignalReceived(KeyboardInterrupt):
@@ -31,7 +94,7 @@ class SignalReceived(KeyboardInterrupt):
     """
 
     def __init__(self, signum: int) -> None:
-        super().__init__(f"{signal.Signals(signum).name} received")
+        super().__init__(f"{signal_name(signum)} received")
         self.signum = int(signum)
 
 
@@ -46,14 +109,25 @@ def _raise(signum: int, frame: FrameType | None) -> None:
     raise SignalReceived(signum)
 
 
+def _ours_to_take(signum: int) -> bool:
+    """Whether ``signum`` is at its default action (or ignored by Python's start-up)."""
+    handler = signal.getsignal(signum)
+    return handler in (signal.SIG_DFL, _raise) or (
+        handler == signal.SIG_IGN and signum in _PYTHON_IGNORES
+    )
+
+
 @contextlib.contextmanager
 def signals_raise() -> Iterator[None]:
-    """Within: SIGTERM, SIGHUP and SIGQUIT raise :class:`SignalReceived`
-    (main thread only; the previous handlers come back afterwards)."""
+    """Within: every signal of :data:`RAISED_SIGNALS` at its default action (and
+    SIGPIPE) raises :class:`SignalReceived` (main thread only; the
+    previous handlers come back afterwards)."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = {signum: signal.signal(signum, _raise) for signum in RAISED_SIGNALS}
+    previous = {
+        signum: signal.signal(signum, _raise) for signum in RAISED_SIGNALS if _ours_to_take(signum)
+    }
     try:
         yield
     finally:
@@ -65,7 +139,8 @@ def signals_raise() -> Iterator[None]:
 def signals_held() -> Iterator[list[int]]:
     """Within: every handled signal is held back and only listed (the list is
     yielded); the stop and the journal it guards are bounded in time, and the
-    exit status stays that of the first way out."""
+    exit status stays that of the first way out. Ignored signals stay ignored,
+    and so do handlers set outside Python."""
     if threading.current_thread() is not threading.main_thread():
         yield []
         return
@@ -74,7 +149,11 @@ def signals_held() -> Iterator[list[int]]:
     def hold(signum: int, frame: FrameType | None) -> None:
         received.append(signum)
 
-    previous = {signum: signal.signal(signum, hold) for signum in HANDLED_SIGNALS}
+    previous = {
+        signum: signal.signal(signum, hold)
+        for signum in HANDLED_SIGNALS
+        if signal.getsignal(signum) not in (signal.SIG_IGN, None)
+    }
     try:
         yield received
     finally:

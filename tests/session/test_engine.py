@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from odohil.cli.wizard import parse_metres
+from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError
 from odohil.science.estimators import EstimateResult
 from odohil.science.floor_marks import marks_from_pose
@@ -337,3 +338,29 @@ def test_records_go_to_the_observer_in_order(tmp_path: Path) -> None:
     assert kinds[-2:] == [ev.SOLVED, ev.FINISHED]
     assert [seq for seq, _, _ in seen] == list(range(2, 2 + len(seen)))
     assert seen[-1][2] == 1
+
+
+@pytest.mark.parametrize("error", [MemoryError, RuntimeError, SystemExit])
+def test_any_exception_during_a_motion_stops_the_robot(
+    tmp_path: Path, error: type[BaseException]
+) -> None:
+    """Not only odohil's own errors: a bug, an out-of-memory error or an exit
+    raised while the robot drives stops it, is journaled, and goes on up."""
+    raised: list[bool] = []
+
+    def on_sample(sample: OdometrySample) -> None:
+        if sample.moving and not raised:
+            raised.append(True)
+            raise error("raised mid-motion")
+
+    with fake_robot("seed=11&time_scale=1") as (robot, truth):
+        journal, state = _start(tmp_path, "k=0.5,l=0.5,n=1")
+        source = FakeTruthSource(truth, description(), seed=3)
+        with journal, pytest.raises(error):
+            SessionEngine(journal, state, robot, source, on_sample=on_sample).run()
+        assert raised
+        assert not truth.moving()
+    records = read_journal(tmp_path).records
+    assert [r.kind for r in records[-3:]] == [ev.MOTION_START, ev.VOID, ev.STOPPED]
+    assert records[-1].data["reason"] == "error"
+    assert records[-1].data["robot"] == "stopped"

@@ -51,6 +51,7 @@ from odohil.driver.create2.link import (
     Sampling,
     open_port,
 )
+from odohil.driver.guardian import Guardian, start_guardian
 from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
 from odohil.errors import (
     ConnectionFailedError,
@@ -105,6 +106,14 @@ busy host; the next step's target makes up for it)."""
 MIN_STEP_COUNTS = 10
 """Shortest step the backend drives, counts (4.4 mm at the Create 2's constants)."""
 STOP_CONFIRM_TIMEOUT_S = 2.0
+CLOSE_BYTES = (
+    commands.drive_direct(0, 0)
+    + commands.pause_resume(False)
+    + commands.start()
+    + commands.stop_oi()
+)
+"""Stop, pause any stream, Start, Stop (C13): the OI ends Off. Sent by :meth:`Create2Robot.close`,
+and by the guardian (odohil/driver/guardian.py) if this process dies while armed."""
 
 
 @dataclass(frozen=True)
@@ -153,6 +162,8 @@ class Create2Robot:
         self._pose = (0.0, 0.0, 0.0)
         self._origin = (0.0, 0.0, 0.0)
         self._counts_seen = 0
+        self.guardian: Guardian | None = None
+        """Sends :data:`CLOSE_BYTES` if this process dies between :meth:`arm` and :meth:`close`."""
 
     # ---- connection --------------------------------------------------------------
     @classmethod
@@ -237,19 +248,17 @@ class Create2Robot:
         self.close()
 
     def close(self) -> None:
-        """Stop, pause any stream, leave the OI Off (C13), close. Idempotent."""
-        if self._link.closed:
-            return
-        with contextlib.suppress(OdohilError):
-            self._link.send(
-                commands.drive_direct(0, 0)
-                + commands.pause_resume(False)
-                + commands.start()
-                + commands.stop_oi()
-            )
-            self._link.drain()
-        self._commanded = False
-        self._link.close()
+        """Stop, pause any stream, leave the OI Off (C13), close, release the
+        guardian. Idempotent. If the close itself fails, the guardian stays: it
+        stops the robot when this process ends."""
+        if not self._link.closed:
+            with contextlib.suppress(OdohilError):
+                self._link.send(CLOSE_BYTES)
+                self._link.drain()
+            self._commanded = False
+            self._link.close()
+        if self.guardian is not None:
+            self.guardian.release()
 
     # ---- readings and odometry ----------------------------------------------------
     def _read(self) -> Reading:
@@ -312,8 +321,12 @@ class Create2Robot:
         return Mode(min(3, max(0, reading.mode_raw - self.mode_offset)))
 
     def arm(self, settings: DriveSettings) -> OdometrySample:
-        """Safe (or Full when the description asks), checked; refused on hazards."""
+        """Safe (or Full when the description asks), checked; refused on hazards.
+        First the guardian starts (odohil/driver/guardian.py: if this process
+        dies, :data:`CLOSE_BYTES` are sent)."""
         self._speeds(settings)
+        if self.guardian is None:
+            self.guardian = start_guardian(self._link.port, CLOSE_BYTES)
         opcode = commands.full() if self.full_mode else commands.safe()
         self._link.send(opcode)
         time.sleep(MODE_WAIT_S)

@@ -11,6 +11,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from types import TracebackType
 
+from odohil.driver.guardian import Guardian, start_guardian
 from odohil.driver.nomad.link import BAUD_RATES, DEFAULT_BAUD, open_port
 from odohil.driver.nomad.motion import DEFAULT_TOLERANCE_WIRE, MotionRecord, forth_and_back
 from odohil.driver.nomad.robot import NomadRobot
@@ -18,6 +19,7 @@ from odohil.driver.nomad.sample import EncoderSample
 from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
 from odohil.driver.port import Port
 from odohil.errors import ParameterError
+from odohil.protocol.nomad import messages as m
 from odohil.science.paths import Design
 from odohil.units import wrap_angle
 
@@ -79,6 +81,8 @@ class NomadBackend:
         self._port = port
         self.transport = transport
         self.tolerance_wire = tolerance_wire
+        self.guardian: Guardian | None = None
+        """Sends ``st`` if this process dies between :meth:`arm` and :meth:`close`."""
 
     @classmethod
     def open(cls, url: str, baud: int | None = None, robot: object = None) -> NomadBackend:
@@ -120,8 +124,11 @@ class NomadBackend:
         return odometry_sample(self.nomad.state())
 
     def arm(self, settings: DriveSettings) -> OdometrySample:
-        """Set the watchdog (``conf_tm``) when ``settings.watchdog_s`` > 0; the
-        encoders after. Speeds and accelerations are sent before each trial."""
+        """Start the guardian (odohil/driver/guardian.py: ``st`` if this process
+        dies), set the watchdog (``conf_tm``) when ``settings.watchdog_s`` > 0;
+        the encoders after. Speeds and accelerations are sent before each trial."""
+        if self.guardian is None:
+            self.guardian = start_guardian(self.transport, m.encode_request(m.St()))
         if settings.watchdog_s > 0:
             self.nomad.set_watchdog(settings.watchdog_s)
         return self.odometry()
@@ -179,5 +186,9 @@ class NomadBackend:
         return odometry_sample(self.nomad.stop_and_confirm(timeout_s))
 
     def close(self) -> None:
-        """``st`` (best effort), then close the port. Idempotent."""
+        """``st`` (best effort), close the port, release the guardian. Idempotent.
+        If the close itself fails, the guardian stays: it stops the robot when
+        this process ends."""
         self.nomad.close()
+        if self.guardian is not None:
+            self.guardian.release()
