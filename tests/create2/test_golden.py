@@ -110,6 +110,7 @@ def test_unknown_opcode_is_skipped_and_partial_command_waits() -> None:
     assert [(c.opcode, c.known) for c in out] == [(0, False)]
     assert splitter.pending == bytes((0x91, 0x00))
     out = splitter.feed(commands.RESYNC)
-    assert out[0] == Command(0x91, bytes(4))  # the pending Drive Direct, at speed 0
-    assert out[-1] == Command(0x80, b"")
+    # the pending Drive Direct completes on Start bytes, then Starts only
+    assert out[0] == Command(0x91, bytes((0x00, 0x80, 0x80, 0x80)))
+    assert out[1:] == [Command(0x80, b"")] * (commands.RESYNC_STARTS - 3)
     assert splitter.pending == b""
