@@ -8,12 +8,11 @@ import struct
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import pytest
 
-from fakes.create2.process import Create2Process
-
+from .conftest import Robot
 from .host import (
     FULL,
     PAUSE,
@@ -41,30 +40,6 @@ def mode_command(h: Host, *opcodes: int) -> None:
     """Send mode commands, then wait for the OI to change modes."""
     h.send(bytes(opcodes))
     time.sleep(MODE_WAIT_S)
-
-
-class Robot:
-    def __init__(self, process: Create2Process) -> None:
-        self.process = process
-        self.host = Host(process.device)
-
-
-@pytest.fixture
-def robot() -> Iterator[Callable[..., Robot]]:
-    """Factory: ``robot(*args)`` starts ``python -m fakes.create2 --seed 3 ARGS``."""
-    started: list[Robot] = []
-
-    def start(*args: str, use_cli: bool = False) -> Robot:
-        process = Create2Process(["--seed", "3", "--no-pacing", *args], use_cli=use_cli)
-        process.__enter__()
-        r = Robot(process)
-        started.append(r)
-        return r
-
-    yield start
-    for r in started:
-        r.host.close()
-        r.process.stop()
 
 
 def test_mode_state_machine(robot: Callable[..., Robot]) -> None:

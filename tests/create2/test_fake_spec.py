@@ -7,12 +7,9 @@ spec, importing nothing from odohil) over a real pty."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
-import pytest
-
-from fakes.create2.process import Create2Process
-
+from .conftest import Robot
 from .host import (
     BAUD,
     BAUD_CODES,
@@ -33,31 +30,6 @@ MODE_WAIT_S = 0.1
 """What libcreate waits after a mode command, s."""
 
 
-class Robot:
-    def __init__(self, process: Create2Process, baud: int) -> None:
-        self.process = process
-        self.host = Host(process.device, baud)
-
-
-@pytest.fixture
-def robot() -> Iterator[Callable[..., Robot]]:
-    """Factory: ``robot(*args, host_baud=115200)`` starts ``python -m fakes.create2
-    --seed 3 ARGS`` and opens the independent host on its pty."""
-    started: list[Robot] = []
-
-    def start(*args: str, host_baud: int = 115200) -> Robot:
-        process = Create2Process(["--seed", "3", *args])
-        process.__enter__()
-        r = Robot(process, host_baud)
-        started.append(r)
-        return r
-
-    yield start
-    for r in started:
-        r.host.close()
-        r.process.stop()
-
-
 def safe(h: Host) -> None:
     """Start, Safe, and the wait a reference host leaves before driving."""
     h.send(bytes((START, SAFE)))
@@ -68,7 +40,7 @@ def test_stasis_is_1_only_while_making_forward_progress(robot: Callable[..., Rob
     # p.32: "returns 1 when the robot is making forward progress and 0 when it
     # is not. It always returns 0 when the robot is turning, driving backward,
     # or not driving"
-    h = robot("--no-pacing").host
+    h = robot().host
     safe(h)
     readings = {}
     for name, command in (
@@ -89,7 +61,7 @@ def test_a_stream_beyond_the_line_rate_is_corrupted_not_queued(
 ) -> None:
     # libcreate's 75-byte frame every 15 ms needs 50 000 baud; at 19200 the line
     # carries 28 bytes a period: p.22, the stream "will eventually become corrupted"
-    r = robot("--baud", "19200", host_baud=19200)  # line pacing on: the line's real rate
+    r = robot("--baud", "19200", pacing=True, host_baud=19200)  # at the line's real rate
     h = r.host
     h.send(bytes((START, STREAM, len(LIBCREATE_IDS), *LIBCREATE_IDS)))
     streamed = h.read_for(1.0)
@@ -105,7 +77,7 @@ def test_a_stream_beyond_the_line_rate_is_corrupted_not_queued(
 
 
 def test_a_host_at_another_rate_gets_no_answer(robot: Callable[..., Robot]) -> None:
-    r = robot("--no-pacing", host_baud=9600)  # the robot is at 115200
+    r = robot(host_baud=9600)  # the robot is at 115200
     h = r.host
     h.send(bytes((START,)))
     reply = h.ask(bytes((SENSORS, 35)), 1, 0.3)
@@ -117,7 +89,7 @@ def test_a_host_at_another_rate_gets_no_answer(robot: Callable[..., Robot]) -> N
 
 
 def test_the_baud_command_changes_the_robots_rate(robot: Callable[..., Robot]) -> None:
-    r = robot("--no-pacing")
+    r = robot()
     h = r.host
     h.send(bytes((START,)))
     assert h.mode() == 1
@@ -135,7 +107,7 @@ def test_passive_sleeps_after_five_minutes_without_commands(
     robot: Callable[..., Robot],
 ) -> None:
     # p.7: Passive sleeps after 5 min of inactivity; at time scale 1000 that is 0.3 s
-    r = robot("--no-pacing", "--time-scale", "1000")
+    r = robot("--time-scale", "1000")
     h = r.host
     h.send(bytes((START,)))
     for _ in range(6):  # commands keep it awake
@@ -155,7 +127,7 @@ def test_passive_sleeps_after_five_minutes_without_commands(
 def test_a_drive_sent_with_safe_is_not_obeyed_one_sent_after_the_wait_is(
     robot: Callable[..., Robot],
 ) -> None:
-    r = robot("--no-pacing")
+    r = robot()
     h = r.host
     h.send(bytes((START,)))
     assert h.mode() == 1
