@@ -9,6 +9,8 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 
+from fakes.create2.line import accepted, reframe
+
 from .conftest import Robot
 from .host import (
     BAUD,
@@ -142,3 +144,17 @@ def test_a_drive_sent_with_safe_is_not_obeyed_one_sent_after_the_wait_is(
     h.send(direct(0, 0))
     moved = [delta(b, a) for b, a in zip(before, h.encoders(), strict=True)]
     assert min(moved) > 0
+
+
+def test_the_line_model_frames_bits_at_the_readers_rate() -> None:
+    data = bytes((128, 131, 145, 0, 200, 0, 200))
+    assert reframe(data, 19200, 19200) == [(b, True) for b in data]
+    # a Start sent at 9600 lasts 12 bit times at 115200: a low start bit and seven
+    # low data bits read as zero bytes without their stop bit, then the high bit
+    good, errors = accepted(bytes((128,)), 9600, 115200)
+    assert errors >= 8
+    assert 128 not in good
+    # read 12 times slower the host sees fewer bytes than were sent, none of them right
+    slow = [b for b, _ in reframe(data, 115200, 9600)]
+    assert len(slow) < len(data)
+    assert bytes(slow) != data[: len(slow)]

@@ -22,6 +22,7 @@ COMMANDS = golden("command")
 REPLIES = golden("reply")
 FRAMES = golden("frame")
 WRAPS = golden("wrap")
+SEQUENCES = golden("sequence")
 
 
 def _ids(v: dict[str, Any]) -> str:
@@ -63,6 +64,15 @@ def test_command_splits_back_whole(vector: dict[str, Any]) -> None:
     assert command.known
     assert bytes((command.opcode,)) + command.data == data
     assert splitter.pending == b""
+
+
+@pytest.mark.parametrize("vector", SEQUENCES, ids=_ids)
+def test_sequence_is_its_bytes_and_splits_into_its_commands(vector: dict[str, Any]) -> None:
+    data = bytes.fromhex(vector["hex"])
+    assert getattr(commands, vector["constant"]) == data
+    out = CommandSplitter().feed(data)
+    assert [c.opcode for c in out] == vector["opcodes"]
+    assert all(c.known for c in out)
 
 
 @pytest.mark.parametrize("vector", REPLIES, ids=_ids)
