@@ -1,8 +1,12 @@
 """pyserial URL handler ``fakecreate2://``: the fake iRobot Create 2 in process.
 
-URL: ``fakecreate2://?seed=1&time_scale=10&fault=cliff@0.5&E_R=-0.35&E_T=-0.015&K_theta=0.02&K_rho=5e-5&turn_scale=0.012&spin_k=2e-4&encoder_origin=65000&mode_offset=1&angle_bug=1&pacing=1&max_gap_ms=15``
+URL: ``fakecreate2://?seed=1&time_scale=10&fault=cliff@0.5&E_R=-0.35&E_T=-0.015&K_theta=0.02&K_rho=5e-5&turn_scale=0.012&spin_k=2e-4&encoder_origin=65000&mode_offset=1&angle_bug=1&pacing=1&max_gap_ms=15&baud=115200&mode_change_ms=50&passive_sleep_s=300``
 (every option optional; ``fault`` may repeat; E_R, E_T, K_theta, K_rho in the
-paper's units; pacing off unless ``pacing=1``, then at the port's baud rate;
+paper's units; ``baud`` is the robot's line rate (default 115200): a port
+opened, or later set, at another rate reads garbage and is not understood
+(fakes/create2/line.py); ``mode_change_ms``: how long Safe and Full take to
+take effect; ``passive_sleep_s``: simulated seconds before Passive sleeps, 0
+never; pacing off unless ``pacing=1``, then at the port's baud rate;
 ``max_gap_ms``: the fake's clock skips any gap between two host calls longer
 than this, fakes/create2/clock.py, so a descheduled host cannot make a leg
 drive on; default: wall time).
@@ -49,6 +53,11 @@ class Serial(FakeNomadSerial):
     def _create2(self) -> Create2Engine:
         return cast(Create2Engine, self._engine(check_cut=False))
 
+    def _reconfigure_port(self) -> None:
+        super()._reconfigure_port()
+        if self.is_open and self.engine is not None:
+            cast(Create2Engine, self.engine).host_baud = self._baudrate
+
     def _engine_from_url(self, url: str) -> NomadEngine:
         parts = urllib.parse.urlsplit(url)
         if parts.scheme != "fakecreate2":
@@ -68,8 +77,12 @@ class Serial(FakeNomadSerial):
                     kwargs[key] = float(value)
                 elif key == "spin_k":
                     kwargs["spin_k"] = float(value)
-                elif key in ("encoder_origin", "mode_offset"):
+                elif key in ("encoder_origin", "mode_offset", "baud"):
                     kwargs[key] = int(value)
+                elif key == "mode_change_ms":
+                    kwargs["mode_change_s"] = float(value) / 1000.0
+                elif key == "passive_sleep_s":
+                    kwargs[key] = float(value) or None
                 elif key == "angle_bug":
                     kwargs["angle_bug"] = value not in ("", "0", "false", "no")
                 elif key == "fault":
@@ -83,11 +96,13 @@ class Serial(FakeNomadSerial):
                 else:
                     raise ValueError(f"unknown option {key!r}")
             params = ErrorParameters.from_paper_units(*(paper[k] for k in _PAPER))
-            config = build_config(params=params, faults=faults, baud=self._baudrate, **kwargs)
+            config = build_config(params=params, faults=faults, **kwargs)
             clock = time.monotonic if max_gap_s is None else LagAbsorbingClock(max_gap_s)
         except (ValueError, OdohilError) as exc:
             raise SerialException(f"bad fakecreate2 URL {url!r}: {exc}") from exc
-        return cast(NomadEngine, Create2Engine(config, clock))
+        engine = Create2Engine(config, clock)
+        engine.host_baud = self._baudrate
+        return cast(NomadEngine, engine)
 
 
 __all__ = ["Serial"]

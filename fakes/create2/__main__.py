@@ -6,9 +6,11 @@ import argparse
 
 from fakes.create2.config import (
     CREATE2_TRUTH,
+    DEFAULT_MODE_CHANGE_S,
     DEFAULT_SPIN_K,
     DEFAULT_TURN_SCALE,
     FAULT_NAMES,
+    PASSIVE_SLEEP_S,
     build_config,
 )
 from fakes.create2.run import run_emulator
@@ -31,6 +33,18 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--encoder-origin", type=int, default=0)
     parser.add_argument("--mode-offset", type=int, default=0)
     parser.add_argument("--angle-bug", action="store_true")
+    parser.add_argument(
+        "--mode-change-ms",
+        type=float,
+        default=DEFAULT_MODE_CHANGE_S * 1000.0,
+        help="wall ms a Safe or Full command takes to take effect",
+    )
+    parser.add_argument(
+        "--passive-sleep-s",
+        type=float,
+        default=PASSIVE_SLEEP_S,
+        help="simulated s in Passive without a command before it sleeps (0: never)",
+    )
     add_serving_options(parser)
     args = parse_and_log(parser, argv)
     config = build_config(
@@ -44,6 +58,8 @@ def main(argv: list[str] | None = None) -> None:
         encoder_origin=args.encoder_origin,
         mode_offset=args.mode_offset,
         angle_bug=args.angle_bug,
+        mode_change_s=args.mode_change_ms / 1000.0,
+        passive_sleep_s=args.passive_sleep_s or None,
     )
     run_emulator(config, pacing=not args.no_pacing, truth_socket=args.truth_socket)
 

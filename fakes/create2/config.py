@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 from odohil.errors import ParameterError
-from odohil.protocol.create2.opcodes import DEFAULT_BAUD
+from odohil.protocol.create2.opcodes import BAUD_RATES, DEFAULT_BAUD
 from odohil.science.diff_drive import DiffDriveErrors, DiffDriveGeometry
 from odohil.science.parameters import ErrorParameters
 
@@ -17,6 +17,13 @@ DEFAULT_TURN_SCALE = 0.012
 """Default e_turn: an in-place turn really turns 1.2 % more than the encoders say."""
 DEFAULT_SPIN_K = 2e-4
 """Default K_spin, rad^2 per rad turned in place."""
+
+DEFAULT_MODE_CHANGE_S = 0.05
+"""How long a Safe or Full command takes to take effect, wall s (C28): no
+source gives it; libcreate waits 100 ms after a mode command, pycreate2 0.5 s
+("so the bot has time to change modes")."""
+PASSIVE_SLEEP_S = 300.0
+"""Passive mode sleeps after 5 minutes without a command (p.7), simulated s."""
 
 EVENTS = (
     "wheel_drop",
@@ -94,6 +101,10 @@ class Create2Config:
         mode_offset: added to packet 35 (1 imitates the 6xx bug, C7).
         angle_bug: packet 20 reports degrees x 0.324056 (firmware <= 3.4.0, C11).
         firmware: the version string of the Reset banner (C14).
+        mode_change_s: wall seconds a Safe or Full command takes to take
+            effect; commands before then find the old mode (C28).
+        passive_sleep_s: simulated seconds in Passive without a command
+            before the robot sleeps (p.7: 5 minutes); None never sleeps (C27).
     """
 
     errors: DiffDriveErrors = field(
@@ -111,6 +122,8 @@ class Create2Config:
     mode_offset: int = 0
     angle_bug: bool = False
     firmware: str = "r3-robot/tags/release-3.7.7:6913"
+    mode_change_s: float = DEFAULT_MODE_CHANGE_S
+    passive_sleep_s: float | None = PASSIVE_SLEEP_S
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.time_scale) and self.time_scale > 0):
@@ -121,6 +134,13 @@ class Create2Config:
             raise ParameterError(f"encoder_origin must be 0..65535, got {self.encoder_origin}")
         if self.mode_offset not in (0, 1):
             raise ParameterError(f"mode_offset must be 0 or 1, got {self.mode_offset}")
+        if self.baud not in BAUD_RATES:
+            raise ParameterError(f"baud must be one of {BAUD_RATES}, got {self.baud}")
+        if not (math.isfinite(self.mode_change_s) and 0.0 <= self.mode_change_s <= 10.0):
+            raise ParameterError(f"mode_change_s must be in [0, 10] s, got {self.mode_change_s}")
+        sleep = self.passive_sleep_s
+        if sleep is not None and not (math.isfinite(sleep) and sleep > 0):
+            raise ParameterError(f"passive_sleep_s must be positive or None, got {sleep}")
 
 
 def build_config(
@@ -135,6 +155,8 @@ def build_config(
     encoder_origin: int = 0,
     mode_offset: int = 0,
     angle_bug: bool = False,
+    mode_change_s: float = DEFAULT_MODE_CHANGE_S,
+    passive_sleep_s: float | None = PASSIVE_SLEEP_S,
 ) -> Create2Config:
     """A :class:`Create2Config` from command-line style values."""
     geometry = DiffDriveGeometry()
@@ -150,4 +172,6 @@ def build_config(
         encoder_origin=encoder_origin,
         mode_offset=mode_offset,
         angle_bug=angle_bug,
+        mode_change_s=mode_change_s,
+        passive_sleep_s=passive_sleep_s,
     )

@@ -10,6 +10,16 @@ Behaviour follows the facts document's §3-§9 and CHOICEs C1-C17 (see
 protocols/create2/README.md): the mode state machine, replies sent at once
 from sensor values that change on 15 ms ticks, stream frames on those
 ticks, safety stops in Safe, faults fired at set encoder distances.
+
+Where the specification says more than "it answers" (protocols/create2/README.md,
+C25-C29): packet 58 reads 1 only while driving straight forward; the robot's
+line has a rate (``config.baud``, changed by the Baud command) and the host's
+(:attr:`Create2Engine.host_baud`, which the transport reports) must match it or
+each side reads garbage (fakes/create2/line.py); what the robot sends goes
+through a bounded send buffer drained at its line rate, so a stream beyond the
+rate is cut short (corrupted), never queued without bound; Passive sleeps after
+5 minutes (simulated) without a command; Safe and Full take effect
+``config.mode_change_s`` after their command.
 """
 
 from __future__ import annotations
@@ -20,6 +30,7 @@ from collections.abc import Callable
 
 from fakes.create2.body import Create2Body
 from fakes.create2.config import EVENTS, Create2Config
+from fakes.create2.line import accepted, carried
 from fakes.create2.truth import CommandRecord, Create2Truth
 from fakes.nomad.engine import DISCONNECT, Disconnect
 from odohil.errors import ParameterError
@@ -61,6 +72,12 @@ CLIFF_IDS = {
     "cliff_front_right": Packet.CLIFF_FRONT_RIGHT,
     "cliff_right": Packet.CLIFF_RIGHT,
 }
+TX_BUFFER_BYTES = 128
+"""The robot's send buffer, bytes (C26): bytes that would not fit behind what is
+still waiting to leave at the line rate are dropped."""
+BAUD_SWITCH_S = 0.1
+"""After a Baud command the robot drops what arrives for this long, s (p.9:
+"wait 100 ms before sending commands at the new baud rate")."""
 SENSOR_OPCODES = frozenset({Opcode.SENSORS, Opcode.QUERY_LIST})
 ACTUATORS = frozenset(
     {
@@ -114,6 +131,15 @@ class Create2Engine:
         self.mode = Mode.OFF
         self.asleep = False
         self.baud = config.baud
+        self.host_baud: int | None = None
+        """The host's line rate as the transport knows it (None: the same as the robot's)."""
+        self._baud_switch_until = -1.0
+        self._tx_free_at = -1.0
+        self._pending_mode: tuple[Mode, float] | None = None
+        self._last_command_wall = self.wall0
+        self.unknown_opcodes = 0
+        self.framing_errors = 0
+        self.dropped_out_bytes = 0
         self._splitter = CommandSplitter()
         self._out: list[tuple[float, Output]] = []
         self._tick = 0
@@ -146,8 +172,17 @@ class Create2Engine:
         self.poll(now)
         if self.disconnected or not data or self.asleep:
             return
+        if now < self._baud_switch_until:
+            self.framing_errors += len(data)
+            return
+        if self.host_baud is not None and self.host_baud != self.baud:
+            data, errors = accepted(data, self.host_baud, self.baud)
+            self.framing_errors += errors
         self.body.advance(self.sim_time(now))
         for command in self._splitter.feed(data):
+            if now < self._baud_switch_until:  # sent at the old rate after a Baud
+                self.framing_errors += 1 + len(command.data)
+                continue
             self._execute(command, now)
 
     def poll(self, now: float | None = None) -> None:
@@ -159,9 +194,38 @@ class Create2Engine:
             at = self._tick_wall(self._tick)
             self.body.advance(self.sim_time(at))
             self._fire_faults(at)
+            self._settle_mode(at)
+            self._maybe_sleep(at)
             self._update_values()
-            if self.stream_ids and not self.stream_paused and self.mode != Mode.OFF:
+            if self._streaming():
                 self._emit(at, encode_frame(self.stream_ids, self._read_values(self.stream_ids)))
+        self._settle_mode(now)
+
+    def _streaming(self) -> bool:
+        return (
+            bool(self.stream_ids)
+            and not self.stream_paused
+            and self.mode != Mode.OFF
+            and not self.asleep
+        )
+
+    def _settle_mode(self, now: float) -> None:
+        """A Safe or Full command takes effect ``config.mode_change_s`` after it (C28)."""
+        if self._pending_mode is not None and now >= self._pending_mode[1]:
+            self.mode = self._pending_mode[0]
+            self._pending_mode = None
+            self._update_values_now()
+
+    def _maybe_sleep(self, now: float) -> None:
+        """Passive sleeps after ``config.passive_sleep_s`` simulated seconds
+        without a command (p.7; C27)."""
+        limit = self.config.passive_sleep_s
+        if limit is None or self.mode != Mode.PASSIVE or self.asleep:
+            return
+        if (now - self._last_command_wall) * self.config.time_scale >= limit:
+            _LOG.info("Passive for %g s without a command: asleep", limit)
+            self._enter_passive()
+            self.asleep = True
 
     def take_output(self, now: float | None = None) -> list[Output]:
         """The writes due by ``now``, in order (bytes, or the disconnect marker)."""
@@ -180,7 +244,7 @@ class Create2Engine:
         """Wall time of the next write: queued output or the next stream frame."""
         if self._out:
             return self._out[0][0]
-        if self.stream_ids and not self.stream_paused and not self.muted:
+        if self._streaming() and not self.muted:
             return self._tick_wall(self._tick + 1)
         return None
 
@@ -204,6 +268,10 @@ class Create2Engine:
             commands=tuple(self.commands),
             faults_fired=tuple(self.faults_fired),
             disconnected=self.disconnected,
+            unknown_opcodes=self.unknown_opcodes,
+            framing_errors=self.framing_errors,
+            dropped_out_bytes=self.dropped_out_bytes,
+            baud=self.baud,
         )
 
     def event(self, name: str) -> None:
@@ -230,8 +298,19 @@ class Create2Engine:
         values[38] = len(self.stream_ids)
         values.update(self.requested)
         values[43], values[44] = left, right
-        values[58] = 1 if self.body.moving else 0
+        values[58] = 1 if self._forward_progress() else 0
         self.values = values
+
+    def _forward_progress(self) -> bool:
+        """Packet 58 bit 0 (p.32): 1 while making forward progress, always 0
+        while turning, driving backward or not driving (C25: both wheels
+        forward at the same speed)."""
+        left, right = self.body.left, self.body.right
+        return (
+            self.body.moving
+            and not (left.stalled or right.stalled)
+            and left.speed_mm_s == right.speed_mm_s > 0.0
+        )
 
     def _read_values(self, ids: tuple[int, ...]) -> dict[int, int]:
         """The values for a reply of ``ids``; 19 and 20, when asked, are the
@@ -246,8 +325,11 @@ class Create2Engine:
     # ---- commands --------------------------------------------------------------------
     def _execute(self, command: Command, now: float) -> None:
         op = command.opcode
+        self._settle_mode(now)
+        self._last_command_wall = now
         if not command.known:
             _LOG.info("unknown opcode %d skipped (C10)", op)
+            self.unknown_opcodes += 1
             return
         if self.mode == Mode.OFF and op not in (Opcode.START, Opcode.RESET):
             _LOG.info("opcode %d ignored while the OI is Off", op)
@@ -274,6 +356,7 @@ class Create2Engine:
             self._enter_passive()
             self.mode = Mode.OFF
             self.stream_ids = ()
+            self.stream_paused = False
             self.body.reset_encoders()
             self._emit(now, self._banner())
         elif op == Opcode.START:
@@ -283,9 +366,9 @@ class Create2Engine:
             self.mode = Mode.OFF
             self.stream_ids = ()
         elif op in (Opcode.SAFE, Opcode.CONTROL):
-            self.mode = Mode.SAFE
+            self._change_mode(Mode.SAFE, now)
         elif op == Opcode.FULL:
-            self.mode = Mode.FULL
+            self._change_mode(Mode.FULL, now)
         elif op == Opcode.POWER:
             self._enter_passive()
             self.asleep = True
@@ -294,6 +377,7 @@ class Create2Engine:
         elif op == Opcode.BAUD:
             if data[0] < len(BAUD_RATES):
                 self.baud = BAUD_RATES[data[0]]
+                self._baud_switch_until = now + BAUD_SWITCH_S
         elif op == Opcode.STREAM:
             ids = tuple(pid for pid in data[1:] if is_valid_id(pid))
             self.stream_ids = ids
@@ -301,7 +385,8 @@ class Create2Engine:
             budget = int(self.baud / 10 * STREAM_PERIOD_S)
             if ids and frame_size(ids) > budget:
                 _LOG.warning(
-                    "stream frame of %d bytes exceeds %d bytes per 15 ms at %d baud",
+                    "stream frame of %d bytes exceeds %d bytes per 15 ms at %d baud: "
+                    "the stream will be corrupted",
                     frame_size(ids),
                     budget,
                     self.baud,
@@ -327,10 +412,20 @@ class Create2Engine:
             scale = MAX_SPEED_MM_S / MAX_PWM
             self.body.set_wheels(right_pwm * scale, left_pwm * scale)
 
+    def _change_mode(self, mode: Mode, now: float) -> None:
+        """Safe or Full, once the OI has had ``config.mode_change_s`` (C28)."""
+        if self.config.mode_change_s <= 0.0:
+            self.mode = mode
+            self._pending_mode = None
+        elif mode != self.mode or self._pending_mode is not None:
+            self._pending_mode = (mode, now + self.config.mode_change_s)
+
     def _enter_passive(self) -> None:
-        """Passive: wheels stop, requested speeds read 0 (C6, C15)."""
+        """Passive: wheels stop, requested speeds read 0 (C6, C15); at once,
+        and a pending Safe or Full is dropped."""
         self.body.stop()
         self.mode = Mode.PASSIVE
+        self._pending_mode = None
         for key in self.requested:
             self.requested[key] = 0
 
@@ -406,6 +501,20 @@ class Create2Engine:
         if self.garble_next:
             self.garble_next = False
             data = data[:-1] + bytes((data[-1] ^ 0x01,))
+        # the send buffer drains at the line rate; what does not fit is lost (C26)
+        byte_s = 10.0 / self.baud
+        waiting = max(0.0, self._tx_free_at - at) / byte_s
+        room = max(0, int(TX_BUFFER_BYTES - waiting + 1e-9))
+        if room < len(data):
+            self.dropped_out_bytes += len(data) - room
+            data = data[:room]
+        if not data:
+            return
+        self._tx_free_at = max(self._tx_free_at, at) + len(data) * byte_s
+        if self.host_baud is not None and self.host_baud != self.baud:
+            data = carried(data, self.baud, self.host_baud)  # the host reads garbage
+            if not data:
+                return
         self._out.append((at, data))
 
 

@@ -50,6 +50,12 @@ class Create2Truth:
         commands: every non-sensor command executed, in order.
         faults_fired: a line per fault or event injected, in order.
         disconnected: whether the line was cut (fault ``disconnect``).
+        unknown_opcodes: command bytes the OI skipped as undefined opcodes.
+        framing_errors: bytes from the host the OI dropped (a host at another
+            line rate, or bytes within 100 ms of a Baud command).
+        dropped_out_bytes: bytes the robot could not send (its send buffer
+            full: a stream beyond the line rate).
+        baud: the robot's line rate now, baud.
     """
 
     sim_time_s: float
@@ -67,6 +73,10 @@ class Create2Truth:
     commands: tuple[CommandRecord, ...]
     faults_fired: tuple[str, ...]
     disconnected: bool
+    unknown_opcodes: int = 0
+    framing_errors: int = 0
+    dropped_out_bytes: int = 0
+    baud: int = 115200
 
     def to_json(self) -> str:
         """One JSON line (no newline)."""

@@ -12,9 +12,46 @@ import time
 
 import serial
 
-START, SAFE, FULL, STOP, RESET = 128, 131, 132, 173, 7
+START, SAFE, FULL, STOP, RESET, BAUD = 128, 131, 132, 173, 7, 129
 SENSORS, QUERY, STREAM, PAUSE = 142, 149, 148, 150
 DRIVE, DIRECT = 137, 145
+DEFINED_OPCODES = frozenset({7, *range(128, 147), 148, 149, 150, 162, 163, 164, 165, 167, 168, 173})
+"""Every opcode the spec defines (p.8-22; 147 and 151-158 were removed, p.40)."""
+BAUD_CODES = (300, 600, 1200, 2400, 4800, 9600, 14400, 19200, 28800, 38400, 57600, 115200)
+"""Baud command (129) codes 0-11 (p.9)."""
+LIBCREATE_IDS = (
+    7,
+    8,
+    9,
+    10,
+    11,
+    12,
+    13,
+    14,
+    15,
+    17,
+    18,
+    21,
+    22,
+    23,
+    24,
+    25,
+    26,
+    35,
+    43,
+    44,
+    45,
+    46,
+    47,
+    48,
+    49,
+    50,
+    51,
+    52,
+    53,
+    58,
+)
+"""The 30 packets libcreate streams from a Create 2 (facts §6): a 75-byte frame."""
 
 
 def direct(right: int, left: int) -> bytes:
@@ -45,8 +82,12 @@ def split_frames(data: bytes) -> list[bytes]:
 class Host:
     """Raw bytes over a pyserial port to the fake's pty."""
 
-    def __init__(self, device: str) -> None:
-        self.port = serial.Serial(device, 115200, timeout=0.05)
+    def __init__(self, device: str, baud: int = 115200) -> None:
+        self.port = serial.Serial(device, baud, timeout=0.05)
+
+    def set_baud(self, baud: int) -> None:
+        """Change the host's line rate (pyserial sets the tty's speed)."""
+        self.port.baudrate = baud
 
     def close(self) -> None:
         """Close the port."""
@@ -84,6 +125,10 @@ class Host:
         reply = self.ask(bytes((QUERY, 2, 43, 44)), 4)
         left, right = struct.unpack(">HH", reply)
         return left, right
+
+    def stasis(self) -> int:
+        """Packet 58: bit0 forward progress, bit1 stasis disabled (p.32)."""
+        return self.ask(bytes((SENSORS, 58)), 1)[0]
 
     def requested(self) -> tuple[int, int]:
         """Packets 41, 42: right and left velocity last requested, mm/s."""

@@ -63,6 +63,14 @@ def stream_frame(name: str, ids: list[int], b: list[int], values: dict[int, int]
     )
 
 
+def sequence(name: str, b: list[int], constant: str, opcodes: list[int], source: str) -> None:
+    V.append(
+        dict(
+            name=name, kind="sequence", hex=hx(b), constant=constant, opcodes=opcodes, source=source
+        )
+    )
+
+
 def wrap(name: str, prev: int, cur: int, delta: int) -> None:
     V.append(dict(name=name, kind="wrap", previous=prev, current=cur, delta=delta, source="§11"))
 
@@ -89,9 +97,12 @@ command("Sensors 100", [142, 100], "sensors", [100], "§4")
 command("Query 43,44", [149, 2, 43, 44], "query_list", [43, 44], "§11")
 command("Stream 43,44", [148, 2, 43, 44], "stream", [43, 44], "§11")
 command("Stream 7,35,43,44", [148, 4, 7, 35, 43, 44], "stream", [7, 35, 43, 44], "§11")
-command("Stream none", [148, 0], "stream", [], "C8")
+command("Stream none (undocumented; the host never sends it)", [148, 0], "stream", [], "C8")
 command("Pause", [150, 0], "pause_resume", [0], "§11")
 command("Resume", [150, 1], "pause_resume", [1], "§11")
+
+# ---- command sequences ----
+sequence("Resync: Start x 16", [128] * 16, "RESYNC", [128] * 16, "§9 (S6), C10")
 
 # ---- raw replies ----
 reply("Mode Safe", [35], [2], {35: 2}, "§11")

@@ -87,10 +87,11 @@ def test_reverse_trial_ends_where_it_started_and_close_leaves_the_oi_off(
     assert abs(truth.left_counts) < 5
     assert truth.left_counts == truth.right_counts
     sent = opcodes(process)
-    # 148 0 (no stream), Safe, 148 n ids (the driver's stream), then Drive Direct only
-    assert sent[:4] == [Opcode.START, Opcode.STREAM, Opcode.SAFE, Opcode.STREAM]
+    # 16 Starts (resync), 150 0 (pause an old stream), Safe, 148 n ids (the
+    # driver's stream), then Drive Direct only
+    assert sent[:19] == [Opcode.START] * 16 + [Opcode.PAUSE_RESUME, Opcode.SAFE, Opcode.STREAM]
     assert Opcode.FULL not in sent
-    assert set(sent[4:]) == {Opcode.DRIVE_DIRECT}
+    assert set(sent[19:]) == {Opcode.DRIVE_DIRECT}
     robot.close()
     time.sleep(0.05)
     truth = process.truth()
@@ -232,7 +233,7 @@ def test_silent_robot_fails_to_connect() -> None:
         # a robot that answers nothing: the OI sleeps after Power (133)
         import serial
 
-        with serial.Serial(process.device) as port:
+        with serial.Serial(process.device, 115200) as port:
             port.write(bytes((128, 133)))
         with pytest.raises(ConnectionFailedError, match="does not answer"):
             Create2Robot.connect(process.device, open_wait_s=0.05)

@@ -8,12 +8,11 @@ import struct
 import subprocess
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 
 import pytest
 
-from fakes.create2.process import Create2Process
-
+from .conftest import Robot
 from .host import (
     FULL,
     PAUSE,
@@ -32,30 +31,15 @@ from .host import (
 )
 
 COUNTS_PER_MM = 508.8 / (math.pi * 72.0)
+MODE_WAIT_S = 0.1
+"""A host waits this long after Safe or Full (libcreate), s: the OI needs time
+to change modes (tests/create2/test_fake_spec.py)."""
 
 
-class Robot:
-    def __init__(self, process: Create2Process) -> None:
-        self.process = process
-        self.host = Host(process.device)
-
-
-@pytest.fixture
-def robot() -> Iterator[Callable[..., Robot]]:
-    """Factory: ``robot(*args)`` starts ``python -m fakes.create2 --seed 3 ARGS``."""
-    started: list[Robot] = []
-
-    def start(*args: str, use_cli: bool = False) -> Robot:
-        process = Create2Process(["--seed", "3", "--no-pacing", *args], use_cli=use_cli)
-        process.__enter__()
-        r = Robot(process)
-        started.append(r)
-        return r
-
-    yield start
-    for r in started:
-        r.host.close()
-        r.process.stop()
+def mode_command(h: Host, *opcodes: int) -> None:
+    """Send mode commands, then wait for the OI to change modes."""
+    h.send(bytes(opcodes))
+    time.sleep(MODE_WAIT_S)
 
 
 def test_mode_state_machine(robot: Callable[..., Robot]) -> None:
@@ -64,16 +48,17 @@ def test_mode_state_machine(robot: Callable[..., Robot]) -> None:
     assert h.mode() is None  # Off: listens only for Start
     h.send(bytes((START,)))
     assert h.mode() == 1
-    h.send(bytes((SAFE,)))
+    mode_command(h, SAFE)
     assert h.mode() == 2
-    h.send(bytes((FULL,)))
+    mode_command(h, FULL)
     assert h.mode() == 3
     h.send(bytes((START,)))
     assert h.mode() == 1
     h.send(bytes((STOP,)))
     assert h.mode() is None
+    # the mode right after each command: Safe and Full take effect later
     modes = [rec.mode for rec in r.process.truth().commands]
-    assert modes == [1, 2, 3, 1, 0]
+    assert modes == [1, 1, 2, 1, 0]
 
 
 def test_drive_direct_counts_forward_and_passive_ignores_it(robot: Callable[..., Robot]) -> None:
@@ -85,7 +70,8 @@ def test_drive_direct_counts_forward_and_passive_ignores_it(robot: Callable[...,
     time.sleep(0.2)
     assert h.encoders() == before
     assert h.requested() == (0, 0)
-    h.send(bytes((SAFE,)) + direct(200, 200))
+    mode_command(h, SAFE)
+    h.send(direct(200, 200))
     time.sleep(0.1)
     assert h.requested() == (200, 200)
     time.sleep(0.4)
@@ -105,7 +91,7 @@ def test_drive_direct_counts_forward_and_passive_ignores_it(robot: Callable[...,
 def test_backwards_through_zero_the_counts_wrap(robot: Callable[..., Robot]) -> None:
     r = robot("--encoder-origin", "5")
     h = r.host
-    h.send(bytes((START, SAFE)))
+    mode_command(h, START, SAFE)
     assert h.encoders() == (5, 5)
     h.send(direct(-150, -150))
     time.sleep(0.3)
@@ -122,7 +108,7 @@ def test_backwards_through_zero_the_counts_wrap(robot: Callable[..., Robot]) -> 
 def test_spin_counts_each_wheel_in_its_commanded_direction(robot: Callable[..., Robot]) -> None:
     r = robot()
     h = r.host
-    h.send(bytes((START, SAFE)))
+    mode_command(h, START, SAFE)
     h.ask(bytes((SENSORS, 20)), 2)  # reset the angle accumulator
     h.send(drive(100, 1))  # spin CCW: right +, left -
     time.sleep(0.3)
@@ -140,7 +126,7 @@ def test_spin_counts_each_wheel_in_its_commanded_direction(robot: Callable[..., 
 def test_angle_bug_and_mode_offset(robot: Callable[..., Robot]) -> None:
     r = robot("--angle-bug", "--mode-offset", "1")
     h = r.host
-    h.send(bytes((START, SAFE)))
+    mode_command(h, START, SAFE)
     assert h.mode() == 3  # Safe reported +1 (the 6xx bug)
     h.ask(bytes((SENSORS, 20)), 2)
     h.send(drive(100, -1))  # spin CW
@@ -157,7 +143,8 @@ def test_angle_bug_and_mode_offset(robot: Callable[..., Robot]) -> None:
 def test_stream_frames_every_15_ms_pause_and_resume(robot: Callable[..., Robot]) -> None:
     r = robot()
     h = r.host
-    h.send(bytes((START, SAFE, STREAM, 4, 7, 35, 43, 44)))
+    mode_command(h, START, SAFE)
+    h.send(bytes((STREAM, 4, 7, 35, 43, 44)))
     data = h.read_for(0.6)
     frames = split_frames(data)
     assert 25 <= len(frames) <= 45  # 0.6 s / 15 ms = 40
@@ -182,7 +169,7 @@ def test_stream_frames_every_15_ms_pause_and_resume(robot: Callable[..., Robot])
 def test_group_100_offsets(robot: Callable[..., Robot]) -> None:
     r = robot("--encoder-origin", "65000")
     h = r.host
-    h.send(bytes((START, SAFE)))
+    mode_command(h, START, SAFE)
     group = h.ask(bytes((SENSORS, 100)), 80)
     assert len(group) == 80
     assert group[40] == 2  # 35 mode @40
@@ -196,7 +183,8 @@ def test_cliff_in_safe_stops_and_drops_to_passive_full_ignores(
 ) -> None:
     r = robot()
     h = r.host
-    h.send(bytes((START, SAFE)) + direct(200, 200))
+    mode_command(h, START, SAFE)
+    h.send(direct(200, 200))
     time.sleep(0.1)
     r.process.event("cliff_front_left")
     assert h.mode() == 1
@@ -207,7 +195,8 @@ def test_cliff_in_safe_stops_and_drops_to_passive_full_ignores(
     assert reply == bytes((0, 0, 1, 0, 0))
     assert h.requested() == (0, 0)
     # Full: no safety stop
-    h.send(bytes((FULL,)) + direct(200, 200))
+    mode_command(h, FULL)
+    h.send(direct(200, 200))
     time.sleep(0.05)
     r.process.event("wheel_drop")
     assert h.mode() == 3
@@ -218,7 +207,8 @@ def test_cliff_in_safe_stops_and_drops_to_passive_full_ignores(
 def test_fault_wheel_drop_at_a_distance(robot: Callable[..., Robot]) -> None:
     r = robot("--fault", "wheel_drop_left@0.05", "--time-scale", "2")
     h = r.host
-    h.send(bytes((START, SAFE)) + direct(250, 250))
+    mode_command(h, START, SAFE)
+    h.send(direct(250, 250))
     time.sleep(0.3)
     truth = r.process.truth()
     assert truth.mode == 1

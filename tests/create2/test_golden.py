@@ -22,6 +22,7 @@ COMMANDS = golden("command")
 REPLIES = golden("reply")
 FRAMES = golden("frame")
 WRAPS = golden("wrap")
+SEQUENCES = golden("sequence")
 
 
 def _ids(v: dict[str, Any]) -> str:
@@ -63,6 +64,15 @@ def test_command_splits_back_whole(vector: dict[str, Any]) -> None:
     assert command.known
     assert bytes((command.opcode,)) + command.data == data
     assert splitter.pending == b""
+
+
+@pytest.mark.parametrize("vector", SEQUENCES, ids=_ids)
+def test_sequence_is_its_bytes_and_splits_into_its_commands(vector: dict[str, Any]) -> None:
+    data = bytes.fromhex(vector["hex"])
+    assert getattr(commands, vector["constant"]) == data
+    out = CommandSplitter().feed(data)
+    assert [c.opcode for c in out] == vector["opcodes"]
+    assert all(c.known for c in out)
 
 
 @pytest.mark.parametrize("vector", REPLIES, ids=_ids)
@@ -110,6 +120,7 @@ def test_unknown_opcode_is_skipped_and_partial_command_waits() -> None:
     assert [(c.opcode, c.known) for c in out] == [(0, False)]
     assert splitter.pending == bytes((0x91, 0x00))
     out = splitter.feed(commands.RESYNC)
-    assert out[0] == Command(0x91, bytes(4))  # the pending Drive Direct, at speed 0
-    assert out[-1] == Command(0x80, b"")
+    # the pending Drive Direct completes on Start bytes, then Starts only
+    assert out[0] == Command(0x91, bytes((0x00, 0x80, 0x80, 0x80)))
+    assert out[1:] == [Command(0x80, b"")] * (commands.RESYNC_STARTS - 3)
     assert splitter.pending == b""

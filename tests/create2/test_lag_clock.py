@@ -30,9 +30,14 @@ def test_gaps_longer_than_the_bound_are_cut() -> None:
 
 def _travel_while_away(query: str, away_s: float) -> float:
     """Metres the fake drives at 100 mm/s while its host sleeps ``away_s``."""
-    port = serial.serial_for_url(f"fakecreate2://?seed=1&time_scale=10{query}", timeout=0.1)
+    port = serial.serial_for_url(
+        f"fakecreate2://?seed=1&time_scale=10{query}", baudrate=115200, timeout=0.1
+    )
     with port:
         port.write(commands.start() + commands.safe())
+        deadline = time.monotonic() + 1.0
+        while port.truth().mode != 2 and time.monotonic() < deadline:
+            time.sleep(0.005)  # the OI takes time to change modes
         before = port.truth().travel_m
         port.write(commands.drive_direct(100, 100))
         time.sleep(away_s)

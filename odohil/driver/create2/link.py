@@ -3,7 +3,8 @@
 Readings are the packets the driver needs (:data:`SAMPLE_IDS`), taken either
 by polling (Query List, replied raw: the input is flushed before each request
 and requests come no faster than every 15 ms, facts §8) or from a stream
-(frames every 15 ms, aligned on 19 and confirmed by their checksum, §6). The
+(frames every 15 ms, aligned on 19 and confirmed by their checksum, §6; only
+where the frame fits the line's 15 ms, else polling). The
 port is opened with ``serial.serial_for_url``, so a device, ``socket://``,
 ``rfc2217://`` and ``fakecreate2://`` share this code.
 """
@@ -47,6 +48,10 @@ READ_SLICE_S = 0.005
 """pyserial read timeout: how often the link checks its own deadlines, s."""
 REPLY_TIMEOUT_S = 1.0
 """Longest wait for a reading, s (66 stream frames; the Nomad link's normal timeout)."""
+DRAIN_QUIET_S = 0.05
+"""The input is drained when nothing has come for this long, s (over three stream periods)."""
+DRAIN_TIMEOUT_S = 1.0
+"""Longest drain, s."""
 _IO_ERRORS = IO_ERRORS
 
 
@@ -124,6 +129,8 @@ class Create2Link:
     ) -> None:
         if sampling not in SAMPLINGS:
             raise ParameterError(f"sampling must be one of {SAMPLINGS}, got {sampling!r}")
+        if sampling == "stream" and not stream_fits(baud):
+            sampling = "poll"  # the frame would not fit the line: a corrupted stream
         self.port = port
         self.url = url
         self.baud = baud
@@ -205,9 +212,32 @@ class Create2Link:
         self.streaming = True
 
     def stop_stream(self) -> None:
-        """Stop the stream (``148 0``)."""
-        self.send(commands.stream([]))
+        """Pause the stream (Pause/Resume ``150 0``, p.22; the list is kept)."""
+        self.send(commands.pause_resume(False))
         self.streaming = False
+
+    def drain_input(
+        self, quiet_s: float = DRAIN_QUIET_S, timeout_s: float = DRAIN_TIMEOUT_S
+    ) -> int:
+        """Read and drop input until none has come for ``quiet_s``; the bytes
+        dropped. ProtocolError when the robot is still sending after ``timeout_s``
+        (a stream that did not pause)."""
+        dropped = 0
+        start = time.monotonic()
+        quiet_since = start
+        while True:
+            got = self._read(4096)
+            now = time.monotonic()
+            if got:
+                dropped += len(got)
+                quiet_since = now
+            elif now - quiet_since >= quiet_s:
+                return dropped
+            if now - start >= timeout_s:
+                raise ProtocolError(
+                    f"{self.url} still sends after {timeout_s:g} s ({dropped} bytes) "
+                    "although its stream was paused"
+                )
 
     def reading(self, timeout_s: float = REPLY_TIMEOUT_S) -> Reading:
         """The freshest reading: polled, or the newest complete stream frame."""
@@ -238,6 +268,12 @@ class Create2Link:
         self.closed = True
         with contextlib.suppress(*_IO_ERRORS):
             self.port.close()
+
+
+def stream_fits(baud: int) -> bool:
+    """Whether the stream frame of :data:`SAMPLE_IDS` leaves the line within one
+    15 ms period at ``baud`` (p.22: a stream beyond that becomes corrupted)."""
+    return frame_size(SAMPLE_IDS) * 10.0 / baud <= STREAM_PERIOD_S
 
 
 def reply_size_of_samples() -> int:

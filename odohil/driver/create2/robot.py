@@ -3,11 +3,14 @@
 What it sends (facts §3-§9 and the CHOICEs in protocols/create2/README.md):
 
 - connect: wait after opening (1 s, C17), resynchronise the command parser
-  (16 x ``00`` then Start, C10), stop any stream (``148 0``), then read the
+  (16 x Start, facts §9 and C10), pause any stream a previous host left
+  (Pause/Resume ``150 0``, p.22), drop what is still arriving, then read the
   mode: it must be Passive; a robot that reports 2 there has the +1 mode bug
   (C7) and every later mode reading is corrected by it;
-- arm: Safe (``131``; Full ``132`` only when asked), checked by reading the
-  mode back; refused while a cliff, wheel drop or bump is reported; then the
+- arm: Safe (``131``; Full ``132`` only when asked), then a wait for the OI to
+  change modes (100 ms, as libcreate; pycreate2 waits 0.5 s) and the mode read
+  back until it is the one asked for (at most 0.5 s) before anything else is
+  sent; refused while a cliff, wheel drop or bump is reported; then the
   stream of the driver's packets starts (``148``; or, with ``sampling="poll"``,
   every reading is a Query List): bench/create2_leg_end.py found streaming
   ends legs at least as tightly at 115200 and 19200 baud (BENCHMARKS.md);
@@ -76,7 +79,12 @@ from odohil.units import wrap_angle
 OPEN_WAIT_S = 1.0
 """Wait after opening the port before the first byte, s (C17; libcreate)."""
 MODE_WAIT_S = 0.02
-"""Wait after a mode command, s (C17)."""
+"""Wait after Start, s (C17)."""
+MODE_CHANGE_WAIT_S = 0.1
+"""Wait after Safe or Full before reading the mode back, s: libcreate's wait
+after a mode command (pycreate2 waits 0.5 s "so the bot has time to change modes")."""
+MODE_CHANGE_TIMEOUT_S = 0.5
+"""The mode must read as asked within this long of Safe or Full, s (pycreate2's wait)."""
 CRAWL_MM_S = 40
 """Wheel speed for the last part of a step, mm/s."""
 SLOW_HORIZON_S = 0.045
@@ -188,8 +196,8 @@ class Create2Robot:
             time.sleep(open_wait_s)
             link.send(commands.RESYNC)
             time.sleep(MODE_WAIT_S)
-            link.send(commands.stream([]))
-            time.sleep(MODE_WAIT_S)
+            link.stop_stream()
+            link.drain_input()
             raw = link.ask(commands.sensors(35), 1)[0]
             if raw not in (Mode.PASSIVE, Mode.PASSIVE + 1):
                 raise ConnectionFailedError(
@@ -329,12 +337,17 @@ class Create2Robot:
             self.guardian = start_guardian(self._link.port, CLOSE_BYTES)
         opcode = commands.full() if self.full_mode else commands.safe()
         self._link.send(opcode)
-        time.sleep(MODE_WAIT_S)
-        reading, sample = self._reading_sample()
-        mode = reading.mode_raw - self.mode_offset
+        time.sleep(MODE_CHANGE_WAIT_S)
+        deadline = time.monotonic() + MODE_CHANGE_TIMEOUT_S - MODE_CHANGE_WAIT_S
+        while True:
+            reading, sample = self._reading_sample()
+            mode = reading.mode_raw - self.mode_offset
+            if mode == self._drive_mode or time.monotonic() >= deadline:
+                break
         if mode != self._drive_mode:
             raise SafetyError(
-                f"the OI did not enter {self._drive_mode.name} (it reports mode {mode}); "
+                f"the OI did not enter {self._drive_mode.name} within "
+                f"{MODE_CHANGE_TIMEOUT_S:g} s (it reports mode {mode}); "
                 "nothing moved"
             )
         hazards = reading.hazards()

@@ -25,10 +25,17 @@ STRAIGHT = 0x7FFF
 SPIN_CW = -1
 SPIN_CCW = 1
 
-RESYNC = bytes(16) + bytes((Opcode.START,))
-"""What the host sends to resynchronise the OI's command parser (CHOICE C10):
-16 zero bytes complete any command the host uses and leave any pending Drive
-at velocity 0; unknown opcode 0 bytes are skipped; then Start."""
+RESYNC_STARTS = 16
+"""Start bytes in :data:`RESYNC`: one more than the data bytes of the longest
+command without a list (Schedule, 15)."""
+RESYNC = bytes((Opcode.START,)) * RESYNC_STARTS
+"""What the host sends to resynchronise the OI's command parser (facts §9, S6:
+send Start "enough times"; C10): a command cut short waits for its data bytes
+(p.8), so the first Starts complete it and the rest are Starts, which leave the
+OI in Passive with the wheels stopped. Only defined opcodes, unlike zero bytes
+(opcode 0 is not in the specification). A Drive left pending completes with
+0x8080 fields for the one byte time (87 us at 115200 baud) before the next
+Start stops it."""
 
 
 def _speed(value: int, what: str) -> bytes:
