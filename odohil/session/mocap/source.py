@@ -24,6 +24,9 @@ from odohil.session.mocap.still import StillCriteria, StillPose, take_still_pose
 from odohil.session.mocap.stream import PoseStream
 from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
 
+MIN_PATH_FRAMES = 10
+"""Fewest frames during a motion for its farthest point to be reported."""
+
 
 def pose_sigma_of(description: RobotDescription, url: str) -> tuple[float, float, float]:
     """The description's pose_sigma, or RobotDescriptionError saying it is
@@ -65,12 +68,25 @@ class MotionCaptureSource:
         return take_still_pose(self.stream, self.pose_sigma, self.criteria)
 
     def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
-        """The still pose at the trial's start, as journal data."""
-        return self.still().to_json()
+        """The still pose at the trial's start, as journal data; from here the
+        stream tracks how far the robot goes from it."""
+        still = self.still()
+        self.stream.track_from(still.pose[0], still.pose[1])
+        return still.to_json()
 
     def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
-        """The still pose at the trial's end, as journal data."""
-        return self.still().to_json()
+        """The still pose at the trial's end, as journal data, with the
+        farthest the stream saw the robot from its start during the motion
+        (``excursion_m``, over ``path_frames`` frames) when it saw at least
+        :data:`MIN_PATH_FRAMES` of them (a fast-forwarded fake robot moves
+        between two frames)."""
+        data = self.still().to_json()
+        if ctx.motion_s is not None:
+            excursion, frames = self.stream.excursion_between(*ctx.motion_s)
+            if excursion is not None and frames >= MIN_PATH_FRAMES:
+                data["excursion_m"] = excursion
+                data["path_frames"] = frames
+        return data
 
     def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
         """The end still pose in the start still pose's frame, with its covariance."""
@@ -79,6 +95,7 @@ class MotionCaptureSource:
         end = StillPose.pose_of(ctx.end, f"{where} end")
         cov = self.pose_cov()
         change, change_cov = pose_change_with_covariance(start, end, cov, cov)
+        excursion = ctx.end.get("excursion_m")
         rows = tuple(tuple(float(v) for v in row) for row in change_cov)
         return MeasuredPose(
             pose=change,
@@ -93,4 +110,5 @@ class MotionCaptureSource:
                     f"{ctx.start.get('n_poses', '?')} and {ctx.end.get('n_poses', '?')} frames"
                 )
             },
+            excursion_m=float(excursion) if isinstance(excursion, int | float) else None,
         )

@@ -20,8 +20,8 @@ sender's clock stepped (or the first frame's stamp was the bad one): they
 become the reference.
 
 While a trial runs the stream also tracks how far the robot goes from its
-start (:meth:`PoseStream.track_from`, :meth:`PoseStream.excursion_m`), so a
-stream that says the robot never moved is caught even on a closed path.
+start (:meth:`PoseStream.track_from`, :meth:`PoseStream.excursion_between`),
+so a stream that says the robot never moved is caught even on a closed path.
 
 A line that is not such an object (not JSON, a missing or non-finite member,
 longer than :data:`MAX_LINE_BYTES`) is counted with its reason and dropped;
@@ -55,6 +55,8 @@ above, after which they are taken as the sender's new time line."""
 EXCURSION_FILTER = 5
 """The excursion is the largest running median of this many successive
 distances from the start (one stray frame does not make it)."""
+PATH_FRAMES = 32768
+"""How many tracked distances from the start are kept (5.5 min at 100 Hz)."""
 BUFFER_S = 10.0
 """How many seconds of poses the client keeps (host clock)."""
 DEFAULT_CONNECT_TIMEOUT_S = 5.0
@@ -190,7 +192,7 @@ class PoseStream:
         self._last_bad_time = ""
         self._origin: tuple[float, float] | None = None
         self._recent: deque[float] = deque(maxlen=EXCURSION_FILTER)
-        self._excursion: float | None = None
+        self._path: deque[tuple[float, float]] = deque(maxlen=PATH_FRAMES)
         self._connected_s = 0.0
         self._closed = ""
 
@@ -326,8 +328,7 @@ class PoseStream:
             return
         self._recent.append(math.hypot(pose.x_m - self._origin[0], pose.y_m - self._origin[1]))
         if len(self._recent) == self._recent.maxlen:
-            filtered = sorted(self._recent)[len(self._recent) // 2]
-            self._excursion = max(filtered, self._excursion or 0.0)
+            self._path.append((pose.received_s, sorted(self._recent)[len(self._recent) // 2]))
 
     # -- what callers read -----------------------------------------------
 
@@ -336,14 +337,16 @@ class PoseStream:
         with self._lock:
             self._origin = (x_m, y_m)
             self._recent.clear()
-            self._excursion = None
+            self._path.clear()
 
-    def excursion_m(self) -> float | None:
-        """The farthest the poses went from the point given to :meth:`track_from`
-        since then, m: the largest running median of :data:`EXCURSION_FILTER`
-        successive distances; None before that many poses."""
+    def excursion_between(self, begin_s: float, end_s: float) -> tuple[float | None, int]:
+        """The farthest the poses that arrived in [begin_s, end_s] (host clock)
+        went from the point given to :meth:`track_from`, m (each the running
+        median of :data:`EXCURSION_FILTER` successive distances; None when
+        none arrived), and how many arrived."""
         with self._lock:
-            return self._excursion
+            inside = [d for t, d in self._path if begin_s <= t <= end_s]
+        return (max(inside) if inside else None), len(inside)
 
     def status(self) -> StreamStatus:
         """What the stream has delivered so far."""
