@@ -69,7 +69,7 @@ from odohil.science.robot_description import RobotDescription, parse_robot_descr
 from odohil.session import state as ev
 from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
-from odohil.session.plausibility import judge
+from odohil.session.plausibility import far_window, judge
 from odohil.session.pose_source import MeasuredPose, PoseSource, TrialContext
 from odohil.session.robot import Robot, SampleCallback
 from odohil.session.signals import SignalReceived, signals_held
@@ -554,7 +554,7 @@ class SessionEngine:
         ctx = replace(
             self._context(opened),
             encoder_end_pose=record.end_pose,
-            motion_s=(record.started_s, record.ended_s),
+            far_s=far_window(record),
         )
         end = dict(self.source.at_end(ctx))
         self._log(

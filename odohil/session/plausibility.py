@@ -30,9 +30,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from odohil.driver.odometry import TrialMotion
 from odohil.science.floor_marks import PoseDistribution
 from odohil.science.pose_selection import (
     IMPLAUSIBLE_SIGMAS,
+    SCALE_FLOOR_M,
     SLIP_LEVEL,
     PoseCheck,
     ScaleCheck,
@@ -71,6 +73,20 @@ class Judgement:
 
     measured: MeasuredPose
     refusal: str = ""
+
+
+def far_window(motion: TrialMotion) -> tuple[float, float] | None:
+    """Host times (s) of the first and last odometry sample of the motion at
+    least half the farthest sample's distance from its start, or None when
+    the farthest is within :data:`~odohil.science.pose_selection.SCALE_FLOOR_M`."""
+    samples = (*motion.samples, motion.end)
+    x0, y0 = motion.start.x_m, motion.start.y_m
+    distances = [math.hypot(s.x_m - x0, s.y_m - y0) for s in samples]
+    farthest = max(distances)
+    if farthest <= SCALE_FLOOR_M:
+        return None
+    far = [s.host_time_s for s, d in zip(samples, distances, strict=True) if d >= farthest / 2]
+    return (far[0], far[-1])
 
 
 def encoder_excursion(trajectory: Sequence[Sequence[float]], end_pose: Pose) -> float:

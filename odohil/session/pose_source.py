@@ -68,8 +68,11 @@ class TrialContext:
         predicted: the model's predictive distribution of the pose change,
             given the odometry, at the current estimate (or the description's
             priors); None before the motion is done.
-        motion_s: host monotonic times (:func:`time.monotonic`, s) the motion
-            started and ended, given to ``at_end`` (None otherwise).
+        far_s: host monotonic times (:func:`time.monotonic`, s) between which
+            the encoders put the robot at least half its farthest distance from
+            the start, given to ``at_end``; a source that watches the path
+            reports what it saw then (None: not given, or the motion went
+            nowhere).
     """
 
     trial: int
@@ -86,7 +89,7 @@ class TrialContext:
     slip: str = ""
     extra: tuple[tuple[str, str, float], ...] = ()
     predicted: PosePrior | None = None
-    motion_s: tuple[float, float] | None = None
+    far_s: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)

@@ -72,9 +72,10 @@ def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
 
 @pytest.fixture
 def watched(tmp_path: Path) -> Iterator[EmulatorProcess]:
-    """A fake robot slow enough (time scale 50: a 1 m closed trial takes about
-    0.3 s) that a 100 Hz stream sees its path, not only its ends."""
-    with _emulator(tmp_path, "50") as process:
+    """A fake robot slow enough (time scale 20: a 1 m closed trial takes about
+    0.7 s, 0.35 s of it beyond half a metre) that a 100 Hz stream sees its
+    path, not only its ends."""
+    with _emulator(tmp_path, "20") as process:
         yield process
 
 

@@ -346,3 +346,22 @@ def test_a_sender_clock_that_steps_is_followed_after_a_few_frames() -> None:
     assert still.n_poses >= 15
     assert 1 <= status.n_bad_time <= 10
     assert still.t_span[0] > 3600.0
+
+
+def test_the_farthest_point_of_a_path_ignores_one_stray_frame() -> None:
+    def frame(t: float) -> bytes:
+        if 0.5 < t < 0.52:  # one frame of another body, 10 m away
+            return pose_line(t, WORLD[0] + 10.0, WORLD[1], WORLD[2])
+        out = max(0.0, 0.5 - abs(t - 0.6))  # out to 0.5 m at t = 0.6 s, and back
+        return pose_line(t, WORLD[0], WORLD[1] + out, WORLD[2])
+
+    with FrameServer(frame) as server, PoseStream(server.url) as stream:
+        assert stream.wait_for_pose(1.0)
+        stream.track_from(WORLD[0], WORLD[1])
+        begin = stream.clock()
+        time.sleep(1.3)
+        excursion, frames = stream.excursion_between(begin, stream.clock())
+        none, zero = stream.excursion_between(begin - 10.0, begin - 5.0)
+    assert frames >= 60
+    assert excursion == pytest.approx(0.5, abs=0.03)
+    assert (none, zero) == (None, 0)

@@ -24,8 +24,9 @@ from odohil.session.mocap.still import StillCriteria, StillPose, take_still_pose
 from odohil.session.mocap.stream import PoseStream
 from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
 
-MIN_PATH_FRAMES = 10
-"""Fewest frames during a motion for its farthest point to be reported."""
+MIN_PATH_FRAMES = 5
+"""Fewest frames, while the encoders put the robot far from its start, for
+the farthest point the stream saw to be reported."""
 
 
 def pose_sigma_of(description: RobotDescription, url: str) -> tuple[float, float, float]:
@@ -76,13 +77,13 @@ class MotionCaptureSource:
 
     def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
         """The still pose at the trial's end, as journal data, with the
-        farthest the stream saw the robot from its start during the motion
-        (``excursion_m``, over ``path_frames`` frames) when it saw at least
-        :data:`MIN_PATH_FRAMES` of them (a fast-forwarded fake robot moves
-        between two frames)."""
+        farthest the stream saw the robot from its start while the encoders
+        put it far (``ctx.far_s``): ``excursion_m``, over ``path_frames``
+        frames, when at least :data:`MIN_PATH_FRAMES` arrived then (a
+        fast-forwarded fake robot may pass between two frames)."""
         data = self.still().to_json()
-        if ctx.motion_s is not None:
-            excursion, frames = self.stream.excursion_between(*ctx.motion_s)
+        if ctx.far_s is not None:
+            excursion, frames = self.stream.excursion_between(*ctx.far_s)
             if excursion is not None and frames >= MIN_PATH_FRAMES:
                 data["excursion_m"] = excursion
                 data["path_frames"] = frames
