@@ -143,15 +143,23 @@ def _refusal(
 
 
 def unit_error(measured: MeasuredPose, predicted: PoseDistribution, statistic: float) -> str:
-    """The unit the measurement's distances are likely in, when dividing them
-    by its factor makes the pose fit the prediction ("" when none does)."""
-    for factor, unit in UNIT_RATIOS:
-        scale = np.array([1.0 / factor, 1.0 / factor, 1.0])
+    """The unit the measurement is likely in, when dividing its distances
+    (or its heading, for degrees) by the unit's factor makes the pose fit the
+    prediction ("" when none does)."""
+    trials = [
+        (
+            np.array([1.0 / factor, 1.0 / factor, 1.0]),
+            f"{unit}? (its distances divided by {factor:.4g}",
+        )
+        for factor, unit in UNIT_RATIOS
+    ]
+    trials.append((np.array([1.0, 1.0, math.pi / 180.0]), "theta in degrees? (as radians"))
+    for scale, what in trials:
         pose = np.array(measured.pose) * scale
         cov = np.array(measured.covariance) * np.outer(scale, scale)
         fitted = pose_statistic(pose, cov, predicted)
         if fitted < IMPLAUSIBLE_SIGMAS**2 and fitted * UNIT_FIT_GAIN < statistic:
-            return f"{unit}? (its distances divided by {factor:.4g} fit: T = {fitted:.1f})"
+            return f"{what} it fits: T = {fitted:.1f})"
     return ""
 
 

@@ -87,7 +87,15 @@ def test_millimetres_on_a_closed_trial_are_named_from_the_pose_alone() -> None:
     true: Pose = (-0.012, 0.008, -0.016)  # a centimetre off, as odometry drifts
     scaled: Pose = (1000 * true[0], 1000 * true[1], true[2])
     judged = judge(1, _measured(scaled), _predicted(CLOSED, encoders), encoders)
-    assert "millimetres? (its distances divided by 1000 fit" in judged.refusal
+    assert "millimetres? (its distances divided by 1000 it fits" in judged.refusal
+
+
+def test_a_heading_in_degrees_is_named() -> None:
+    encoders: Pose = (0.0008, 0.0, 0.0)
+    true: Pose = (-0.012, 0.008, -0.016)
+    in_degrees: Pose = (true[0], true[1], float(np.degrees(true[2])))
+    judged = judge(1, _measured(in_degrees), _predicted(CLOSED, encoders), encoders)
+    assert ": theta in degrees? (as radians it fits" in judged.refusal
 
 
 def test_a_frozen_stream_on_a_closed_trial_is_told_by_the_path_it_saw() -> None:
