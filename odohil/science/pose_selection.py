@@ -29,6 +29,16 @@ Used the same way live (odohil/session/engine.py) and offline
    degrees of freedom for m clean distances; beyond its (1 - :data:`SLIP_LEVEL`)
    quantile the check trips. The suspect is the distance whose single
    outlier shift explains most of T: argmax_k (S^-1 v)_k^2 / (S^-1)_kk.
+4. **Pose check** (:func:`pose_check`): the same test for a source that
+   measures the pose itself (motion capture, a pose file, the fake's truth):
+   the innovation is the pose against the prediction, v = x - mu, with
+   covariance S = P + C (C the measurement's); beyond the same quantile the
+   trial is doubtful, beyond :data:`IMPLAUSIBLE_SIGMAS` squared it is
+   implausible. So is a pose whose distance from the start, or the farthest
+   point of its path when the source saw the path, is less than half or more
+   than twice the encoders' beyond :data:`SCALE_FLOOR_M` (and, above, beyond
+   the prediction's spread): no odometry is that wrong, a frozen stream or
+   a unit error is.
 """
 
 from __future__ import annotations
@@ -75,6 +85,15 @@ predict the next trial: a belief from few trials must not be overconfident."""
 AMBIGUITY_SEPARATION = 5.0
 """Candidates closer than this many standard deviations of the chosen pose
 (in every component) count as the same answer."""
+IMPLAUSIBLE_SIGMAS = 10.0
+"""A measured pose this many standard deviations (Mahalanobis, T = 100) from
+the prediction is implausible: the measurement, not the robot, is wrong."""
+SCALE_RATIO = 2.0
+"""A measured distance from the start below 1/this or above this times the
+encoders' is implausible (beyond :data:`SCALE_FLOOR_M`)."""
+SCALE_FLOOR_M = 0.02
+"""Distances from the start that differ by less than this are never
+implausible, m (the noise of a farthest point seen in a noisy stream)."""
 _LOG_AMBIGUOUS = math.log(CLEAR_CUT_LIKELIHOOD_RATIO)
 
 
@@ -370,9 +389,7 @@ def slip_check(
     m = measured.size
     s = jac @ np.asarray(predicted.cov, dtype=np.float64) @ jac.T
     s += description.sigma_m**2 * np.eye(m)
-    s_inv = np.linalg.inv(0.5 * (s + s.T))
-    weighted = s_inv @ innovation
-    statistic = float(innovation @ weighted)
+    statistic, weighted, s_inv = _innovation_test(innovation, s)
     explained = weighted**2 / np.diag(s_inv)
     suspect = int(np.argmax(explained))
     limit = float(stats.chi2.isf(SLIP_LEVEL, m))
@@ -385,6 +402,124 @@ def slip_check(
         suspect_label=distance_labels(description)[suspect],
         shift_m=float(weighted[suspect] / s_inv[suspect, suspect]),
     )
+
+
+def _innovation_test(
+    innovation: FloatArray, cov: FloatArray
+) -> tuple[float, FloatArray, FloatArray]:
+    """T = v^T S^-1 v of an innovation v with covariance S; also S^-1 v and S^-1."""
+    s_inv = np.asarray(np.linalg.inv(0.5 * (cov + cov.T)), dtype=np.float64)
+    weighted = s_inv @ innovation
+    return float(innovation @ weighted), weighted, s_inv
+
+
+@dataclass(frozen=True, eq=False)
+class ScaleCheck:
+    """How far from its start the measurement and the encoders put the robot.
+
+    Attributes:
+        what: ``displacement`` (the end point) or ``excursion`` (the farthest
+            point of the path).
+        measured_m: the measurement's, m.
+        encoders_m: the encoders', m.
+        off: below 1/:data:`SCALE_RATIO` or above :data:`SCALE_RATIO` times
+            the encoders' (see the module docstring).
+    """
+
+    what: str
+    measured_m: float
+    encoders_m: float
+    off: bool
+
+    @property
+    def ratio(self) -> float:
+        """measured / encoders (inf when the encoders say 0)."""
+        return self.measured_m / self.encoders_m if self.encoders_m > 0 else math.inf
+
+
+@dataclass(frozen=True, eq=False)
+class PoseCheck:
+    """A measured pose change against the prediction and the encoders.
+
+    Attributes:
+        statistic: T = v^T S^-1 v (see the module docstring), chi^2 with 3
+            degrees of freedom when the measurement and the model are right.
+        limit: its (1 - :data:`SLIP_LEVEL`) quantile.
+        scales: the distance from the start, then the path's farthest point
+            when the source saw it.
+    """
+
+    statistic: float
+    limit: float
+    scales: tuple[ScaleCheck, ...]
+
+    @property
+    def doubtful(self) -> bool:
+        """T beyond its (1 - :data:`SLIP_LEVEL`) quantile."""
+        return self.statistic > self.limit
+
+    @property
+    def implausible(self) -> bool:
+        """T beyond :data:`IMPLAUSIBLE_SIGMAS` squared, or a distance off scale."""
+        return self.statistic > IMPLAUSIBLE_SIGMAS**2 or any(s.off for s in self.scales)
+
+    def to_json(self) -> dict[str, float]:
+        """The numbers, for the journal."""
+        data = {"T": self.statistic, "limit": self.limit}
+        for scale in self.scales:
+            data[f"{scale.what}_m"] = scale.measured_m
+            data[f"encoder_{scale.what}_m"] = scale.encoders_m
+        return data
+
+
+def pose_statistic(
+    pose_change: Sequence[float] | FloatArray,
+    cov: Sequence[Sequence[float]] | FloatArray,
+    predicted: PoseDistribution,
+) -> float:
+    """T = v^T (P + C)^-1 v of a measured pose change (covariance C) against
+    the prediction (mean mu, covariance P), v = x - mu with theta wrapped."""
+    delta = np.asarray(pose_change, dtype=np.float64) - np.asarray(predicted.mean, dtype=np.float64)
+    delta[2] = wrap_angle(float(delta[2]))
+    total = np.asarray(predicted.cov, dtype=np.float64) + np.asarray(cov, dtype=np.float64)
+    return _innovation_test(delta, total)[0]
+
+
+def pose_check(
+    pose_change: Sequence[float] | FloatArray,
+    cov: Sequence[Sequence[float]] | FloatArray,
+    predicted: PoseDistribution,
+    encoder_end_pose: Sequence[float] | FloatArray,
+    excursion: tuple[float, float] | None = None,
+) -> PoseCheck:
+    """The pose check of a measured pose change (see the module docstring).
+
+    Args:
+        pose_change: the measured (dx m, dy m, dtheta rad).
+        cov: its 3x3 covariance.
+        predicted: the predictive distribution (:func:`predictive_pose`).
+        encoder_end_pose: the encoders' end pose in the start frame.
+        excursion: the farthest the measurement and the encoders saw the robot
+            from its start during the motion (m, m), when the source saw the path.
+    """
+    pose = np.asarray(pose_change, dtype=np.float64)
+    statistic = pose_statistic(pose, cov, predicted)
+    total = np.asarray(predicted.cov, dtype=np.float64) + np.asarray(cov, dtype=np.float64)
+    spread = math.sqrt(max(float(np.linalg.eigvalsh(total[:2, :2]).max()), 0.0))
+    pairs = [("displacement", float(np.hypot(*pose[:2])), float(np.hypot(*encoder_end_pose[:2])))]
+    if excursion is not None:
+        pairs.append(("excursion", float(excursion[0]), float(excursion[1])))
+    scales = tuple(
+        ScaleCheck(
+            what,
+            measured,
+            encoders,
+            off=measured < encoders / SCALE_RATIO - SCALE_FLOOR_M
+            or measured > encoders * SCALE_RATIO + SCALE_FLOOR_M + IMPLAUSIBLE_SIGMAS * spread,
+        )
+        for what, measured, encoders in pairs
+    )
+    return PoseCheck(statistic, float(stats.chi2.isf(SLIP_LEVEL, 3)), scales)
 
 
 def required_cross_distances(design: Design) -> int:
@@ -430,11 +565,18 @@ def check_redundancy(description: RobotDescription, designs: Sequence[Design]) -
 
 __all__ = [
     "ESTIMATE_INFLATION",
+    "IMPLAUSIBLE_SIGMAS",
+    "SCALE_FLOOR_M",
+    "SCALE_RATIO",
     "SLIP_LEVEL",
     "ParameterBelief",
+    "PoseCheck",
     "PoseSelection",
+    "ScaleCheck",
     "SlipCheck",
     "check_redundancy",
+    "pose_check",
+    "pose_statistic",
     "predictive_pose",
     "redundancy_problems",
     "required_cross_distances",

@@ -16,8 +16,11 @@ attempt:
    the pose at the current estimate (or the description's priors); a source
    that takes several readings journals each through ``log`` (the tape:
    ``measurement``, ``measurements_rejected``, ``remeasured``,
-   ``extra_distance``, odohil/session/sources.py); the pose is journaled
-   (``solved``); an ambiguous one is left out of every estimate;
+   ``extra_distance``, odohil/session/sources.py); the pose is checked
+   against the encoders and the prediction (odohil/session/plausibility.py:
+   an implausible one is journaled ``void`` with its likely cause and stops
+   the session before the next motion) and journaled (``solved``); an
+   ambiguous one is left out of every estimate;
 6. the live estimate is updated (``estimate``).
 
 Every record is on disk (fsync) before the next step starts, so after a crash
@@ -54,6 +57,7 @@ from odohil import __version__
 from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
 from odohil.errors import (
     JournalError,
+    MeasurementError,
     OdohilError,
     StopUnconfirmedError,
 )
@@ -64,6 +68,7 @@ from odohil.science.robot_description import RobotDescription, parse_robot_descr
 from odohil.session import state as ev
 from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
+from odohil.session.plausibility import far_window, judge
 from odohil.session.pose_source import MeasuredPose, PoseSource, TrialContext
 from odohil.session.robot import Robot, SampleCallback
 from odohil.session.signals import SignalReceived, signal_name, signals_held
@@ -545,7 +550,11 @@ class SessionEngine:
         record = self.robot.drive(design, self.motion.drive_settings(), self.on_sample)
         opened = self.state.open_trial
         assert opened is not None
-        ctx = replace(self._context(opened), encoder_end_pose=record.end_pose)
+        ctx = replace(
+            self._context(opened),
+            encoder_end_pose=record.end_pose,
+            far_s=far_window(record),
+        )
         end = dict(self.source.at_end(ctx))
         self._log(
             ev.MOTION_DONE,
@@ -583,12 +592,23 @@ class SessionEngine:
         assert opened is not None
         assert opened.encoder_end_pose is not None
         design = self.plan.design_of(opened.trial)  # as driven: one-way trials alternate
-        self._predicted = predictive_pose(design, self._belief(), opened.encoder_end_pose)
+        predicted = predictive_pose(design, self._belief(), opened.encoder_end_pose)
+        self._predicted = predicted
         try:
             ctx = self._context(opened, self._predicted)
             measured = self.source.pose_change(ctx, self._source_log)
         finally:
             self._predicted = None
+        judged = judge(
+            opened.trial, measured, predicted, opened.encoder_end_pose, opened.trajectory
+        )
+        if judged.refusal:  # void: the trial is redone once the measurement is fixed
+            self._log(
+                ev.VOID,
+                {"trial": opened.trial, "attempt": opened.attempt, "reason": judged.refusal},
+            )
+            raise MeasurementError(judged.refusal)
+        measured = judged.measured
         self._log(ev.SOLVED, _solved_json(opened, measured))
         if self.state.completed[-1].ambiguous:
             self._estimated = len(self.state.completed)

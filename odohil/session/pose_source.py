@@ -17,8 +17,11 @@ one distance at a time, re-measures) journals each through ``log`` before it
 goes on, so nothing the operator typed is lost; ``log`` hands back the context
 as the journal now stands.
 
-The engine journals what ``pose_change`` returns as the trial's ``solved``
-record; an ``ambiguous`` pose is journaled and left out of every estimate.
+The engine checks what ``pose_change`` returns against the encoders and the
+model's prediction (odohil/session/plausibility.py: a doubtful pose is
+flagged, an implausible one voids the attempt and stops the session), then
+journals it as the trial's ``solved`` record; an ``ambiguous`` pose is
+journaled and left out of every estimate.
 
 Sources: the tape with the floor-marks solver, the fake robot's truth
 channel, a trial file of poses (odohil/session/sources.py); motion capture
@@ -65,6 +68,11 @@ class TrialContext:
         predicted: the model's predictive distribution of the pose change,
             given the odometry, at the current estimate (or the description's
             priors); None before the motion is done.
+        far_s: host monotonic times (:func:`time.monotonic`, s) between which
+            the encoders put the robot at least half its farthest distance from
+            the start, given to ``at_end``; a source that watches the path
+            reports what it saw then (None: not given, or the motion went
+            nowhere).
     """
 
     trial: int
@@ -81,6 +89,7 @@ class TrialContext:
     slip: str = ""
     extra: tuple[tuple[str, str, float], ...] = ()
     predicted: PosePrior | None = None
+    far_s: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -100,6 +109,12 @@ class MeasuredPose:
             left out of every estimate.
         candidates: the plausible poses of an ambiguous trial.
         details: more JSON for the ``solved`` record (e.g. the solver's chi2).
+        excursion_m: the farthest the source saw the robot from its start
+            during the motion, m; None when it did not see the path.
+        prediction_checked: the source already tested the pose against
+            ``ctx.predicted`` and handled a doubt (the tape's slip check): the
+            engine's per-trial check only refuses an implausible one
+            (odohil/session/plausibility.py).
     """
 
     pose: Pose
@@ -111,6 +126,8 @@ class MeasuredPose:
     ambiguous: bool = False
     candidates: tuple[Pose, ...] = ()
     details: Mapping[str, Any] = field(default_factory=dict)
+    excursion_m: float | None = None
+    prediction_checked: bool = False
 
 
 class MeasurementLog(Protocol):

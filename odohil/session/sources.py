@@ -536,6 +536,7 @@ class TapeSource:
             if selection.ambiguous
             else (),
             details={"chi2": float(solution.chi2)},
+            prediction_checked=True,
         )
 
 

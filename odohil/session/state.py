@@ -33,7 +33,9 @@ Event kinds, in the order a session writes them (``data`` members in brackets):
   ``pose_change``, ``cov``, ``chi2``, ``clear_cut``, ``reason``, and
   optionally ``ambiguous`` (two candidate poses stay plausible: the trial is
   left out of every estimate), ``candidates`` (their poses), ``slip`` (why
-  the slip check still doubts the trial)];
+  the slip check, or the per-trial check of odohil/session/plausibility.py,
+  doubts the trial), ``check`` (that check's numbers: ``T``, ``limit``, the
+  measured and encoder distances from the start)];
 - ``estimate`` [``n_trials``, ``result``: the estimate's JSON object];
 - ``void``: the attempt is discarded and the trial redone [``trial``,
   ``attempt``, ``reason``];

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 from odohil.science.estimators.checks import sufficiency
 from odohil.science.estimators.result import ParameterEstimate
 from odohil.science.parameters import NOMAD150, PARAMETER_NAMES, ErrorParameters
@@ -36,3 +38,23 @@ def test_default_targets_are_fractions_of_the_values_with_floors() -> None:
     assert targets["K_theta"] == NOMAD150.k_theta / 2
     assert targets["K_rho"] == NOMAD150.k_rho / 2
     assert default_targets(ErrorParameters(0.0, 0.0, 0.0, 0.0)) == TARGET_FLOORS
+
+
+def test_an_estimate_of_exactly_zero_is_judged_by_its_standard_error_without_a_warning() -> None:
+    """Issue 17: a frozen motion-capture stream made E_R exactly 0 and the
+    reason divided by |E_R| (``RuntimeWarning: divide by zero`` on stderr)."""
+    params = ErrorParameters(0.0, NOMAD150.e_t, NOMAD150.k_theta, NOMAD150.k_rho)
+    stderrs = (1e-3, 1e-5, 1e-7, 1e-6)  # E_R far above its floor
+    estimates = [
+        ParameterEstimate.build(name, value, se)
+        for name, value, se in zip(PARAMETER_NAMES, params.as_tuple(), stderrs, strict=True)
+    ]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = sufficiency(estimates, params, [])
+    assert result.unidentified == ("E_R",)
+    reason = next(r for r in result.reasons if r.startswith("E_R"))
+    assert reason == (
+        f"E_R has standard error 0.001 (target {TARGET_FLOORS['E_R']:.2g}); "
+        "its estimate is 0, so no relative error"
+    )

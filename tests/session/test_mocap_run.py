@@ -13,6 +13,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from fakes.nomad.process import EmulatorProcess
@@ -22,7 +23,7 @@ from odohil.session import state as ev
 from odohil.session.journal import JOURNAL_NAME, read_journal
 from odohil.session.mocap.still import StillCriteria
 from tests.session.helpers import ROBOT_TOML
-from tests.session.mocap_server import FrameServer, republish_truth
+from tests.session.mocap_server import FrameServer, pose_line, republish_truth
 
 ODOHIL = shutil.which("odohil") or "odohil"
 TRUTH = ErrorParameters.from_paper_units(-1.0, -0.05, 0.3, 9e-4)
@@ -52,16 +53,29 @@ def _robot(tmp_path: Path, pose_sigma: bool = True) -> Path:
     return path
 
 
-@pytest.fixture
-def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
+def _emulator(tmp_path: Path, time_scale: str) -> EmulatorProcess:
     paper = TRUTH.to_paper_units()
     args = [
-        "--seed", SEED, "--time-scale", "20000", "--no-pacing",
+        "--seed", SEED, "--time-scale", time_scale, "--no-pacing",
         "--E-R", repr(paper["E_R"]), "--E-T", repr(paper["E_T"]),
         "--K-theta", repr(paper["K_theta"]), "--K-rho", repr(paper["K_rho"]),
         "--truth-socket", str(tmp_path / "t.sock"),
     ]  # fmt: skip
-    with EmulatorProcess(args) as process:
+    return EmulatorProcess(args)
+
+
+@pytest.fixture
+def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
+    with _emulator(tmp_path, "20000") as process:
+        yield process
+
+
+@pytest.fixture
+def watched(tmp_path: Path) -> Iterator[EmulatorProcess]:
+    """A fake robot slow enough (time scale 20: a 1 m closed trial takes about
+    0.7 s, 0.35 s of it beyond half a metre) that a 100 Hz stream sees its
+    path, not only its ends."""
+    with _emulator(tmp_path, "20") as process:
         yield process
 
 
@@ -166,6 +180,13 @@ def test_a_bad_tcp_url_is_bad_input(idle: EmulatorProcess, tmp_path: Path) -> No
     assert idle.truth().motion_log == ()
 
 
+def _resume(tmp_path: Path, url: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [ODOHIL, "resume", str(tmp_path / "session"), "--measure", url, "--json", "--from-here"],
+        capture_output=True, text=True, timeout=120,
+    )  # fmt: skip
+
+
 def _solved(tmp_path: Path) -> int:
     try:
         lines = (tmp_path / "session" / JOURNAL_NAME).read_bytes().split(b"\n")[:-1]
@@ -213,14 +234,98 @@ def test_a_sender_that_dies_stops_the_session_and_resume_goes_on_with_another(
         assert 2 <= done_before < 8
 
         with sender(2) as second:
-            resumed = subprocess.run(
-                [ODOHIL, "resume", str(tmp_path / "session"), "--measure", second.url,
-                 "--json", "--from-here"],
-                capture_output=True, text=True, timeout=120,
-            )  # fmt: skip
+            resumed = _resume(tmp_path, second.url)
     assert resumed.returncode in (0, 3), resumed.stderr
     assert json.loads(resumed.stdout)["n_trials"] == 8
     records = read_journal(tmp_path / "session").records
     assert sorted(r.data["trial"] for r in records if r.kind == ev.SOLVED) == list(range(1, 9))
     robots = [r.data["connection"].get("mocap_url") for r in records if r.kind == ev.ROBOT]
     assert robots == [first.url, second.url]
+
+
+# -- issue 17: each trial's measured pose change is checked before it is kept --
+
+FIRST_TRIAL_PLANS = {"one-way": "k=0.5,l=1,n=2;k=1,l=1,n=2", "closed": "k=1,l=1,n=2;k=0.5,l=1,n=2"}
+"""A plan whose first trial ends 1 m from its start, and one whose first trial
+comes back to its start (only the path between tells a frozen stream there)."""
+
+
+def _truth_frames(truth: TruthClient, seed: int, scale: float = 1.0):
+    """The republished true pose, its positions multiplied by ``scale`` (1000:
+    a sender streaming millimetres); the heading stays in radians."""
+
+    def true_pose() -> tuple[float, float, float]:
+        snap = truth.snapshot()
+        return (snap.true_x_m, snap.true_y_m, snap.true_theta_rad)
+
+    frame = republish_truth(
+        true_pose, rotation_rad=0.7, shift_m=(2.0, 1.0), sigma=FRAME_SIGMA, seed=seed
+    )
+    if scale == 1.0:
+        return frame
+
+    def scaled(t: float) -> bytes:
+        data = json.loads(frame(t))
+        return pose_line(t, data["x"] * scale, data["y"] * scale, data["theta"])
+
+    return scaled
+
+
+def _frozen(seed: int):
+    """A stream that says the robot never moves: one world pose with frame noise."""
+    rng = np.random.default_rng(seed)
+
+    def frame(t: float) -> bytes:
+        e = rng.normal(0.0, 1.0, 3) * np.array(FRAME_SIGMA)
+        return pose_line(round(t, 6), 2.0 + e[0], 1.0 + e[1], 0.7 + e[2])
+
+    return frame
+
+
+def _refused_at_the_first_trial(tmp_path: Path, done: subprocess.CompletedProcess[str]) -> None:
+    assert done.returncode == 1, done.stderr
+    records = read_journal(tmp_path / "session").records
+    kinds = [r.kind for r in records]
+    # the first trial's motion, and no other: the session stopped before the second
+    assert kinds.count(ev.MOTION_START) == 1, kinds
+    assert ev.SOLVED not in kinds
+    assert kinds[-2:] == [ev.VOID, ev.STOPPED], kinds
+    assert records[-1].data["robot"] == "stopped"
+    assert records[-2].data["trial"] == 1
+
+
+@pytest.mark.parametrize("first", sorted(FIRST_TRIAL_PLANS))
+def test_a_frozen_stream_is_refused_at_the_first_trial_and_resume_goes_on_with_a_good_one(
+    watched: EmulatorProcess, tmp_path: Path, first: str
+) -> None:
+    emulator = watched
+    plan = FIRST_TRIAL_PLANS[first]
+    with FrameServer(_frozen(3)) as frozen:
+        done = _run(emulator, _robot(tmp_path), frozen.url, tmp_path, plan)
+    _refused_at_the_first_trial(tmp_path, done)
+    assert "frozen stream?" in done.stderr
+    assert "RuntimeWarning" not in done.stderr
+    assert not emulator.truth().moving
+    message = read_journal(tmp_path / "session").records[-1].data["message"]
+    assert "frozen stream?" in message
+    assert frozen.url in message
+    # the sender fixed, the session goes on where it stopped and completes
+    with TruthClient(emulator.truth_socket) as truth, FrameServer(_truth_frames(truth, 4)) as good:
+        resumed = _resume(tmp_path, good.url)
+    assert resumed.returncode in (0, 3), resumed.stderr
+    assert json.loads(resumed.stdout)["n_trials"] == 4
+    records = read_journal(tmp_path / "session").records
+    assert sorted(r.data["trial"] for r in records if r.kind == ev.SOLVED) == [1, 2, 3, 4]
+
+
+def test_a_stream_in_millimetres_is_refused_at_the_first_trial(
+    emulator: EmulatorProcess, tmp_path: Path
+) -> None:
+    with (
+        TruthClient(emulator.truth_socket) as truth,
+        FrameServer(_truth_frames(truth, 5, scale=1000.0)) as server,
+    ):
+        done = _run(emulator, _robot(tmp_path), server.url, tmp_path, FIRST_TRIAL_PLANS["closed"])
+    _refused_at_the_first_trial(tmp_path, done)
+    assert "millimetres?" in done.stderr
+    assert not emulator.truth().moving

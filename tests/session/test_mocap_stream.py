@@ -5,6 +5,7 @@ jumping, malformed lines), each a MeasurementError naming the URL."""
 from __future__ import annotations
 
 import math
+import re
 import time
 from pathlib import Path
 
@@ -276,3 +277,91 @@ def test_a_journal_header_names_its_stream_by_a_tcp_url() -> None:
         validate_header({"measure": "tcp", "settings": {"mocap_url": 5555}})
     with pytest.raises(JournalError, match=r"measure must be one of fake, file, operator, tcp"):
         validate_header({"measure": "udp"})
+
+
+# -- issue 17: one bad time stamp is dropped and counted, never poisons the stream --
+
+
+def _stamped(bad: dict[int, float]) -> FrameServer:
+    """A robot at rest whose frame number n is stamped ``bad[n]`` instead of
+    its time (a corrupt stamp, a clock glitch)."""
+    sent = {"n": 0}
+
+    def frame(t: float) -> bytes:
+        n = sent["n"]
+        sent["n"] += 1
+        return pose_line(bad.get(n, t), *WORLD)
+
+    return FrameServer(frame)
+
+
+@pytest.mark.parametrize(
+    ("bad", "reason"),
+    [
+        ({5: 1e12}, r"'t' 1e\+12 s is [\d.e+]+ s after the previous frame's"),
+        ({0: 1e12}, r"'t' stepped from 1e\+12 s"),  # the first frame's stamp is the bad one
+        ({5: -3.0}, r"'t' -3 s does not increase"),
+    ],
+    ids=["far-future", "first-far-future", "out-of-order"],
+)
+def test_one_bad_time_stamp_is_dropped_and_counted(bad: dict[int, float], reason: str) -> None:
+    with _stamped(bad) as server, PoseStream(server.url) as stream:
+        assert stream.wait_for_pose(1.0)
+        time.sleep(0.2)  # the bad frame is behind us, and as many good ones
+        still = take_still_pose(stream, SIGMA, FAST)
+        status = stream.status()
+    assert still.pose == pytest.approx(WORLD)
+    assert still.n_poses >= 15
+    assert status.n_bad_time == 1
+    assert still.to_json()["bad_time_stamps"] == 1
+    assert re.search(reason, status.last_bad_time), status.last_bad_time
+
+
+def test_a_stream_whose_every_stamp_is_bad_ends_with_that_reason() -> None:
+    rng = np.random.default_rng(3)
+
+    def frame(t: float) -> bytes:
+        return pose_line(float(rng.uniform(0.0, 1e6)), *WORLD)  # stamps in random order
+
+    with FrameServer(frame) as server, PoseStream(server.url) as stream:
+        assert stream.wait_for_pose(1.0)
+        with pytest.raises(
+            MeasurementError,
+            match=r"motion capture .*frame\(s\) with a bad time stamp dropped.*does the "
+            r"sender stamp its frames with one steady clock, in seconds\?",
+        ):
+            take_still_pose(stream, SIGMA, FAST)
+
+
+def test_a_sender_clock_that_steps_is_followed_after_a_few_frames() -> None:
+    # an NTP step of the sender's clock: every later frame is an hour ahead
+    def frame(t: float) -> bytes:
+        return pose_line(t + (3600.0 if t > 0.1 else 0.0), *WORLD)
+
+    with FrameServer(frame) as server, PoseStream(server.url) as stream:
+        assert stream.wait_for_pose(1.0)
+        time.sleep(0.3)
+        still = take_still_pose(stream, SIGMA, FAST)
+        status = stream.status()
+    assert still.n_poses >= 15
+    assert 1 <= status.n_bad_time <= 10
+    assert still.t_span[0] > 3600.0
+
+
+def test_the_farthest_point_of_a_path_ignores_one_stray_frame() -> None:
+    def frame(t: float) -> bytes:
+        if 0.5 < t < 0.52:  # one frame of another body, 10 m away
+            return pose_line(t, WORLD[0] + 10.0, WORLD[1], WORLD[2])
+        out = max(0.0, 0.5 - abs(t - 0.6))  # out to 0.5 m at t = 0.6 s, and back
+        return pose_line(t, WORLD[0], WORLD[1] + out, WORLD[2])
+
+    with FrameServer(frame) as server, PoseStream(server.url) as stream:
+        assert stream.wait_for_pose(1.0)
+        stream.track_from(WORLD[0], WORLD[1])
+        begin = stream.clock()
+        time.sleep(1.3)
+        excursion, frames = stream.excursion_between(begin, stream.clock())
+        none, zero = stream.excursion_between(begin - 10.0, begin - 5.0)
+    assert frames >= 60
+    assert excursion == pytest.approx(0.5, abs=0.03)
+    assert (none, zero) == (None, 0)

@@ -26,8 +26,10 @@ from odohil.session.state import SessionState, session_trials
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
 
 QUERY = f"seed=11&{FAST}&E_R=-1.0&E_T=-0.05&K_theta=0.3&K_rho=0.0009"
-POSES = [(0.5, 0.01, -0.02), (0.49, -0.005, 0.01)]
-"""Two trials of k=0.5, l=0.5 m (the second driven backwards)."""
+POSES = [(0.5, 0.001, -0.004), (-0.49, -0.0005, 0.003)]
+"""Two trials of k=0.5, l=0.5 m (the second driven backwards: its end lies
+behind its start), each within what the encoders and the priors predict (the
+engine refuses an implausible pose, odohil/session/plausibility.py)."""
 
 
 def _start(folder: Path, plan: str) -> tuple[Any, SessionState]:

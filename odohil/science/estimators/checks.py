@@ -279,10 +279,15 @@ def sufficiency(
                     "closed paths pin E_T only weakly, about as 1/|E_R|; one-way runs (k=0.5) "
                     "pin it far better"
                 )
+            elif abs(value) < 1e-300:  # no relative error to speak of (a frozen measurement)
+                reasons.append(
+                    f"{name} has standard error {stderr[p]:.2g} (target {targets[p]:.2g}); "
+                    "its estimate is 0, so no relative error"
+                )
             else:
                 reasons.append(
                     f"{name} has relative standard error {stderr[p] / abs(value):.0%} "
-                    f"(target {targets[p] / max(abs(value), 1e-300):.0%})"
+                    f"(target {targets[p] / abs(value):.0%})"
                 )
     if not flagged:
         return Sufficiency(True, "enough trials: every parameter meets its target", (), (), ())

@@ -24,6 +24,10 @@ from odohil.session.mocap.still import StillCriteria, StillPose, take_still_pose
 from odohil.session.mocap.stream import PoseStream
 from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
 
+MIN_PATH_FRAMES = 5
+"""Fewest frames, while the encoders put the robot far from its start, for
+the farthest point the stream saw to be reported."""
+
 
 def pose_sigma_of(description: RobotDescription, url: str) -> tuple[float, float, float]:
     """The description's pose_sigma, or RobotDescriptionError saying it is
@@ -65,12 +69,25 @@ class MotionCaptureSource:
         return take_still_pose(self.stream, self.pose_sigma, self.criteria)
 
     def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
-        """The still pose at the trial's start, as journal data."""
-        return self.still().to_json()
+        """The still pose at the trial's start, as journal data; from here the
+        stream tracks how far the robot goes from it."""
+        still = self.still()
+        self.stream.track_from(still.pose[0], still.pose[1])
+        return still.to_json()
 
     def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
-        """The still pose at the trial's end, as journal data."""
-        return self.still().to_json()
+        """The still pose at the trial's end, as journal data, with the
+        farthest the stream saw the robot from its start while the encoders
+        put it far (``ctx.far_s``): ``excursion_m``, over ``path_frames``
+        frames, when at least :data:`MIN_PATH_FRAMES` arrived then (a
+        fast-forwarded fake robot may pass between two frames)."""
+        data = self.still().to_json()
+        if ctx.far_s is not None:
+            excursion, frames = self.stream.excursion_between(*ctx.far_s)
+            if excursion is not None and frames >= MIN_PATH_FRAMES:
+                data["excursion_m"] = excursion
+                data["path_frames"] = frames
+        return data
 
     def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
         """The end still pose in the start still pose's frame, with its covariance."""
@@ -79,6 +96,7 @@ class MotionCaptureSource:
         end = StillPose.pose_of(ctx.end, f"{where} end")
         cov = self.pose_cov()
         change, change_cov = pose_change_with_covariance(start, end, cov, cov)
+        excursion = ctx.end.get("excursion_m")
         rows = tuple(tuple(float(v) for v in row) for row in change_cov)
         return MeasuredPose(
             pose=change,
@@ -93,4 +111,5 @@ class MotionCaptureSource:
                     f"{ctx.start.get('n_poses', '?')} and {ctx.end.get('n_poses', '?')} frames"
                 )
             },
+            excursion_m=float(excursion) if isinstance(excursion, int | float) else None,
         )

@@ -77,6 +77,8 @@ class StillPose:
             (robust standard deviation from successive differences).
         t_span: the sender's ``t`` of the window's first and last pose, s.
         malformed: lines dropped since connecting (with the last reason).
+        bad_time_stamps: frames dropped for their time stamp since connecting
+            (with the last reason).
     """
 
     pose: tuple[float, float, float]
@@ -85,6 +87,8 @@ class StillPose:
     t_span: tuple[float, float]
     malformed: int
     last_malformed: str = ""
+    bad_time_stamps: int = 0
+    last_bad_time_stamp: str = ""
 
     def to_json(self) -> dict[str, Any]:
         """The JSON object journaled with the trial."""
@@ -97,6 +101,9 @@ class StillPose:
         }
         if self.last_malformed:
             data["last_malformed"] = self.last_malformed
+        if self.bad_time_stamps:
+            data["bad_time_stamps"] = self.bad_time_stamps
+            data["last_bad_time_stamp"] = self.last_bad_time_stamp
         return data
 
     @staticmethod
@@ -141,8 +148,8 @@ def take_still_pose(
         raise MeasurementError(
             f"motion capture {url}: stale stream: the newest pose arrived "
             f"{now - status.last_received_s:.2f} s ago (more than {criteria.stale_s:g} s, "
-            f"by this computer's clock){_closed(status)}{_dropped(status)}; is the robot "
-            "still tracked?"
+            f"by this computer's clock){_closed(status)}{_dropped(status)}; "
+            f"{'is the robot still tracked?' if not status.n_bad_time else _rate_hint(status)}"
         )
     poses = stream.poses_between(begin, end)
     if len(poses) < criteria.min_poses:
@@ -151,7 +158,7 @@ def take_still_pose(
         raise MeasurementError(
             f"motion capture {url}: only {len(poses)} pose(s) arrived in the "
             f"{criteria.window_s:g} s still window (at least {criteria.min_poses} needed)"
-            f"{_dropped(status)}; is the sender streaming at its full rate?"
+            f"{_dropped(status)}; {_rate_hint(status)}"
         )
     return judge_window(poses, pose_sigma, criteria, url, status)
 
@@ -218,6 +225,8 @@ def judge_window(
         t_span=(poses[0].t_s, poses[-1].t_s),
         malformed=status.n_malformed,
         last_malformed=status.last_malformed,
+        bad_time_stamps=status.n_bad_time,
+        last_bad_time_stamp=status.last_bad_time,
     )
 
 
@@ -242,6 +251,22 @@ def _closed(status: StreamStatus) -> str:
 
 
 def _dropped(status: StreamStatus) -> str:
-    if not status.n_malformed:
-        return ""
-    return f" ({status.n_malformed} malformed line(s) dropped; last: {status.last_malformed})"
+    dropped = []
+    if status.n_malformed:
+        dropped.append(
+            f"{status.n_malformed} malformed line(s) dropped; last: {status.last_malformed}"
+        )
+    if status.n_bad_time:
+        dropped.append(
+            f"{status.n_bad_time} frame(s) with a bad time stamp dropped; last: "
+            f"{status.last_bad_time}"
+        )
+    return f" ({'; '.join(dropped)})" if dropped else ""
+
+
+def _rate_hint(status: StreamStatus) -> str:
+    """What to check when too few poses arrive: the stamps when frames were
+    dropped for them, else the rate."""
+    if status.n_bad_time:
+        return "does the sender stamp its frames with one steady clock, in seconds?"
+    return "is the sender streaming at its full rate?"

@@ -7,9 +7,21 @@ world frame (other keys are ignored). See docs/motion-capture.md.
 
 Clocks: every pose is stamped on arrival with this computer's monotonic clock
 (``received_s``, :func:`time.monotonic`); staleness and the still window are
-judged on that clock. The sender's ``t`` is its own clock, never compared
-with ours: it only has to increase from one pose to the next (a repeated or
-older ``t`` is a replayed or reordered frame and is dropped and counted).
+judged on that clock. The sender's ``t`` is its own clock, in seconds,
+never compared with ours in absolute terms; from one accepted pose to the
+next it must increase (a repeated or older ``t`` is a replayed or reordered
+frame), and by no more than the host's clock advanced plus
+:data:`MAX_T_LEAD_S` (a frame stamped far in the future: a corrupt stamp, a
+clock glitch). A frame that breaks either is dropped and counted as a bad
+time stamp; it does not become the reference the next frames are judged by,
+so one bad stamp never poisons the stream. When :data:`REANCHOR_FRAMES`
+frames in a row break it but follow each other by the same rule, the
+sender's clock stepped (or the first frame's stamp was the bad one): they
+become the reference.
+
+While a trial runs the stream also tracks how far the robot goes from its
+start (:meth:`PoseStream.track_from`, :meth:`PoseStream.excursion_between`),
+so a stream that says the robot never moved is caught even on a closed path.
 
 A line that is not such an object (not JSON, a missing or non-finite member,
 longer than :data:`MAX_LINE_BYTES`) is counted with its reason and dropped;
@@ -34,6 +46,17 @@ from odohil.errors import ConnectionFailedError, ParameterError
 
 MAX_LINE_BYTES = 4096
 """Longest line accepted; a longer one is counted malformed and skipped."""
+MAX_T_LEAD_S = 1.0
+"""How much further the sender's ``t`` may advance between two accepted
+frames than this computer's clock did, s; a frame beyond is dropped."""
+REANCHOR_FRAMES = 10
+"""Frames in a row with a bad time stamp that follow each other by the rule
+above, after which they are taken as the sender's new time line."""
+EXCURSION_FILTER = 5
+"""The excursion is the largest running median of this many successive
+distances from the start (one stray frame does not make it)."""
+PATH_FRAMES = 32768
+"""How many tracked distances from the start are kept (5.5 min at 100 Hz)."""
 BUFFER_S = 10.0
 """How many seconds of poses the client keeps (host clock)."""
 DEFAULT_CONNECT_TIMEOUT_S = 5.0
@@ -65,8 +88,11 @@ class StreamStatus:
 
     Attributes:
         n_poses: poses accepted since connecting.
-        n_malformed: lines dropped (bad JSON, members, order or length).
+        n_malformed: lines dropped (bad JSON, members or length).
         last_malformed: the reason for the last dropped line ("" if none).
+        n_bad_time: frames dropped for their time stamp (not increasing, or
+            far ahead of this computer's clock).
+        last_bad_time: the reason for the last of them ("" if none).
         last_received_s: monotonic arrival time of the newest pose (None: none yet).
         connected_s: monotonic time of the connection.
         closed: why the connection ended ("" while it is open).
@@ -78,6 +104,8 @@ class StreamStatus:
     last_received_s: float | None
     connected_s: float
     closed: str
+    n_bad_time: int = 0
+    last_bad_time: str = ""
 
 
 def parse_tcp_url(url: str) -> tuple[str, int]:
@@ -158,7 +186,13 @@ class PoseStream:
         self._n_poses = 0
         self._n_malformed = 0
         self._last_malformed = ""
-        self._last_t: float | None = None
+        self._last: StreamedPose | None = None
+        self._rival: list[StreamedPose] = []
+        self._n_bad_time = 0
+        self._last_bad_time = ""
+        self._origin: tuple[float, float] | None = None
+        self._recent: deque[float] = deque(maxlen=EXCURSION_FILTER)
+        self._path: deque[tuple[float, float]] = deque(maxlen=PATH_FRAMES)
         self._connected_s = 0.0
         self._closed = ""
 
@@ -260,20 +294,59 @@ class PoseStream:
             self._malformed(f"{exc}: {line[:80]!r}")
             return
         with self._lock:
-            if self._last_t is not None and pose.t_s <= self._last_t:
-                self._n_malformed += 1
-                self._last_malformed = (
-                    f"'t' {pose.t_s:.6g} s does not increase (last {self._last_t:.6g} s)"
+            bad = None if self._last is None else _time_problem(self._last, pose)
+            taken = [pose]
+            if bad is not None:
+                self._n_bad_time += 1
+                self._last_bad_time = bad
+                if self._rival and _time_problem(self._rival[-1], pose) is not None:
+                    self._rival = []
+                self._rival.append(pose)
+                if len(self._rival) < REANCHOR_FRAMES:
+                    return
+                # these frames follow each other: the sender's clock stepped, or
+                # the reference was the bad stamp; they are taken after all
+                assert self._last is not None
+                self._n_bad_time -= len(self._rival) - 1
+                self._last_bad_time = (
+                    f"'t' stepped from {self._last.t_s:.6g} s to {self._rival[0].t_s:.6g} s; "
+                    f"{len(self._rival)} frames followed the new time line, which is kept"
                 )
-                return
-            self._last_t = pose.t_s
-            self._poses.append(pose)
-            self._n_poses += 1
+                taken = self._rival
+            self._rival = []
+            for accepted in taken:
+                self._last = accepted
+                self._track(accepted)
+                self._poses.append(accepted)
+                self._n_poses += 1
             while self._poses and self._poses[0].received_s < now - BUFFER_S:
                 self._poses.popleft()
             self._lock.notify_all()
 
+    def _track(self, pose: StreamedPose) -> None:
+        if self._origin is None:
+            return
+        self._recent.append(math.hypot(pose.x_m - self._origin[0], pose.y_m - self._origin[1]))
+        if len(self._recent) == self._recent.maxlen:
+            self._path.append((pose.received_s, sorted(self._recent)[len(self._recent) // 2]))
+
     # -- what callers read -----------------------------------------------
+
+    def track_from(self, x_m: float, y_m: float) -> None:
+        """From now on, track how far the poses go from (x_m, y_m) (world, m)."""
+        with self._lock:
+            self._origin = (x_m, y_m)
+            self._recent.clear()
+            self._path.clear()
+
+    def excursion_between(self, begin_s: float, end_s: float) -> tuple[float | None, int]:
+        """The farthest the poses that arrived in [begin_s, end_s] (host clock)
+        went from the point given to :meth:`track_from`, m (each the running
+        median of :data:`EXCURSION_FILTER` successive distances; None when
+        none arrived), and how many arrived."""
+        with self._lock:
+            inside = [d for t, d in self._path if begin_s <= t <= end_s]
+        return (max(inside) if inside else None), len(inside)
 
     def status(self) -> StreamStatus:
         """What the stream has delivered so far."""
@@ -285,6 +358,8 @@ class PoseStream:
                 last_received_s=self._poses[-1].received_s if self._poses else None,
                 connected_s=self._connected_s,
                 closed=self._closed,
+                n_bad_time=self._n_bad_time,
+                last_bad_time=self._last_bad_time,
             )
 
     def poses_between(self, begin_s: float, end_s: float) -> list[StreamedPose]:
@@ -303,3 +378,19 @@ class PoseStream:
                     break
                 self._lock.wait(min(left, _POLL_S))
             return self._n_poses > 0
+
+
+def _time_problem(last: StreamedPose, pose: StreamedPose) -> str | None:
+    """Why ``pose``'s time stamp cannot follow ``last``'s, or None when it can
+    (see the module docstring)."""
+    if pose.t_s <= last.t_s:
+        return f"'t' {pose.t_s:.6g} s does not increase (last {last.t_s:.6g} s)"
+    step = pose.t_s - last.t_s
+    elapsed = pose.received_s - last.received_s
+    if step > elapsed + MAX_T_LEAD_S:
+        return (
+            f"'t' {pose.t_s:.6g} s is {step:.3g} s after the previous frame's, which arrived "
+            f"{elapsed:.3g} s before it by this computer's clock (more than {MAX_T_LEAD_S:g} s "
+            "ahead: a corrupt stamp or a clock glitch)"
+        )
+    return None
