@@ -12,9 +12,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from odohil import units
-from odohil.errors import ParameterError, RobotDescriptionError, TrialFileError
+from odohil.errors import ParameterError, TrialFileError
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.plan import Plan, check_session_plan, parse_plan
+from odohil.session.robot_file import read_robot_toml
 from odohil.session.trial_files import read_trials
 
 
@@ -44,10 +45,7 @@ def check_new_session(
             (:func:`check_turns`) or a ``--session`` that is not a folder.
         RobotDescriptionError: the robot description cannot be read or is invalid.
     """
-    try:
-        toml = robot_file.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise RobotDescriptionError(f"--robot: cannot read {robot_file}: {exc}") from None
+    toml = read_robot_toml(robot_file, what="--robot: robot description")
     description = parse_robot_description(toml, source=str(robot_file))
     try:
         plan = check_session_plan(parse_plan(plan_text, default_variant(description)))
