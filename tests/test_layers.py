@@ -67,7 +67,7 @@ def _subpackages(layer: str) -> set[str]:
     return {p.parent.name for p in (ROOT / "odohil" / layer).glob("*/__init__.py")}
 
 
-SHARED_DRIVER_MODULES = {"__init__", "odometry", "port"}
+SHARED_DRIVER_MODULES = {"__init__", "odometry", "port", "step_limit"}
 """What the driver layer shares between its backends."""
 
 SHARED_PROTOCOL_MODULES = {"__init__", "numbers"}
