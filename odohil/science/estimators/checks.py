@@ -358,8 +358,8 @@ def plan_problems(
         )
     try:
         variances = _variances(fisher_information(list(counts.items()), params))
-    except ParameterError as exc:
-        return (f"the plan's Fisher information cannot be computed: {exc}",)
+    except (ParameterError, np.linalg.LinAlgError):
+        return ()  # not computable at these values (K = 0 with exact poses): no finding
     missing = [PARAMETER_NAMES[p] for p in range(4) if not math.isfinite(variances[p])]
     if missing:
         return (
