@@ -320,7 +320,7 @@ class Journal:
     def _check_not_in_use(cls, folder: Path) -> None:
         """Raise the in-use error if another process holds the journal's lock."""
         try:
-            fd = os.open(journal_path(folder), os.O_RDONLY)
+            fd = os.open(journal_path(folder), os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY)
         except OSError:
             return
         try:
