@@ -41,6 +41,10 @@ def test_the_limit_follows_the_speed_profile_and_is_capped() -> None:
     limit = step_limit("leg 1 m", 1.0, 0.5, 0.5, 120.0)
     assert limit.limit_s == pytest.approx(2 * 3.0 + LIMIT_MARGIN_S)
     assert "leg 1 m not done within its time limit of 9.0 s" in limit.expired_text()
+    # a turn of pi at 45 deg/s and 30 deg/s^2: 4 s turning + 1.5 s speeding up and down
+    turn = step_limit("turn 3.14159 rad", -math.pi, math.pi / 4, math.pi / 6, 120.0)
+    assert turn.profile_s == pytest.approx(5.5)
+    assert turn.limit_s == pytest.approx(2 * 5.5 + LIMIT_MARGIN_S)
     capped = step_limit("leg 1 m", 1.0, 0.5, 0.5, 4.0)
     assert capped.limit_s == 4.0
     assert "step timeout" in capped.expired_text()
