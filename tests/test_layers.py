@@ -67,8 +67,9 @@ def _subpackages(layer: str) -> set[str]:
     return {p.parent.name for p in (ROOT / "odohil" / layer).glob("*/__init__.py")}
 
 
-SHARED_DRIVER_MODULES = {"__init__", "odometry", "port", "guardian"}
-"""What the driver layer shares between its backends (guardian: the stop if odohil dies)."""
+SHARED_DRIVER_MODULES = {"__init__", "odometry", "port", "guardian", "step_limit"}
+"""What the driver layer shares between its backends (guardian: the stop if odohil dies;
+step_limit: the time limit of a leg or a turn)."""
 
 SHARED_PROTOCOL_MODULES = {"__init__", "numbers"}
 """What the protocol layer shares between its robot protocols (wire integers)."""

@@ -36,6 +36,7 @@ class Wheel:
         self.counts = origin_counts
         self.fraction = 0.0
         self.stalled = False
+        self.drag = 1.0  # fraction of the commanded speed the wheel really turns at
 
     def turn(self, travel_mm: float, mm_per_count: float) -> None:
         """The encoder counts ``travel_mm``, in the commanded direction (C5)."""
@@ -128,7 +129,7 @@ class Create2Body:
         if dt <= 0.0:
             return
         self.t = t_end
-        travel = [0.0 if w.stalled else w.speed_mm_s * dt for w in (self.left, self.right)]
+        travel = [0.0 if w.stalled else w.speed_mm_s * w.drag * dt for w in (self.left, self.right)]
         left_mm, right_mm = travel
         if left_mm == 0.0 and right_mm == 0.0:
             return

@@ -46,10 +46,15 @@ robot and drops Safe to Passive; a bump only sets packet 7; ``charger`` drops
 Safe or Full to Passive (a powered charger); ``clear`` clears every sensor;
 ``wake`` wakes the robot after Power (133)."""
 
-LINE_FAULTS = ("disconnect", "mute", "garble", "stall")
+LINE_FAULTS = ("disconnect", "mute", "garble", "stall", "drag")
 """Faults of the line or the wheels: ``disconnect`` cuts the line, ``mute``
 stops every reply and frame, ``garble`` flips one bit of the next output,
-``stall`` stops both wheels and their encoders while commands still say move."""
+``stall`` stops both wheels and their encoders while commands still say move,
+``drag`` makes both wheels turn at :data:`DRAG_FACTOR` of the commanded speed
+(a dragged load, a flat battery: the encoders count on, a leg takes 20 times
+as long)."""
+DRAG_FACTOR = 0.05
+"""Fraction of the commanded speed the wheels turn at after a ``drag`` fault."""
 
 FAULT_NAMES = EVENTS + LINE_FAULTS
 

@@ -29,7 +29,7 @@ import time
 from collections.abc import Callable
 
 from fakes.create2.body import Create2Body
-from fakes.create2.config import EVENTS, Create2Config
+from fakes.create2.config import DRAG_FACTOR, EVENTS, Create2Config
 from fakes.create2.line import accepted, carried
 from fakes.create2.truth import CommandRecord, Create2Truth
 from fakes.nomad.engine import DISCONNECT, Disconnect
@@ -494,6 +494,8 @@ class Create2Engine:
                 self.garble_next = True
             elif fault.name == "stall":
                 self.body.left.stalled = self.body.right.stalled = True
+            elif fault.name == "drag":
+                self.body.left.drag = self.body.right.drag = DRAG_FACTOR
 
     def _emit(self, at: float, data: bytes) -> None:
         if self.muted or self.disconnected or not data:

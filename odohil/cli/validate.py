@@ -50,6 +50,7 @@ from odohil.session.engine import start_session
 from odohil.session.floor_space import check_floor
 from odohil.session.plan import Plan, check_session_plan
 from odohil.session.preflight import check_trial_file
+from odohil.session.robot_file import read_robot_toml
 from odohil.session.state import description_of_header, load_session
 from odohil.session.validation import (
     PATH_SYNTAX,
@@ -100,10 +101,7 @@ def _description(calibration: Calibration, robot: Path | None) -> tuple[RobotDes
             str(state.header["robot_toml"]),
             str(state.header.get("robot_path") or ""),
         )
-    try:
-        toml = robot.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ParameterError(f"--robot: cannot read {robot}: {exc}") from None
+    toml = read_robot_toml(robot, ParameterError, "--robot: robot description")
     return parse_robot_description(toml, str(robot)), toml, str(robot)
 
 

@@ -64,7 +64,7 @@ from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MAX_LEG_M
 from odohil.science.pose_selection import check_redundancy
-from odohil.science.robot_description import RobotDescription
+from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session import state as ev
 from odohil.session.engine import (
     IncrementalLiveEstimator,
@@ -79,7 +79,7 @@ from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
 from odohil.session.preflight import check_session_folder, check_turns, default_variant
 from odohil.session.robot import Robot
-from odohil.session.robot_file import load_robot_description
+from odohil.session.robot_file import load_robot_description, read_robot_toml
 from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext, check_distance
@@ -624,8 +624,8 @@ def _prepare(
     if robot_file is None:
         _fail(console, Check("robot description", False, "a new session needs --robot FILE"))
     try:
-        description = load_robot_description(robot_file)
-        text = robot_file.read_text(encoding="utf-8")
+        text = read_robot_toml(robot_file)
+        description = parse_robot_description(text, source=str(robot_file))
     except (OdohilError, OSError) as exc:
         _fail(console, Check("robot description", False, str(exc)))
     console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))

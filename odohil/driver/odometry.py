@@ -52,7 +52,9 @@ class DriveSettings:
         turn_rate_rad_s: in-place turning rate, rad/s.
         acceleration_m_s2: translation acceleration, m/s^2.
         turn_acceleration_rad_s2: turning acceleration, rad/s^2.
-        step_timeout_s: longest wall time of one leg or turn, s.
+        step_timeout_s: longest wall time of one leg or turn, s: the cap of
+            each step's own limit, derived from its length and the speeds
+            (odohil/driver/step_limit.py).
         watchdog_s: the robot's own watchdog, s (0 leaves it off): it stops
             the robot when the host dies mid-motion, where the robot has one.
     """

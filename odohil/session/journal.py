@@ -41,11 +41,16 @@ from types import FrameType, TracebackType
 from typing import Any
 
 from odohil.errors import JournalError
+from odohil.session.bounded_io import MIB, read_fd_bytes, read_file_bytes
 from odohil.session.signals import HANDLED_SIGNALS
 
 JOURNAL_NAME = "journal.jsonl"
 """File name of the journal inside a session folder."""
 TORN_PREFIX = "journal.torn-"
+MAX_JOURNAL_BYTES = 128 * MIB
+"""Largest journal read, bytes (a session of 1,000 trials journals about 2 MiB)."""
+MAX_RECORD_BYTES = 4 * MIB
+"""Longest journal record (line), bytes (the header carries the robot description)."""
 
 _CRC_OPEN = b',"crc":"'
 _CRC_SUFFIX_LEN = len(_CRC_OPEN) + 8 + 2  # ,"crc":"xxxxxxxx"}
@@ -206,10 +211,13 @@ def read_journal(folder: str | Path) -> JournalContents:
             before the last one.
     """
     path = journal_path(folder)
-    try:
-        content = path.read_bytes()
-    except OSError as exc:
-        raise JournalError(f"cannot read the session journal {path}: {exc}") from exc
+    content = read_file_bytes(
+        path,
+        what="the session journal",
+        max_bytes=MAX_JOURNAL_BYTES,
+        max_line_bytes=MAX_RECORD_BYTES,
+        error=JournalError,
+    )
     return parse_journal(content, str(path))
 
 
@@ -286,12 +294,21 @@ class Journal:
         """
         path = Path(folder)
         try:
-            fd = os.open(journal_path(path), os.O_RDWR | os.O_APPEND)
+            # O_NONBLOCK and O_NOCTTY: a FIFO or a terminal put there cannot hang
+            # the open; read_fd_bytes refuses anything but a regular file
+            fd = os.open(journal_path(path), os.O_RDWR | os.O_APPEND | os.O_NONBLOCK | os.O_NOCTTY)
         except OSError as exc:
             raise JournalError(f"cannot open the session journal in {path}: {exc}") from exc
         try:
             cls._lock(fd, path)
-            content = _read_all(fd)
+            content = read_fd_bytes(
+                fd,
+                source=f"the session journal {journal_path(path)}",
+                max_bytes=MAX_JOURNAL_BYTES,
+                max_line_bytes=MAX_RECORD_BYTES,
+                error=JournalError,
+            )
+            os.set_blocking(fd, True)
             contents = parse_journal(content, str(journal_path(path)))
             if contents.torn is not None:
                 contents = cls._set_aside(path, fd, content, contents)
@@ -304,7 +321,7 @@ class Journal:
     def _check_not_in_use(cls, folder: Path) -> None:
         """Raise the in-use error if another process holds the journal's lock."""
         try:
-            fd = os.open(journal_path(folder), os.O_RDONLY)
+            fd = os.open(journal_path(folder), os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY)
         except OSError:
             return
         try:
@@ -431,13 +448,3 @@ def _signals_deferred() -> Iterator[None]:
                 before(got, frame)
             elif before != signal.SIG_IGN:
                 signal.raise_signal(got)
-
-
-def _read_all(fd: int) -> bytes:
-    os.lseek(fd, 0, os.SEEK_SET)
-    chunks: list[bytes] = []
-    while True:
-        chunk = os.read(fd, 1 << 20)
-        if not chunk:
-            return b"".join(chunks)
-        chunks.append(chunk)

@@ -12,9 +12,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from odohil import units
-from odohil.errors import ParameterError, RobotDescriptionError, TrialFileError
+from odohil.errors import ParameterError, TrialFileError
+from odohil.science.estimators.checks import plan_problems
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.plan import Plan, check_session_plan, parse_plan
+from odohil.session.robot_file import read_robot_toml
 from odohil.session.trial_files import read_trials
 
 
@@ -41,19 +43,18 @@ def check_new_session(
 
     Raises:
         ParameterError: a bad plan, a ``turn`` design the robot refuses
-            (:func:`check_turns`) or a ``--session`` that is not a folder.
+            (:func:`check_turns`), a plan the estimator cannot use
+            (:func:`check_estimable`) or a ``--session`` that is not a folder.
         RobotDescriptionError: the robot description cannot be read or is invalid.
     """
-    try:
-        toml = robot_file.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise RobotDescriptionError(f"--robot: cannot read {robot_file}: {exc}") from None
+    toml = read_robot_toml(robot_file, what="--robot: robot description")
     description = parse_robot_description(toml, source=str(robot_file))
     try:
         plan = check_session_plan(parse_plan(plan_text, default_variant(description)))
     except ParameterError as exc:
         raise ParameterError(f"--plan: {exc}") from None
     check_turns(plan, description, allow_turns)
+    check_estimable(plan, description)
     check_session_folder(session)
     return Checked(plan=plan, description=description, toml=toml)
 
@@ -81,6 +82,21 @@ def check_turns(plan: Plan, description: RobotDescription, allow_turns: bool) ->
             "carry error ([robot] turns_exact = false): turn trials bias E_R and K_theta "
             "while looking consistent. Use variant=reverse (the default for this robot), "
             "or give --allow-turns to run them anyway (the estimate is then not trusted)"
+        )
+
+
+def check_estimable(plan: Plan, description: RobotDescription) -> None:
+    """Refuse a plan whose trials, all driven, could give no estimate of the four
+    parameters (:func:`odohil.science.estimators.checks.plan_problems`, at the
+    description's ``[priors]``): ParameterError naming ``--plan``, the reason and
+    what would make it estimable."""
+    problems = plan_problems(
+        [(item.design, item.n_trials) for item in plan.items], description.priors.mean
+    )
+    if problems:
+        raise ParameterError(
+            f"--plan {plan.to_text()}: no estimate could come of these trials (nothing "
+            "was driven): " + "; ".join(problems)
         )
 
 

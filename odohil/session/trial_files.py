@@ -31,6 +31,7 @@ from odohil.science.grouping import by_design
 from odohil.science.paths import VARIANTS, Design, Variant
 from odohil.science.pose_selection import ParameterBelief, predictive_pose, select_pose
 from odohil.science.robot_description import RobotDescription
+from odohil.session.bounded_io import MIB, read_file_text
 
 FloatArray = npt.NDArray[np.float64]
 TrialKind = Literal["pose", "marks"]
@@ -46,6 +47,10 @@ MAX_LINE_CHARS = 4096
 """Longest line of a trial file (csv's own field limit is 128 KiB)."""
 MAX_ROWS = 100_000
 """Most trial rows in one file."""
+MAX_FILE_BYTES = 32 * MIB
+"""Largest trial file (or pose file), bytes: 100,000 rows of over 300 bytes each."""
+MAX_LINE_BYTES = 4 * MAX_LINE_CHARS
+"""Longest line read, bytes (4 per UTF-8 character); :data:`MAX_LINE_CHARS` is then checked."""
 MAX_POSE_M = 10_000.0
 """Largest |dx|, |dy|, |odo_x|, |odo_y| and mark distance, metres."""
 MAX_ANGLE_RAD = 1_000.0
@@ -136,11 +141,24 @@ def read_trials(
             row is bad; the message lists every bad row by line number.
     """
     file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TrialFileError(f"cannot read trial file {file}: {exc}") from exc
+    text = read_trial_text(file, "trial file")
     return parse_trials(text, description, prior, source=str(file))
+
+
+def read_trial_text(file: Path, what: str) -> str:
+    """The text of a trial or pose file, read within :data:`MAX_FILE_BYTES` and
+    :data:`MAX_LINE_BYTES` (odohil/session/bounded_io.py).
+
+    Raises:
+        TrialFileError: not a regular file, too large, a line too long, not UTF-8.
+    """
+    return read_file_text(
+        file,
+        what=what,
+        max_bytes=MAX_FILE_BYTES,
+        max_line_bytes=MAX_LINE_BYTES,
+        error=TrialFileError,
+    )
 
 
 def parse_trials(

@@ -59,7 +59,14 @@ from odohil.session.state import (
     session_observations,
     session_trials,
 )
-from odohil.session.trial_files import MAX_ANGLE_RAD, MAX_POSE_M, MAX_ROWS, TrialSet, read_trials
+from odohil.session.trial_files import (
+    MAX_ANGLE_RAD,
+    MAX_POSE_M,
+    MAX_ROWS,
+    TrialSet,
+    read_trial_text,
+    read_trials,
+)
 
 VALIDATION_FOLDER = "validation"
 """Sub-folder of a calibration session that holds its validation sessions."""
@@ -295,10 +302,7 @@ def read_path_poses(file: Path, path: EncoderPath, label: str) -> ValidationTria
     Raises:
         TrialFileError: naming the file, the line and the column.
     """
-    try:
-        text = file.read_text(encoding="utf-8").removeprefix("\ufeff")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise TrialFileError(f"cannot read {file}: {exc}") from None
+    text = read_trial_text(file, "pose file").removeprefix("\ufeff")
     lines = [
         (n, line)
         for n, line in enumerate(text.splitlines(), start=1)

@@ -31,7 +31,7 @@ from tests.session.helpers import write_robot
 ODOHIL = shutil.which("odohil") or "odohil"
 PARAMS = ["--E-R", "-1", "--K-theta", "0.3", "--K-rho", "0.0009", "--no-pacing"]
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
-SHORT_PLAN = "k=1,l=0.3,n=1"
+SHORT_PLAN = "k=1,l=0.3,n=2"  # the fewest trials run accepts (two)
 
 
 def _emulator(tmp_path: Path, name: str, *extra: str, time_scale: str = "1") -> EmulatorProcess:
@@ -213,7 +213,7 @@ def test_a_second_signal_during_the_stop_does_not_skip_it(tmp_path: Path) -> Non
     folder = tmp_path / "session"
     with _emulator(tmp_path, "twice") as emulator:
         process = subprocess.Popen(
-            _run_args(emulator, tmp_path, "k=0.5,l=0.5,n=1", folder),
+            _run_args(emulator, tmp_path, "k=0.5,l=0.5,n=2", folder),
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,

@@ -47,6 +47,7 @@ import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from types import TracebackType
+from typing import NoReturn
 
 from odohil.driver.create2.link import (
     Create2Link,
@@ -56,6 +57,7 @@ from odohil.driver.create2.link import (
 )
 from odohil.driver.guardian import Guardian, start_guardian
 from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
+from odohil.driver.step_limit import StepLimit, step_limit
 from odohil.errors import (
     ConnectionFailedError,
     MotionError,
@@ -122,6 +124,14 @@ CLOSE_BYTES = (
 )
 """Stop, pause any stream, Start, Stop (C13): the OI ends Off. Sent by :meth:`Create2Robot.close`,
 and by the guardian (odohil/driver/guardian.py) if this process dies while armed."""
+MAX_READING_COUNTS = 16384
+"""Largest encoder change between two readings, counts (a quarter of the 16-bit
+range, 7.3 m; the wheels turn about 17 counts in a 15 ms frame): a larger one,
+or one against the wheels' direction beyond :data:`BACKWARD_JITTER_COUNTS`,
+cannot be told from a wrap-around (readings lost, or a fake run so fast that
+its wheels turn half the range between two frames) and ends the step."""
+BACKWARD_JITTER_COUNTS = 20
+"""Largest count change against the step's direction accepted between two readings."""
 
 
 @dataclass(frozen=True)
@@ -133,6 +143,7 @@ class _Step:
     counts: float
     speed_mm_s: int
     what: str
+    limit: StepLimit
 
 
 class Create2Robot:
@@ -457,13 +468,29 @@ class Create2Robot:
             if isinstance(step, Leg):
                 sign = 1 if step.length_m > 0 else -1
                 counts = self.geometry.counts_for(abs(step.length_m))
-                steps.append(_Step(sign, sign, counts, leg_speed, f"leg {step.length_m:g} m"))
+                what = f"leg {step.length_m:g} m"
+                limit = step_limit(
+                    what,
+                    step.length_m,
+                    settings.speed_m_s,
+                    settings.acceleration_m_s2,
+                    settings.step_timeout_s,
+                )
+                steps.append(_Step(sign, sign, counts, leg_speed, what, limit))
             else:
                 assert isinstance(step, Turn)
                 sign = 1 if step.angle_rad > 0 else -1
                 arc = abs(step.angle_rad) * self.geometry.wheel_base_m / 2.0
                 counts = self.geometry.counts_for(arc)
-                steps.append(_Step(-sign, sign, counts, turn_speed, f"turn {step.angle_rad:g} rad"))
+                what = f"turn {step.angle_rad:g} rad"
+                limit = step_limit(
+                    what,
+                    step.angle_rad,
+                    settings.turn_rate_rad_s,
+                    settings.turn_acceleration_rad_s2,
+                    settings.step_timeout_s,
+                )
+                steps.append(_Step(-sign, sign, counts, turn_speed, what, limit))
         for planned in steps:
             if planned.counts < MIN_STEP_COUNTS:
                 raise ParameterError(
@@ -534,7 +561,7 @@ class Create2Robot:
             return sum(s * (t - d) for s, t, d in zip(signs, target, travelled, strict=True)) / 2
 
         crawl = min(step.speed_mm_s, CRAWL_MM_S)
-        deadline = time.monotonic() + settings.step_timeout_s
+        deadline = time.monotonic() + step.limit.limit_s
         tolerance = max(
             self.geometry.counts_for(STEP_TOLERANCE_M), STEP_TOLERANCE_FRACTION * step.counts
         )
@@ -549,7 +576,7 @@ class Create2Robot:
                 last = reading
                 record(sample)
                 self._check(reading)
-                self._track(previous, reading, travelled)
+                self._track(step, previous, reading, travelled)
                 moved = (previous.left_counts, previous.right_counts) != (
                     reading.left_counts,
                     reading.right_counts,
@@ -595,7 +622,7 @@ class Create2Robot:
             last = reading
             record(sample)
             self._check(reading)
-            self._track(previous, reading, travelled)
+            self._track(step, previous, reading, travelled)
             now = reading.host_time_s
             if (previous.left_counts, previous.right_counts) != (
                 reading.left_counts,
@@ -621,16 +648,45 @@ class Create2Robot:
                     f"{sample.pose_text()}"
                 )
             if now > deadline:
-                self.stop()
-                raise OdohilTimeoutError(
-                    f"{step.what} not done within its step timeout; robot "
-                    f"told to stop at {sample.pose_text()}"
+                self._end_step(
+                    f"{step.limit.expired_text()}; robot told to stop at {sample.pose_text()}"
                 )
         return last
 
-    def _track(self, previous: Reading, reading: Reading, travelled: list[float]) -> None:
-        travelled[0] += encoder_delta(previous.left_counts, reading.left_counts)
-        travelled[1] += encoder_delta(previous.right_counts, reading.right_counts)
+    def _track(
+        self, step: _Step, previous: Reading, reading: Reading, travelled: list[float]
+    ) -> None:
+        """Add the counts since ``previous`` to ``travelled``; a change the 16-bit
+        counters cannot tell from a wrap-around (:data:`MAX_READING_COUNTS`) ends the step."""
+        deltas = (
+            encoder_delta(previous.left_counts, reading.left_counts),
+            encoder_delta(previous.right_counts, reading.right_counts),
+        )
+        signs = (step.left_sign, step.right_sign)
+        if any(
+            abs(d) > MAX_READING_COUNTS or s * d < -BACKWARD_JITTER_COUNTS
+            for d, s in zip(deltas, signs, strict=True)
+        ):
+            self.stop()
+            raise MotionError(
+                f"{step.what}: the encoders changed by {deltas[0]:+d} (left), {deltas[1]:+d} "
+                f"(right) counts between two readings, against the wheels' direction or more "
+                f"than {MAX_READING_COUNTS}: a wrap-around of the 16-bit counters cannot be "
+                "ruled out (readings lost, or a fake whose time scale turns its wheels half "
+                "the counter range between two frames); robot told to stop"
+            )
+        travelled[0] += deltas[0]
+        travelled[1] += deltas[1]
+
+    def _end_step(self, message: str) -> NoReturn:
+        """Stop, confirm the stop, and raise OdohilTimeoutError with ``message``
+        (StopUnconfirmedError, with it, when the robot does not report still)."""
+        self.stop()
+        try:
+            self._wait_still(STOP_CONFIRM_TIMEOUT_S)
+        except StopUnconfirmedError as exc:
+            raise StopUnconfirmedError(f"{message}; {exc}") from exc
+        raise OdohilTimeoutError(f"{message}; stop confirmed")
 
     def _command(self, step: _Step, speed: int) -> None:
         self._commanded = True

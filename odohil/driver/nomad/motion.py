@@ -15,7 +15,13 @@ from dataclasses import dataclass
 
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.driver.nomad.sample import EncoderSample
-from odohil.errors import MotionError, ParameterError
+from odohil.driver.step_limit import StepLimit, step_limit
+from odohil.errors import (
+    MotionError,
+    OdohilTimeoutError,
+    ParameterError,
+    StopUnconfirmedError,
+)
 from odohil.protocol.nomad.limits import leg_to_wire
 from odohil.protocol.nomad.messages import Pr
 from odohil.protocol.nomad.numbers import S16_MAX
@@ -115,6 +121,49 @@ def _wire_steps(design: Design) -> list[tuple[int, int]]:
     return steps
 
 
+def _step_limits(
+    design: Design,
+    speeds: tuple[float, float],
+    accelerations: tuple[float, float],
+    step_timeout_s: float,
+) -> list[StepLimit]:
+    """The time limit of each step (odohil/driver/step_limit.py), checked before
+    anything is sent."""
+    limits: list[StepLimit] = []
+    for step in design.path().steps:
+        if isinstance(step, Leg):
+            what, size, speed, acceleration = (
+                f"leg {step.length_m:g} m",
+                step.length_m,
+                speeds[0],
+                accelerations[0],
+            )
+        else:
+            what, size, speed, acceleration = (
+                f"turn {step.angle_rad:g} rad",
+                step.angle_rad,
+                speeds[1],
+                accelerations[1],
+            )
+        limits.append(step_limit(what, size, speed, acceleration, step_timeout_s))
+    return limits
+
+
+def _poll_within(
+    robot: NomadRobot, limit: StepLimit, record: Callable[[EncoderSample], None]
+) -> EncoderSample:
+    """Poll until the step ends; past its limit: ``st`` (sent by the robot's
+    motion guard), the stop confirmed, OdohilTimeoutError naming the step."""
+    try:
+        return robot.poll_until_stopped(limit.limit_s, record)
+    except OdohilTimeoutError as exc:
+        try:
+            robot.stop_and_confirm()
+        except StopUnconfirmedError as unconfirmed:
+            raise StopUnconfirmedError(f"{limit.expired_text()}; {unconfirmed}") from exc
+        raise OdohilTimeoutError(f"{limit.expired_text()}: {exc}; stop confirmed") from exc
+
+
 def forth_and_back(
     robot: NomadRobot,
     design: Design,
@@ -134,7 +183,9 @@ def forth_and_back(
     wire's range (:func:`odohil.protocol.nomad.limits.check_leg_length_m`: at least
     25.4 mm, at most 83.2 m) or a turn rounds to no wire units; MotionError if
     a step ends off its commanded encoder pose, and whatever the robot raises
-    (after ``st``) on protocol errors or timeouts. ``on_sample`` sees every
+    (after ``st``) on protocol errors or timeouts, OdohilTimeoutError (the stop
+    confirmed) when a step outlasts its time limit (its length at ``speeds``,
+    odohil/driver/step_limit.py, at most ``step_timeout_s``). ``on_sample`` sees every
     sample taken: the one before the first step, then every poll
     (a step ends at the first sample that shows no axis active).
     """
@@ -157,10 +208,11 @@ def forth_and_back(
     record(start)
     before = start
 
-    for trans, steer in wire_steps:
+    limits = _step_limits(design, speeds, accelerations, step_timeout_s)
+    for (trans, steer), limit in zip(wire_steps, limits, strict=True):
         cmd = robot.move_relative_wire(trans, steer, 0)
         commands.append(cmd)
-        after = robot.poll_until_stopped(step_timeout_s, record)
+        after = _poll_within(robot, limit, record)
         _check_step(robot, before, after, cmd, tolerance_wire)
         step_ends.append(after)
         before = after

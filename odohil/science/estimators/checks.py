@@ -29,6 +29,7 @@ from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.estimators.likelihood import design_path
 from odohil.science.estimators.observations import DesignSummary, Observation
+from odohil.science.estimators.paper import MIN_START_TRIALS, START_NEEDS, starts_estimate
 from odohil.science.estimators.result import (
     ModelCheck,
     Outlier,
@@ -36,7 +37,12 @@ from odohil.science.estimators.result import (
     Sufficiency,
     Suggestion,
 )
-from odohil.science.fisher import MomentDerivatives, moment_derivatives, trial_information
+from odohil.science.fisher import (
+    MomentDerivatives,
+    fisher_information,
+    moment_derivatives,
+    trial_information,
+)
 from odohil.science.grouping import by_design
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
@@ -322,3 +328,47 @@ def sufficiency(
             advice.append(f"{PARAMETER_NAMES[p]}: more trials of these designs would not do")
     verdict = f"not enough trials for {_join(list(names))} ({'; '.join(advice)})"
     return Sufficiency(False, verdict, names, tuple(reasons), tuple(suggestions))
+
+
+def plan_problems(
+    designs: Sequence[tuple[Design, int]], params: ErrorParameters
+) -> tuple[str, ...]:
+    """Why trials of these designs, this many each, cannot give an estimate of the
+    four parameters, known before any is driven (empty when they can): every
+    estimator starts from the paper's method
+    (:func:`odohil.science.estimators.paper.starts_estimate`), and every
+    parameter needs information (:func:`odohil.science.fisher.fisher_information`
+    at ``params``, exact poses: measurement noise only lowers it). Each reason
+    says what would make the plan estimable. Backward trials count for their
+    forward design (the estimators mirror them)."""
+    counts: dict[Design, int] = {}
+    for design, n in designs:
+        counts[design.forward] = counts.get(design.forward, 0) + n
+    labels = [f"{d.label()}: {units.plural(n, 'trial')}" for d, n in counts.items()]
+    if not any(starts_estimate(d, n) for d, n in counts.items()):
+        signed = [d for d in counts if abs(d.path().signed_distance_m) > 0.0]
+        if signed:
+            fix = "; ".join(f"n={MIN_START_TRIALS} or more for {d.label()}" for d in signed)
+        else:
+            fix = (
+                f"add {MIN_START_TRIALS} or more trials of a design that ends away from its "
+                "start: an odd number of legs (k=0.5, 1.5, ...; e.g. k=0.5,l=1,n="
+                f"{MIN_START_TRIALS}), or variant=turn on a robot whose turns are exact"
+            )
+        return (
+            "every estimate starts from the paper's method, which needs "
+            f"{START_NEEDS}; the plan has {_join(labels)} (signed distance "
+            + ", ".join(f"{d.path().signed_distance_m:g} m" for d in counts)
+            + f"). It becomes estimable with: {fix}",
+        )
+    try:
+        variances = _variances(fisher_information(list(counts.items()), params))
+    except (ParameterError, np.linalg.LinAlgError):
+        return ()  # not computable at these values (K = 0 with exact poses): no finding
+    missing = [PARAMETER_NAMES[p] for p in range(4) if not math.isfinite(variances[p])]
+    if missing:
+        return (
+            f"{_join(missing)} cannot be identified from {_join(labels)} (no Fisher "
+            "information); add a design of another k or l",
+        )
+    return ()

@@ -38,7 +38,7 @@ from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.estimators.observations import DesignSummary
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import ErrorParameters
-from odohil.science.paths import FloatArray
+from odohil.science.paths import Design, FloatArray
 
 _MIN_GAIN = 1e-3
 """1 + E_T below this is reported as this: the model needs a positive scale."""
@@ -65,19 +65,31 @@ class PaperEstimate:
     raw_k: tuple[float, float]
 
 
+MIN_START_TRIALS = 2
+"""Trials of one design the method needs (phi2 is a sample variance)."""
+START_NEEDS = (
+    "at least 2 trials of one design whose signed distance is not zero (the 'turn' "
+    "variant, or an odd number of legs), so that phi1 measures E_R"
+)
+"""What :func:`choose_designs` needs, in words."""
+
+
+def starts_estimate(design: Design, n_trials: int) -> bool:
+    """Whether ``n_trials`` trials of ``design`` (its forward view) can start the
+    method: at least :data:`MIN_START_TRIALS` and a non-zero signed distance, so
+    that the mean heading change measures E_R. Every estimator starts here."""
+    return n_trials >= MIN_START_TRIALS and abs(design.path().signed_distance_m) > 0.0
+
+
 def choose_designs(summaries: Sequence[DesignSummary]) -> tuple[DesignSummary, DesignSummary]:
     """(design for E_R, K_theta, E_T; design for K_rho), as in the paper.
 
     Raises:
         MeasurementError: no design has two trials and a non-zero signed distance.
     """
-    usable = [s for s in summaries if s.n >= 2 and abs(s.design.path().signed_distance_m) > 0.0]
+    usable = [s for s in summaries if starts_estimate(s.design, s.n)]
     if not usable:
-        raise MeasurementError(
-            "the paper's method needs at least 2 trials of one design whose signed "
-            "distance is not zero (the 'turn' variant, or an odd number of legs), "
-            "so that phi1 measures E_R"
-        )
+        raise MeasurementError(f"the paper's method needs {START_NEEDS}")
     first = min(usable, key=lambda s: (s.design.k, -s.n * s.design.distance_m))
     second = max(summaries, key=lambda s: (s.design.k, s.n * s.design.distance_m))
     return first, second

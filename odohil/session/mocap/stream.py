@@ -43,6 +43,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from odohil.errors import ConnectionFailedError, ParameterError
+from odohil.session.bounded_io import LineSplitter
 
 MAX_LINE_BYTES = 4096
 """Longest line accepted; a longer one is counted malformed and skipped."""
@@ -245,8 +246,7 @@ class PoseStream:
 
     def _read(self) -> None:
         assert self._sock is not None
-        pending = b""
-        skipping = False  # inside an over-long line, dropped up to its newline
+        splitter = LineSplitter(MAX_LINE_BYTES)
         reason = ""
         while not self._stop.is_set():
             try:
@@ -260,19 +260,11 @@ class PoseStream:
                 reason = "the sender closed the connection"
                 break
             now = self.clock()
-            pending += chunk
-            if skipping:
-                if b"\n" not in pending:
-                    pending = b""
-                    continue
-                pending = pending.split(b"\n", 1)[1]
-                skipping = False
-            *lines, pending = pending.split(b"\n")
-            for line in lines:
+            too_long = splitter.n_too_long
+            for line in splitter.feed(chunk):
                 self._take(line.strip(), now)
-            if len(pending) > MAX_LINE_BYTES:
+            for _ in range(splitter.n_too_long - too_long):
                 self._malformed(f"a line longer than {MAX_LINE_BYTES} bytes")
-                pending, skipping = b"", True
         with self._lock:
             self._closed = self._closed or reason or "closed by odohil"
             self._lock.notify_all()

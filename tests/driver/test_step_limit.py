@@ -1,0 +1,124 @@
+"""The overall time limit of a leg or turn (odohil/driver/step_limit.py), on both
+robots, and the Create 2's refusal of an encoder change it cannot tell from a
+wrap-around (issue 17, item 3).
+
+Before: a leg was bounded only by ``step_timeout_s`` (120 s), and the Create 2
+driver took each frame's count change mod 65536 the short way round: on
+``fakecreate2://?time_scale=2000`` the wheels turn about 33,700 counts between
+two 15 ms frames, read as 31,800 counts *backwards*, so the leg's remaining
+distance grew frame after frame and the robot was reported 110 km behind its
+start when the 120 s ran out.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import pytest
+from typer.testing import CliRunner
+
+import fakes
+from odohil.cli.app import app
+from odohil.driver.create2.robot import Create2Robot
+from odohil.driver.odometry import DriveSettings
+from odohil.driver.step_limit import LIMIT_MARGIN_S, profile_time_s, step_limit
+from odohil.errors import MotionError, OdohilTimeoutError, ParameterError
+from odohil.science.paths import Design
+from odohil.session.robots import open_robot
+
+fakes.register_url_handlers()
+
+SETTINGS = DriveSettings()  # 0.5 m/s, 0.5 m/s^2, step_timeout_s 120 s
+
+
+def test_the_limit_follows_the_speed_profile_and_is_capped() -> None:
+    # 1 m at 0.5 m/s, 0.5 m/s^2: 1 s accelerating and braking + 1.5 s cruising
+    assert profile_time_s(1.0, 0.5, 0.5) == pytest.approx(3.0)
+    # 0.1 m never reaches 0.5 m/s: a triangle, 2 sqrt(d / a)
+    assert profile_time_s(-0.1, 0.5, 0.5) == pytest.approx(2 * math.sqrt(0.2))
+    limit = step_limit("leg 1 m", 1.0, 0.5, 0.5, 120.0)
+    assert limit.limit_s == pytest.approx(2 * 3.0 + LIMIT_MARGIN_S)
+    assert "leg 1 m not done within its time limit of 9.0 s" in limit.expired_text()
+    # a turn of pi at 45 deg/s and 30 deg/s^2: 4 s turning + 1.5 s speeding up and down
+    turn = step_limit("turn 3.14159 rad", -math.pi, math.pi / 4, math.pi / 6, 120.0)
+    assert turn.profile_s == pytest.approx(5.5)
+    assert turn.limit_s == pytest.approx(2 * 5.5 + LIMIT_MARGIN_S)
+    capped = step_limit("leg 1 m", 1.0, 0.5, 0.5, 4.0)
+    assert capped.limit_s == 4.0
+    assert "step timeout" in capped.expired_text()
+    with pytest.raises(ParameterError, match="positive speed"):
+        step_limit("leg 1 m", 1.0, 0.0, 0.5, 120.0)
+
+
+def test_a_create2_leg_that_cannot_end_is_stopped_at_its_limit() -> None:
+    """The fake's wheels turn at 5 % of the commanded speed (``drag``): the
+    0.3 m leg would take 12 s; its limit is 2 x 1.55 + 3 s."""
+    with Create2Robot.connect("fakecreate2://?seed=1&fault=drag", open_wait_s=0.0) as robot:
+        robot.arm(SETTINGS)
+        robot.zero()
+        started = time.monotonic()
+        with pytest.raises(OdohilTimeoutError) as raised:
+            robot.drive(Design(0.5, 0.3, "reverse"), SETTINGS)
+        took = time.monotonic() - started
+        truth = robot.transport.truth()  # type: ignore[attr-defined]
+        assert not truth.moving  # stopped, and the stop confirmed before the error
+    message = str(raised.value)
+    assert "leg 0.3 m not done within its time limit of 6.1 s" in message, message
+    assert "stop confirmed" in message
+    assert 6.1 <= took < 10.0
+    assert truth.travel_m < 0.3
+
+
+def test_a_create2_at_a_time_scale_that_wraps_its_encoders_ends_the_leg_at_once() -> None:
+    """The issue's fake: the first frame of the leg shows a change the 16-bit
+    counters cannot tell from a wrap-around; the leg ends with that reason
+    instead of driving on for 120 s."""
+    with Create2Robot.connect("fakecreate2://?seed=1&time_scale=2000", open_wait_s=0.0) as robot:
+        robot.arm(SETTINGS)
+        robot.zero()
+        started = time.monotonic()
+        with pytest.raises(MotionError, match="wrap-around of the 16-bit counters"):
+            robot.drive(Design(0.5, 1.0, "reverse"), SETTINGS)
+        assert time.monotonic() - started < 5.0
+        robot.stop_and_confirm()
+        assert not robot.transport.truth().moving  # type: ignore[attr-defined]
+
+
+def test_a_nomad_step_that_never_reports_its_end_is_stopped_at_its_limit() -> None:
+    """``stuck``: the fake reports the axis active for ever after the first
+    ``pr``; the 0.3 m leg (at 0.5 m/s, 0.5 m/s^2: 1.55 s) ends at 2 x 1.55 + 3 s."""
+    with open_robot("nomad150", "fakerobot://?seed=1&fault=stuck:pr@1") as robot:
+        robot.arm(SETTINGS)
+        robot.settle(5.0)
+        started = time.monotonic()
+        with pytest.raises(OdohilTimeoutError) as raised:
+            robot.drive(Design(0.5, 0.3), SETTINGS)
+        took = time.monotonic() - started
+        assert not robot.odometry().moving
+    message = str(raised.value)
+    assert "leg 0.3 m not done within its time limit of 6.1 s" in message, message
+    assert "stop confirmed" in message
+    assert 6.1 <= took < 10.0
+
+
+def test_the_issues_run_on_a_wrapping_create2_ends_with_a_clear_error(tmp_path: Path) -> None:
+    """``odohil run`` on the issue's fake (a plan the estimator can use: the
+    issue's ``k=1`` reverse plan is now refused before anything moves, see
+    tests/session/test_preflight_estimable.py): exit 1 within seconds, the
+    reason named, the stop confirmed, the session journaled for a resume."""
+    started = time.monotonic()
+    result = CliRunner().invoke(
+        app,
+        [
+            "run", "--port", "fakecreate2://?seed=1&time_scale=2000", "--robot", "create2",
+            "--plan", "k=0.5,l=1,n=3", "--measure", "fake", "--session", str(tmp_path / "s"),
+        ],
+    )  # fmt: skip
+    assert time.monotonic() - started < 60.0
+    err = " ".join(result.stderr.split())
+    assert result.exit_code == 1, err
+    assert "leg 1 m: the encoders changed by" in err
+    assert "wrap-around of the 16-bit counters cannot be ruled out" in err
+    assert "robot stopped (it reports" in err
