@@ -30,16 +30,15 @@ from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
     EXIT_ERROR,
-    EXIT_OK,
     EXIT_STOP_UNCONFIRMED,
-    EXIT_UNTRUSTED,
+    exit_for_outcome,
     exit_for_signal,
 )
 from odohil.cli.line import FAKE_URL_SCHEMES, Line, register_fake_urls, resolve_line
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.verdict import verdict_line
+from odohil.cli.verdict import export_refusal_lines, outcome_line
 from odohil.errors import (
     InitError,
     JournalError,
@@ -50,7 +49,7 @@ from odohil.errors import (
     StopUnconfirmedError,
     TrialFileError,
 )
-from odohil.science.estimators import EstimateResult, estimate
+from odohil.science.estimators import EstimateResult
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
@@ -66,21 +65,21 @@ from odohil.session.engine import (
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
 from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
+from odohil.session.outcome import EstimateOutcome, estimate_state
 from odohil.session.plan import Plan
 from odohil.session.pose_source import PoseSource
-from odohil.session.preflight import check_new_session, check_trial_file, turn_designs
+from odohil.session.preflight import (
+    check_new_session,
+    check_trial_file,
+    check_trials_per_design,
+    turn_designs,
+)
 from odohil.session.robot import Robot
 from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, TapeSource, TruthReader
 from odohil.session.start_pose import StartPose
-from odohil.session.state import (
-    SessionState,
-    ambiguous_trials,
-    description_of_header,
-    load_session,
-    session_observations,
-)
+from odohil.session.state import SessionState, load_session
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
@@ -329,14 +328,13 @@ def execute(
     )  # fmt: skip
     if isinstance(ran, Outcome):
         return ran
-    try:
-        fitted = final_estimate(ran, exclude)
-    except OdohilError as exc:
-        console.print(f"[red]no estimate[/]: {exc}")
-        return Outcome(EXIT_ERROR, None)
-    if not fitted.verdict.trusted:
-        console.print(verdict_line(fitted.verdict), highlight=False)
-    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted)
+    fitted = final_estimate(ran, exclude)
+    console.print(outcome_line(fitted), highlight=False)
+    for line in export_refusal_lines(fitted):
+        console.print(line, highlight=False)
+    verdict = {"status": fitted.status, "reasons": [fitted.problem]}
+    details = {} if fitted.result else {"verdict": verdict}
+    return Outcome(exit_for_outcome(fitted), fitted.result, details=details)
 
 
 def run_engine(
@@ -433,32 +431,26 @@ def ended(
         "trials_done": len(state.completed),
         "session": str(engine.journal.folder),
     }
-    partial: EstimateResult | None = None
-    try:
-        partial = final_estimate(state, exclude)
-    except OdohilError as exc:
-        info["partial_estimate_note"] = str(exc)
+    fitted = final_estimate(state, exclude)
+    partial = fitted.result
+    if partial is None:
+        info["partial_estimate_note"] = fitted.problem
     info["partial_estimate"] = None if partial is None else partial.to_json_dict()
     return Outcome(code, None, status, info)
 
 
-def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateResult:
-    """A finished session's estimate: every solved trial but the ambiguous ones
-    and those in ``exclude``; the verdict lists the ambiguous ones left out.
-
-    Raises:
-        MeasurementError: too few trials for an estimate.
-    """
-    observations = session_observations(state)
-    done = {o.trial for o in observations}
-    return estimate(
-        observations,
-        exclude=[t for t in exclude if t in done],
-        ambiguous=[t.trial for t in ambiguous_trials(state)],
-        turns_exact=description_of_header(state).robot.turns_exact,
-    )
+def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateOutcome:
+    """A session's estimate and verdict by the one recipe
+    (odohil/session/outcome.py): every solved trial but the ambiguous ones and
+    those in ``exclude`` (numbers of trials not yet done are ignored)."""
+    done = {t.trial for t in state.completed}
+    return estimate_state(state, [t for t in exclude if t in done])
 
 
+ALLOW_FEW_HELP = (
+    "Run a plan with fewer trials a design than the planner's minimum (10); "
+    "its estimate is then not exported without --force."
+)
 ALLOW_TURNS_HELP = (
     "Run `turn` designs on a robot whose turns carry error ([robot] turns_exact = false); "
     "the estimate is then not trusted."
@@ -687,6 +679,7 @@ def run(
     exclude_text: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
     units_choice: UnitsOption = UNITS_DEFAULT,
     allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
+    allow_few: Annotated[bool, typer.Option("--allow-few-trials", help=ALLOW_FEW_HELP)] = False,
 ) -> None:
     """Run a calibration session unattended: n trials, no prompts, journaled.
 
@@ -698,6 +691,7 @@ def run(
     with session_exit_codes(console, json_out):
         checked = check_new_session(plan_text, robot_file, folder, allow_turns)  # nothing moved
         plan, description, toml = checked.plan, checked.description, checked.toml
+        check_trials_per_design(plan, allow_few)
         warn_turns(console, plan, description)
         exclude = checked_exclude(exclude_text, plan.n_trials, console)
         option = parse_measure(measure)
