@@ -34,7 +34,13 @@ from odohil.cli.exit_codes import (
     exit_for_outcome,
     exit_for_signal,
 )
-from odohil.cli.line import FAKE_URL_SCHEMES, Line, register_fake_urls, resolve_line
+from odohil.cli.line import (
+    Line,
+    open_truth_client,
+    register_fake_urls,
+    resolve_line,
+    truth_available,
+)
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
@@ -107,8 +113,10 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     """The robot on ``line`` (through the backend its protocol names) and its
     truth side channel (None when there is none).
 
-    ``fakerobot://`` ports carry their own truth (on the backend's
-    ``transport``, the open port); a pty fake robot needs ``truth_socket``.
+    A backend's in-process fake port (``fakerobot://``, ``fakecreate2://``)
+    carries its own truth (on the backend's ``transport``, the open port); a
+    pty fake robot needs ``truth_socket``, read by the client its backend
+    declares (odohil/session/robots.py ``fake_hooks``).
     The robot is closed (stopped) on exit.
     """
     register_fake_urls(line.port)
@@ -117,11 +125,7 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     truth: Any = None
     try:
         if truth_socket:
-            from fakes.nomad.truth import TruthClient
-
-            client = TruthClient(truth_socket)
-            client.open()
-            truth = client
+            truth = open_truth_client(line, truth_socket)
         elif hasattr(transport, "truth"):
             truth = transport
         yield robot, truth
@@ -156,7 +160,8 @@ def make_source(
         if truth is None:
             raise InitError(
                 "--measure fake needs the fake robot's truth side channel: give "
-                "--truth-socket PATH (the path `odohil emulate` printed) or a fakerobot:// port"
+                "--truth-socket PATH (the path `odohil emulate` printed) or the fake's own URL "
+                "(fakerobot://, fakecreate2://)"
             )
         reader: TruthReader = SnapshotTruth(truth)
         return TapeSource(FakeTruthSource(reader, description, seed=seed), description)
@@ -714,7 +719,7 @@ def run(
         }
         if option.mocap_url:
             settings["mocap_url"] = option.mocap_url
-        if kind == "fake" and not truth_socket and not line.port.startswith(FAKE_URL_SCHEMES):
+        if kind == "fake" and not truth_available(line, truth_socket):
             try:
                 make_source(kind, description, None, seed, trial_file)  # says what is missing
             except OdohilError as exc:

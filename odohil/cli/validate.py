@@ -24,7 +24,7 @@ from odohil.cli.exit_codes import (
     EXIT_UNTRUSTED,
     exit_for_outcome,
 )
-from odohil.cli.line import resolve_line
+from odohil.cli.line import resolve_line, truth_available
 from odohil.cli.options import bounded
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
@@ -294,7 +294,7 @@ def _drive_or_reload(
     line = resolve_line(description, port, baud, robot_path or "the session's robot description")
     if trial_file:
         check_trial_file(trial_file, description, plan)
-    if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
+    if kind == "fake" and not truth_available(line, truth_socket):
         make_source(kind, description, None, seed, trial_file)  # says what is missing
     settings = {
         **line.to_json(),
