@@ -457,7 +457,7 @@ ALLOW_FEW_HELP = (
     "its estimate is then not exported without --force."
 )
 ALLOW_TURNS_HELP = (
-    "Run `turn` designs on a robot whose turns carry error ([robot] turns_exact = false); "
+    "Run `turn` designs on a robot whose turns carry error (\\[robot] turns_exact = false); "
     "the estimate is then not trusted."
 )
 
@@ -636,7 +636,7 @@ def run(
         str | None,
         typer.Option(
             "--port",
-            help="Serial device, pty path or pyserial URL (default: robot.toml [serial] port).",
+            help="Serial device, pty path or pyserial URL (default: robot.toml \\[serial] port).",
         ),
     ] = None,
     *,
@@ -669,7 +669,7 @@ def run(
         typer.Option(
             "--baud",
             callback=bounded("baud"),
-            help="Line speed (default: robot.toml [serial] baud, else the robot's default).",
+            help="Line speed (default: robot.toml \\[serial] baud, else the robot's default).",
         ),
     ] = None,
     json_out: Annotated[

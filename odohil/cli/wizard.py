@@ -718,7 +718,7 @@ def wizard(
         typer.Option(
             "--port",
             help="Serial port (or pyserial URL) of the robot "
-            "(default: the session's, else robot.toml [serial] port).",
+            "(default: the session's, else robot.toml \\[serial] port).",
         ),
     ] = None,
     robot_file: Annotated[
@@ -738,7 +738,7 @@ def wizard(
         typer.Option(
             "--baud",
             callback=bounded("baud"),
-            help="Line speed (default: the session's, else robot.toml [serial] baud, "
+            help="Line speed (default: the session's, else robot.toml \\[serial] baud, "
             "else the robot's default).",
         ),
     ] = None,
