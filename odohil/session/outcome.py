@@ -231,8 +231,8 @@ def export_refusals(
     ]
     if few:
         reasons.append(
-            f"fewer than {min_trials_per_design} trials a design, the planner's minimum "
-            f"for honest intervals: {', '.join(few)}"
+            f"fewer than {units.plural(min_trials_per_design, 'trial')} a design, the "
+            f"planner's minimum for honest intervals: {', '.join(few)}"
         )
     for name, what in (("E_T", "distance scale 1 + E_T"), ("E_R", "heading drift E_R")):
         p = result.parameter(name)
