@@ -8,12 +8,14 @@ the option or file and what is accepted; nothing has moved yet.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 from odohil import units
 from odohil.errors import ParameterError, TrialFileError
 from odohil.science.estimators.checks import plan_problems
+from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.plan import Plan, check_session_plan, parse_plan
 from odohil.session.robot_file import read_robot_toml
@@ -100,8 +102,37 @@ def check_estimable(plan: Plan, description: RobotDescription) -> None:
         )
 
 
+def check_trials_per_design(
+    plan: Plan,
+    allow_few: bool,
+    min_trials_per_design: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
+) -> None:
+    """Refuse a plan with a design of fewer trials than the planner's minimum
+    for honest intervals, unless ``allow_few`` (ParameterError naming
+    ``--plan`` and ``--allow-few-trials``): such a session's estimate cannot
+    be exported without ``--force`` (odohil/session/outcome.py)."""
+    few = [
+        f"{i.design.label()} (n={i.n_trials})"
+        for i in plan.items
+        if i.n_trials < min_trials_per_design
+    ]
+    if few and not allow_few:
+        raise ParameterError(
+            f"--plan has fewer than {units.plural(min_trials_per_design, 'trial')} a design "
+            f"({', '.join(few)}), the planner's minimum for honest intervals: its estimate "
+            "could not be exported. Give n >= "
+            f"{min_trials_per_design} for every design, or --allow-few-trials to run it anyway"
+        )
+
+
 def check_session_folder(session: Path | None) -> None:
-    """A ``--session`` that exists must be a folder (ParameterError otherwise)."""
+    """A ``--session`` that exists must be a folder, and a symbolic link must
+    lead somewhere (ParameterError otherwise)."""
+    if session is not None and session.is_symlink() and not session.exists():
+        raise ParameterError(
+            f"--session {session} is a symbolic link to {os.readlink(session)}, which does "
+            "not exist: create that folder, or give another --session"
+        )
     if session is not None and session.exists() and not session.is_dir():
         raise ParameterError(
             f"--session {session} is a file, not a session folder: give a new or "

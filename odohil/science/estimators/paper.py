@@ -89,7 +89,9 @@ def choose_designs(summaries: Sequence[DesignSummary]) -> tuple[DesignSummary, D
     """
     usable = [s for s in summaries if starts_estimate(s.design, s.n)]
     if not usable:
-        raise MeasurementError(f"the paper's method needs {START_NEEDS}")
+        raise MeasurementError(
+            f"an estimate needs {START_NEEDS} (every method starts from the paper's)"
+        )
     first = min(usable, key=lambda s: (s.design.k, -s.n * s.design.distance_m))
     second = max(summaries, key=lambda s: (s.design.k, s.n * s.design.distance_m))
     return first, second
