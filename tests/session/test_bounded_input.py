@@ -111,7 +111,7 @@ def test_a_session_whose_journal_is_a_fifo_is_refused(tmp_path: Path, command: s
     extra = {
         "report": ["--out", str(tmp_path / "report.html")],
         "run": ["--session", str(folder), "--port", "fakerobot://?seed=1", "--robot",
-                "nomad150", "--plan", "k=1,l=1,n=2", "--measure", "fake"],
+                "nomad150", "--allow-few-trials", "--plan", "k=1,l=1,n=2", "--measure", "fake"],
     }.get(command, [])  # fmt: skip
     try:
         code, err = odohil(command, *([] if command == "run" else [folder]), *extra, timeout_s=10)
