@@ -113,7 +113,8 @@ def test_the_issues_run_on_a_wrapping_create2_ends_with_a_clear_error(tmp_path: 
         app,
         [
             "run", "--port", "fakecreate2://?seed=1&time_scale=2000", "--robot", "create2",
-            "--allow-few-trials", "--plan", "k=0.5,l=1,n=3", "--measure", "fake", "--session", str(tmp_path / "s"),
+            "--allow-few-trials", "--plan", "k=0.5,l=1,n=3", "--measure", "fake",
+            "--session", str(tmp_path / "s"),
         ],
     )  # fmt: skip
     assert time.monotonic() - started < 60.0
