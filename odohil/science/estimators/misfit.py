@@ -47,13 +47,16 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Literal
+from pathlib import PurePath
+from typing import Any, Literal, Protocol
 
 import numpy as np
 from scipy import special
 
 from odohil.errors import ParameterError
-from odohil.science.paths import FloatArray
+from odohil.science.path_trials import PathTrial
+from odohil.science.paths import FloatArray, Turn
+from odohil.units import wrap_angle
 
 AXES = ("x", "y", "theta")
 """The residual components, in order: x m, y m, heading rad."""
@@ -150,8 +153,11 @@ class BiasTest:
                 f"{axis} residuals differ between {self.n} groups more than their spread "
                 f"allows (F = {self.statistic:.3g}, {self.detail}, p = {self.p_value:.2g})"
             )
+        where = (
+            f"all {self.n} trials" if self.group == "all" else f"the {self.n} {self.group} trials"
+        )
         return (
-            f"{axis} residual {self.size_text()} on the {self.n} {self.group} trials "
+            f"{axis} residual {self.size_text()} on {where} "
             f"(z = {self.statistic:.1f}, predicted SE {_abs_text(self.axis, self.stderr)})"
         )
 
@@ -513,5 +519,78 @@ def misfit_check(
         fitted=fitted,
         tests=done,
         pinned=tuple(pinned),
+        turn_hint=turn_hint,
+    )
+
+
+class Prediction(Protocol):
+    """A model's prediction of one trial (e.g.
+    :class:`odohil.science.validation.PathPrediction`), SI."""
+
+    @property
+    def mean(self) -> FloatArray:
+        """(3,) expected (x m, y m, heading rad minus the path's winding)."""
+        ...
+
+    @property
+    def cov(self) -> FloatArray:
+        """(3, 3) the model's covariance (without the measurement's)."""
+        ...
+
+    @property
+    def jacobian(self) -> FloatArray:
+        """(3, p) d mean / d parameters."""
+        ...
+
+
+def labels_of(trials: Sequence[PathTrial]) -> list[TrialLabel]:
+    """The groups of general-path trials: their family and direction; the run
+    (for the trial-order check) is their source, or the source's folder when
+    every source holds one trial (a data set of one file per run, a folder per
+    session, as the optiodom data set)."""
+    per_source: dict[str, int] = {}
+    for trial in trials:
+        per_source[trial.source] = per_source.get(trial.source, 0) + 1
+    one_each = all(count == 1 for count in per_source.values())
+    out = []
+    for trial in trials:
+        run = str(PurePath(trial.source).parent) if one_each and trial.source else trial.source
+        turns = any(isinstance(s, Turn) and s.angle_rad != 0.0 for s in trial.path.steps)
+        out.append(TrialLabel(trial.family, trial.direction, run, turns))
+    return out
+
+
+def path_misfit(
+    trials: Sequence[PathTrial],
+    predictions: Sequence[Prediction],
+    parameter_cov: FloatArray | None,
+    *,
+    fitted: bool = True,
+    level: float = MISFIT_LEVEL,
+    turn_hint: str = "",
+) -> MisfitCheck:
+    """:func:`misfit_check` of general-path trials against a model's
+    per-trial predictions (any model: the four parameters, or with turn errors;
+    ``parameter_cov`` is the covariance of the parameters the Jacobians are
+    taken in, SI)."""
+    if len(predictions) != len(trials):
+        raise ParameterError(f"{len(trials)} trials but {len(predictions)} predictions")
+    n = len(trials)
+    residuals = np.empty((n, 3))
+    covs = np.empty((n, 3, 3))
+    for i, (trial, prediction) in enumerate(zip(trials, predictions, strict=True)):
+        r = trial.pose_change - prediction.mean
+        r[2] = wrap_angle(float(r[2]))
+        residuals[i] = r
+        covs[i] = prediction.cov + trial.measurement_cov
+    jacobians = np.stack([np.asarray(p.jacobian, dtype=np.float64) for p in predictions])
+    return misfit_check(
+        residuals,
+        covs,
+        labels_of(trials),
+        jacobians,
+        parameter_cov,
+        fitted=fitted,
+        level=level,
         turn_hint=turn_hint,
     )
