@@ -232,9 +232,7 @@ class ValidationResult:
         bias = [t for t in self.bias if not t.passed]
         if bias:
             axes = [t for t in bias if t.dof == 1] or bias
-            out.append(
-                "a bias the trials share: " + "; ".join(t.describe() for t in axes)
-            )
+            out.append("a bias the trials share: " + "; ".join(t.describe() for t in axes))
         return tuple(out)
 
     def failed(self) -> tuple[str, ...]:

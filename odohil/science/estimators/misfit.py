@@ -227,13 +227,15 @@ class MisfitCheck:
         """One sentence per failing kind of test (group biases: the strongest
         per axis), each naming the group, the axis and the bias's size."""
         failed = self.failed()
-        out: list[str] = []
-        # per axis the strongest group bias, else the spread test
+        # per axis the strongest group bias, else the spread test; strongest axis first
+        chosen = []
         for axis in AXES:
             mine = [t for t in failed if t.axis == axis and t.kind != "order"]
             groups = [t for t in mine if t.kind == "group"] or mine
             if groups:
-                out.append(groups[0].describe() + self._advice(groups[0]))
+                chosen.append(groups[0])
+        chosen.sort(key=lambda t: t.p_value)
+        out = [t.describe() + self._advice(t) for t in chosen]
         out += [
             test.describe() + ": the first trials differ (let the robot settle first, or "
             "leave them out with --exclude)"
