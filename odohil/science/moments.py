@@ -17,7 +17,28 @@ Writing A(s) = (1+E_T) sigma(s) e^{i thetatilde(s)}:
     Cov(Delta,Z)= int A(s) (i K s) e^{-K s/2} ds                      (Stein's lemma)
     Var Delta   = K rho,   E[Delta] = net turn - winding + E_R u(rho)
 
-(K = K_theta). On a leg A is a complex exponential in s, and for s < s' both
+(K = K_theta).
+
+Turn errors (a differential drive, :class:`TurnErrors`): a turn of encoder
+angle a in class c (spin or arc, ccw or cw: odohil/science/paths.py
+TURN_CLASSES) really turns a (1 + e_c), and a spin adds N(0, K_spin |a|).
+Then thetatilde(s) gains sum_c e_c P_c(s) (P_c(s) the signed angle of the
+class-c turns before s), and the heading noise X(s) = W(s) + the spins'
+noise before s has the variance V(s) = K s + K_spin S(s) (S(s) the |angle|
+spun before s), with independent increments. Every factor above is
+E[e^{i(X(s) -+ X(s'))}], so the formulas hold with K s replaced by V(s):
+e^{-K|s - s'|/2} by e^{-|V(s) - V(s')|/2}, e^{-(4K min + K|s - s'|)/2} by
+e^{-(3 V(s) + V(s'))/2} (s < s'), the K_rho term's e^{-2Ks} by e^{-2V(s)},
+and Cov(Delta, Z) = int A(s) i V(s) e^{-V(s)/2} ds (Stein's lemma again:
+Delta's noise is X(s) plus later independent increments). Var Delta =
+K rho + K_spin S(rho), E[Delta] gains sum_c e_c P_c(rho). V jumps only
+between legs, so on every leg it is K s plus a constant and the one-leg
+integrals below are unchanged; only the factors between legs gain the jumps.
+tests/science/test_turn_moments.py checks all of it against a Monte Carlo
+simulation of the discrete model (odohil/science/diff_drive.py
+:func:`~odohil.science.diff_drive.simulate_turn_errors`).
+
+On a leg A is a complex exponential in s, and for s < s' both
 kernels factorise, so pairs of distinct legs reduce to products of one-leg
 integrals (a recurrence over legs, O(legs)); same-leg double integrals reduce
 to one-dimensional ones. A one-leg integral whose integrand turns or decays
@@ -66,6 +87,39 @@ class PoseMoments:
     def mean_square_distance(self) -> float:
         """<x^2 + y^2>, m^2: the expected phi5 (a raw second moment)."""
         return float(self.cov[0, 0] + self.cov[1, 1] + self.mean[0] ** 2 + self.mean[1] ** 2)
+
+
+@dataclass(frozen=True)
+class TurnErrors:
+    """A differential drive's turn errors (module docstring), per turn class.
+
+    Attributes:
+        spin_ccw, spin_cw, arc_ccw, arc_cw: e_turn of the turns of that class
+            (no unit; a turn of encoder angle a really turns a (1 + e_turn)).
+        k_spin: heading variance per radian spun in place, rad^2/rad (arcs
+            carry none of their own: their noise is K_theta's along the legs).
+    """
+
+    spin_ccw: float = 0.0
+    spin_cw: float = 0.0
+    arc_ccw: float = 0.0
+    arc_cw: float = 0.0
+    k_spin: float = 0.0
+
+    @classmethod
+    def uniform(cls, e_turn: float, k_spin: float = 0.0) -> TurnErrors:
+        """One e_turn for every turn."""
+        return cls(e_turn, e_turn, e_turn, e_turn, k_spin)
+
+    @property
+    def scales(self) -> FloatArray:
+        """(4,) e_turn in the order of odohil/science/paths.py TURN_CLASSES."""
+        return np.array([self.spin_ccw, self.spin_cw, self.arc_ccw, self.arc_cw])
+
+    @property
+    def exact(self) -> bool:
+        """Whether every turn is exact (all zero)."""
+        return not np.any(self.scales) and self.k_spin == 0.0
 
 
 @lru_cache(maxsize=1)
@@ -122,12 +176,15 @@ def _long_leg_integrals(
     return (i_mean, i_tail, i_same_abs, i_stein, i_f, i_same_sq, i_noise)
 
 
-def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
+def pose_moments(
+    path: EncoderPath, params: ErrorParameters, turns: TurnErrors | None = None
+) -> PoseMoments:
     """Mean vector and 3x3 covariance of (x, y, Delta) for one trial of ``path``.
 
     Args:
         path: the encoder path.
         params: the error parameters (SI).
+        turns: the turns' errors (None: exact turns, the paper's model).
 
     Returns:
         A :class:`PoseMoments` in SI (m, rad).
@@ -140,7 +197,19 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
     omega = params.e_r * legs.sign
     # A(a_j + t) = alpha_j e^{i omega_j t} on leg j, t in [0, L_j]
     phase = legs.heading_rad + params.e_r * legs.start_signed_m
+    # the spins' heading variance before each leg (the jumps of V), rad^2
+    jump = np.zeros(length.size)
+    turn_mean, turn_var = 0.0, 0.0
+    if turns is not None and not turns.exact:
+        table = path.turns
+        scales = turns.scales
+        phase = phase + scales @ table.before_rad
+        jump = turns.k_spin * table.spin_before_rad
+        turn_mean = float(scales @ table.total_rad)
+        turn_var = turns.k_spin * table.spin_total_rad
     alpha = gain * legs.sign * np.exp(1j * phase)
+    # V(s) at each leg's start: K a_j + J_j
+    v_start = k * start + jump
 
     # legs whose integrands turn by a bounded phase: one Gauss-Legendre panel;
     # the others by closed forms in phi1, phi2 (cost independent of the length)
@@ -175,7 +244,7 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
         ):
             target[long_leg] = value
 
-    mean_legs = alpha * np.exp(-0.5 * k * start) * i_mean  # m_j
+    mean_legs = alpha * np.exp(-0.5 * v_start) * i_mean  # m_j
     mean_z = complex(mean_legs.sum())
 
     # E|Z|^2: same legs, then pairs i < j through S_j = sum_{i<j} B_i e^{-K(a_j - e_i)/2}
@@ -183,27 +252,29 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
     tail = (alpha * i_tail).tolist()  # B_i
     head = np.conj(alpha * i_mean).tolist()  # conj C_j
     shrink = np.exp(-0.5 * k * length).tolist()
+    jumps = np.exp(-0.5 * np.diff(jump, prepend=0.0)).tolist()
     running, cross = 0.0j, 0.0j
-    for b, c_conj, g in zip(tail, head, shrink, strict=True):
+    for b, c_conj, g, h in zip(tail, head, shrink, jumps, strict=True):
+        running *= h
         cross += running * c_conj
         running = running * g + b
     abs_sq = params.k_rho * path.distance_m + same_abs + 2.0 * cross.real
 
     # E[Z^2]: kernel e^{-3Ks/2} e^{-Ks'/2} for s < s'
     sq_alpha = alpha * alpha
-    f_legs = alpha * np.exp(-1.5 * k * start) * i_f
+    f_legs = alpha * np.exp(-1.5 * v_start) * i_f
     before = np.concatenate(([0.0j], np.cumsum(f_legs)[:-1]))
-    same_sq = sq_alpha * np.exp(-2.0 * k * start) * i_same_sq
-    noise = params.k_rho / gain**2 * sq_alpha * np.exp(-2.0 * k * start) * i_noise
+    same_sq = sq_alpha * np.exp(-2.0 * v_start) * i_same_sq
+    noise = params.k_rho / gain**2 * sq_alpha * np.exp(-2.0 * v_start) * i_noise
     sq = complex(2.0 * (same_sq.sum() + (before * mean_legs).sum()) + noise.sum())
 
     cov_delta_z = complex(
-        (1j * k * alpha * np.exp(-0.5 * k * start) * (start * i_mean + i_stein)).sum()
+        (1j * alpha * np.exp(-0.5 * v_start) * (v_start * i_mean + k * i_stein)).sum()
     )
 
     c_abs = abs_sq - abs(mean_z) ** 2  # Var x + Var y
     c_sq = sq - mean_z * mean_z  # Var x - Var y + 2i Cov(x, y)
-    var_delta = k * path.distance_m
+    var_delta = k * path.distance_m + turn_var
     cov = np.array(
         [
             [(c_abs + c_sq.real) / 2.0, c_sq.imag / 2.0, cov_delta_z.real],
@@ -211,7 +282,9 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
             [cov_delta_z.real, cov_delta_z.imag, var_delta],
         ]
     )
-    mean_delta = path.net_turn_rad - path.winding_rad + params.e_r * path.signed_distance_m
+    mean_delta = (
+        path.net_turn_rad - path.winding_rad + params.e_r * path.signed_distance_m + turn_mean
+    )
     mean = np.array([mean_z.real, mean_z.imag, mean_delta])
     return PoseMoments(mean=mean, cov=cov)
 
