@@ -48,13 +48,12 @@ from scipy import stats
 
 from odohil.science.estimators.joint import JointFit, designs_of
 from odohil.science.estimators.likelihood import (
+    GroupStats,
     LikelihoodValue,
     ModelPoint,
     evaluate,
-    model_point,
     with_moments,
 )
-from odohil.science.estimators.observations import TrialGroup
 from odohil.science.paths import FloatArray
 
 FOUR_SIGMA = 4.0
@@ -121,10 +120,12 @@ def log_t_interval(value: float, stderr: float, dof: float, rule: str) -> Interv
 
 
 def satterthwaite_dof(
-    groups: Sequence[TrialGroup], fit: JointFit, index: int, cox_reid: bool = True
+    groups: Sequence[GroupStats], fit: JointFit, index: int, cox_reid: bool = True
 ) -> float:
-    """nu = 2 SE^4 / Var(SE^2) of parameter ``index`` (0: E_R, 1: E_T), the
-    variance of SE^2 by the delta method through log K_theta and log K_rho."""
+    """nu = 2 SE^4 / Var(SE^2) of parameter ``index`` (0: E_R, 1: E_T, or
+    another mean parameter of the layout), the variance of SE^2 by the delta
+    method through the log variance rates (log K_theta and log K_rho, and
+    log K_spin where the layout has it)."""
     info = fit.value.information
     if info is None:
         return math.inf
@@ -135,20 +136,20 @@ def satterthwaite_dof(
     var = float(cov[index, index])
     if not (var > 0 and math.isfinite(var)):
         return math.inf
-    designs = designs_of(groups)
+    rates = list(fit.point.layout.log_rates)
     h = 0.05
-    grad = np.zeros(2)
-    for j, k in enumerate((2, 3)):
+    grad = np.zeros(len(rates))
+    for j, k in enumerate(rates):
         phi = fit.point.phi.copy()
         phi[k] += h
-        moved = evaluate(groups, model_point(phi, designs, derivatives=True), cox_reid)
+        moved = evaluate(groups, fit.point.moved(phi, derivatives=True), cox_reid)
         if moved.information is None:
             return math.inf
         try:
             grad[j] = (float(np.linalg.inv(moved.information)[index, index]) - var) / h
         except np.linalg.LinAlgError:
             return math.inf
-    spread = float(grad @ cov[2:, 2:] @ grad)
+    spread = float(grad @ cov[np.ix_(rates, rates)] @ grad)
     if spread <= 0:
         return math.inf
     return min(2.0 * var**2 / spread, 1e6)
@@ -158,14 +159,16 @@ class _Profile:
     """The Cox-Reid adjusted profile NLL of one log K, with warm starts."""
 
     def __init__(
-        self, groups: Sequence[TrialGroup], fit: JointFit, index: int, cox_reid: bool
+        self, groups: Sequence[GroupStats], fit: JointFit, index: int, cox_reid: bool
     ) -> None:
         self.groups = [g for g in groups if g.n > 0]
         self.designs = designs_of(self.groups)
         self.index = index
-        self.free = [i for i in range(4) if i != index]
+        self.layout = fit.point.layout
+        self.free = [i for i in range(self.layout.size) if i != index]
         self.cox_reid = cox_reid
-        self.anchor: ModelPoint = model_point(fit.point.phi, self.designs, derivatives=True)
+        self.model = fit.point.model
+        self.anchor: ModelPoint = self.model.point(fit.point.phi, self.designs, derivatives=True)
         self.psi_hat = float(fit.point.phi[index])
         self.evaluations = 0
         base = self.refit(self.psi_hat, fit.point.phi)
@@ -173,7 +176,7 @@ class _Profile:
         self.last = fit.point.phi.copy()
 
     def _value(self, phi: FloatArray) -> LikelihoodValue:
-        point = with_moments(self.anchor, model_point(phi, self.designs, derivatives=False))
+        point = with_moments(self.anchor, self.model.point(phi, self.designs, derivatives=False))
         return evaluate(self.groups, point, self.cox_reid)
 
     def refit(self, psi: float, start: FloatArray) -> tuple[float, FloatArray]:
@@ -200,9 +203,7 @@ class _Profile:
             while t > 0.05:
                 new = phi.copy()
                 new[free] += t * step
-                new[1] = max(new[1], -0.99)
-                for k in (2, 3):
-                    new[k] = float(np.clip(new[k], *_LOG_K_RANGE))
+                new[free] = self.layout.bounded(new, *_LOG_K_RANGE)[free]
                 trial = self._value(new)
                 if trial.nll <= value.nll + 1e-9:
                     break
@@ -246,15 +247,15 @@ class _Profile:
 
 
 def profile_interval(
-    groups: Sequence[TrialGroup],
+    groups: Sequence[GroupStats],
     fit: JointFit,
     index: int,
     cox_reid: bool = True,
     widen: float = 1.0,
 ) -> Interval:
-    """The profile-likelihood interval of K_theta (index 2) or K_rho (3) at
-    both levels (see the module docstring), SI. ``widen`` (at least 1)
-    multiplies the deviance threshold: the sandwich ratio of
+    """The profile-likelihood interval of K_theta (index 2) or K_rho (3), or
+    another log rate of the layout (K_spin), at both levels (see the module
+    docstring), SI. ``widen`` (at least 1) multiplies the deviance threshold: the sandwich ratio of
     odohil/science/estimators/scores.py when the data spread more than the
     model says."""
     widen = max(widen, 1.0) if math.isfinite(widen) else 1.0
