@@ -67,6 +67,9 @@ _INNER_TOLERANCE = 1e-6
 """The nuisance re-fit stops when its Newton decrement (about twice the NLL
 still to gain) is below this."""
 _SECANT_STEPS = 8
+_BISECTION_STEPS = 40
+_BRACKET_TOLERANCE = 1e-3
+"""Bisection stops when the bracket in log K is this narrow."""
 _ROOT_TOLERANCE = 0.01
 """A bound is accepted when |r(psi) - q| is below this (in units of the root)."""
 
@@ -126,33 +129,43 @@ def satterthwaite_dof(
     another mean parameter of the layout), the variance of SE^2 by the delta
     method through the log variance rates (log K_theta and log K_rho, and
     log K_spin where the layout has it)."""
+    return satterthwaite_dofs(groups, fit, (index,), cox_reid)[0]
+
+
+def satterthwaite_dofs(
+    groups: Sequence[GroupStats], fit: JointFit, indices: Sequence[int], cox_reid: bool = True
+) -> list[float]:
+    """:func:`satterthwaite_dof` of several parameters at the cost of one
+    (the model is moved once per log rate)."""
+    none = [math.inf] * len(indices)
     info = fit.value.information
     if info is None:
-        return math.inf
+        return none
     try:
         cov = np.linalg.inv(info)
     except np.linalg.LinAlgError:
-        return math.inf
-    var = float(cov[index, index])
-    if not (var > 0 and math.isfinite(var)):
-        return math.inf
+        return none
+    wanted = list(indices)
+    var = np.diag(cov)[wanted]
     rates = list(fit.point.layout.log_rates)
     h = 0.05
-    grad = np.zeros(len(rates))
+    grad = np.zeros((len(rates), len(wanted)))
     for j, k in enumerate(rates):
         phi = fit.point.phi.copy()
         phi[k] += h
         moved = evaluate(groups, fit.point.moved(phi, derivatives=True), cox_reid)
         if moved.information is None:
-            return math.inf
+            return none
         try:
-            grad[j] = (float(np.linalg.inv(moved.information)[index, index]) - var) / h
+            grad[j] = (np.diag(np.linalg.inv(moved.information))[wanted] - var) / h
         except np.linalg.LinAlgError:
-            return math.inf
-    spread = float(grad @ cov[np.ix_(rates, rates)] @ grad)
-    if spread <= 0:
-        return math.inf
-    return min(2.0 * var**2 / spread, 1e6)
+            return none
+    spread = np.einsum("ji,jk,ki->i", grad, cov[np.ix_(rates, rates)], grad)
+    out = []
+    for v, s2 in zip(var, spread, strict=True):
+        ok = v > 0 and math.isfinite(v) and s2 > 0
+        out.append(min(2.0 * float(v) ** 2 / float(s2), 1e6) if ok else math.inf)
+    return out
 
 
 class _Profile:
@@ -230,6 +243,7 @@ class _Profile:
         target = side * q
         a, ra = self.psi_hat, 0.0
         b = self.psi_hat + side * max(abs(guess), 1e-6)
+        inner, outer = self.psi_hat, math.nan  # the bracket: short of the target, past it
         for _ in range(_SECANT_STEPS):
             b = float(np.clip(b, *_LOG_K_RANGE))
             rb = self.root(b)
@@ -237,13 +251,40 @@ class _Profile:
                 return b
             if b == limit and (rb - target) * side < 0:
                 return side * math.inf
+            if math.isfinite(rb):
+                if (rb - target) * side < 0:
+                    inner = b if (b - inner) * side > 0 else inner
+                elif math.isnan(outer) or (outer - b) * side > 0:
+                    outer = b
             if not math.isfinite(rb) or (rb - ra) * (b - a) <= 0:
                 # r must rise with psi: step half-way back toward the last good point
                 b = 0.5 * (a + b)
                 continue
             slope = (rb - ra) / (b - a)
             a, ra, b = b, rb, b + (target - rb) / slope
-        return b
+        return self._bisect(target, side, inner, outer, limit)
+
+    def _bisect(
+        self, target: float, side: float, inner: float, outer: float, limit: float
+    ) -> float:
+        """Bisection on the bracket [inner, outer] when the secant did not
+        converge (r far from linear in psi: an estimate at the floor of log K,
+        where the deviance grows like K = e^psi)."""
+        if math.isnan(outer):
+            if (self.root(limit) - target) * side < 0:
+                return side * math.inf
+            outer = limit
+        middle = 0.5 * (inner + outer)
+        for _ in range(_BISECTION_STEPS):
+            middle = 0.5 * (inner + outer)
+            r = self.root(middle)
+            if abs(r - target) < _ROOT_TOLERANCE or abs(outer - inner) < _BRACKET_TOLERANCE:
+                return middle
+            if math.isfinite(r) and (r - target) * side < 0:
+                inner = middle
+            else:
+                outer = middle
+        return middle
 
 
 def profile_interval(

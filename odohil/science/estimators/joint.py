@@ -44,6 +44,8 @@ DECREMENT_TOLERANCE = 1e-8
 _MAX_ITERATIONS = 60
 _MAX_LOG_STEP = 2.0
 """Largest change of log K in one step (a factor e^2)."""
+_FLOOR_JUMP = 10.0
+"""A log K step below -this goes to the floor at once (see :func:`_limit`)."""
 _LOG_K_FLOOR = math.log(1e-14)
 _LOG_K_CEILING = math.log(1e2)
 _FALLBACK_SCALE = 1e-3
@@ -101,20 +103,47 @@ def _solve(info: FloatArray, rhs: FloatArray, damping: float) -> FloatArray:
 
 
 def _limit(phi: FloatArray, step: FloatArray, layout: Layout) -> FloatArray:
+    """phi + step with every log K moving at most _MAX_LOG_STEP (the whole
+    step scaled down), except that a variance rate the step would shrink by
+    more than e^_FLOOR_JUMP goes straight to the floor (a rate the data put
+    at 0 would otherwise take ten steps to get there; a wrong jump is
+    rejected like any step that does not improve the fit)."""
     step = step.copy()
-    largest = float(np.max(np.abs(step[list(layout.log_rates)])))
+    rates = [i for i in layout.log_rates if step[i] >= -_FLOOR_JUMP]
+    jumps = [i for i in layout.log_rates if step[i] < -_FLOOR_JUMP]
+    largest = float(np.max(np.abs(step[rates]))) if rates else 0.0
     if largest > _MAX_LOG_STEP:
         step *= _MAX_LOG_STEP / largest
+    step[jumps] = _LOG_K_FLOOR - phi[jumps]
     return layout.bounded(phi + step, _LOG_K_FLOOR, _LOG_K_CEILING)
 
 
-def decrement(value: LikelihoodValue) -> float:
+def decrement(value: LikelihoodValue, held: Sequence[int] = ()) -> float:
     """score^T I^-1 score: the squared length of the remaining Newton step in
-    standard-error units."""
+    standard-error units (over the parameters not ``held``)."""
     assert value.gradient is not None
     assert value.information is not None
-    step = _solve(value.information, value.gradient, 0.0)
-    return float(abs(value.gradient @ step))
+    free = [i for i in range(value.gradient.size) if i not in held]
+    step = _solve(value.information[np.ix_(free, free)], value.gradient[free], 0.0)
+    return float(abs(value.gradient[free] @ step))
+
+
+def held_at_floor(phi: FloatArray, value: LikelihoodValue, layout: Layout) -> list[int]:
+    """The variance rates at the floor of log K whose score still pushes them
+    down: the optimum is on the boundary (K = 0 for all practical purposes),
+    so they are held there and the others are fitted (and converge)."""
+    if value.gradient is None:
+        return []
+    return [i for i in layout.log_rates if phi[i] <= _LOG_K_FLOOR + 1e-9 and value.gradient[i] > 0]
+
+
+def _free_step(value: LikelihoodValue, held: Sequence[int], damping: float) -> FloatArray:
+    assert value.gradient is not None
+    assert value.information is not None
+    free = [i for i in range(value.gradient.size) if i not in held]
+    step = np.zeros(value.gradient.size)
+    step[free] = _solve(value.information[np.ix_(free, free)], -value.gradient[free], damping)
+    return step
 
 
 def covariance_si(point: ModelPoint, value: LikelihoodValue) -> FloatArray:
@@ -177,11 +206,12 @@ def refine(
     while iterations < max_iterations:
         assert value.gradient is not None
         assert value.information is not None
-        if decrement(value) < DECREMENT_TOLERANCE:
+        held = held_at_floor(point.phi, value, layout)
+        if decrement(value, held) < DECREMENT_TOLERANCE:
             converged = True
             break
         iterations += 1
-        step = _solve(value.information, -value.gradient, damping)
+        step = _free_step(value, held, damping)
         trial_phi = _limit(point.phi, step, layout)
         if cox_reid:
             # an estimating equation (score + adjustment = 0): steps are kept
@@ -191,7 +221,9 @@ def refine(
             else:
                 moved = point.moved(trial_phi, derivatives=True)
             trial = evaluate(groups, moved, cox_reid=True)
-            if trial.gradient is not None and decrement(trial) < decrement(value):
+            if trial.gradient is not None and decrement(
+                trial, held_at_floor(trial_phi, trial, layout)
+            ) < decrement(value, held):
                 point, value = moved, trial
                 damping = 0.0 if damping <= 1e-3 else damping / 10.0
             else:
