@@ -85,6 +85,11 @@ class TrialFileError(MeasurementError):
     """A trial file with bad rows; the message lists each by line number."""
 
 
+class RecordingError(MeasurementError):
+    """A recorded log (odometry and ground truth) that cannot be read or cut
+    into trials; the message names the file, the line or message, and the field."""
+
+
 class JournalError(OdohilError):
     """A session journal that cannot be trusted: unreadable, or corrupt before
     its last record (a torn last record is reported, not raised)."""

@@ -26,6 +26,7 @@ COMMAND_MODULES: tuple[str, ...] = (
     "estimate",
     "wizard",
     "validate",
+    "import_log",
 )
 
 app = typer.Typer(

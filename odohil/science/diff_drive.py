@@ -68,8 +68,12 @@ class DiffDriveGeometry:
 
     Attributes:
         counts_per_rev: encoder counts per wheel revolution.
-        wheel_diameter_m: wheel diameter, m.
+        wheel_diameter_m: wheel diameter, m (the left wheel's when
+            ``right_wheel_diameter_m`` is given).
         wheel_base_m: distance between the wheels' contact points, m.
+        right_wheel_diameter_m: the right wheel's diameter when the nominal
+            constants give the two wheels apart (``wheel_diameter_m = [left,
+            right]`` in a robot description), m; None: the same as the left.
 
     Defaults: the iRobot Create 2 (OI specification p.5, p.31).
     """
@@ -77,17 +81,34 @@ class DiffDriveGeometry:
     counts_per_rev: float = 508.8
     wheel_diameter_m: float = 0.072
     wheel_base_m: float = 0.235
+    right_wheel_diameter_m: float | None = None
 
     def __post_init__(self) -> None:
         for name in ("counts_per_rev", "wheel_diameter_m", "wheel_base_m"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ParameterError(f"{name} must be a positive number, got {value!r}")
+        right = self.right_wheel_diameter_m
+        if right is not None and not (math.isfinite(right) and right > 0):
+            raise ParameterError(f"right_wheel_diameter_m must be a positive number, got {right!r}")
+
+    @property
+    def wheel_diameters_m(self) -> tuple[float, float]:
+        """(left, right) wheel diameters, m."""
+        right = self.right_wheel_diameter_m
+        return self.wheel_diameter_m, self.wheel_diameter_m if right is None else right
 
     @property
     def metres_per_count(self) -> float:
-        """Wheel travel of one encoder count, m."""
-        return math.pi * self.wheel_diameter_m / self.counts_per_rev
+        """Wheel travel of one encoder count, m (the two wheels' mean)."""
+        left, right = self.wheel_diameters_m
+        return math.pi * 0.5 * (left + right) / self.counts_per_rev
+
+    @property
+    def wheel_metres_per_count(self) -> tuple[float, float]:
+        """(left, right) wheel travel of one encoder count, m."""
+        left, right = self.wheel_diameters_m
+        return math.pi * left / self.counts_per_rev, math.pi * right / self.counts_per_rev
 
     def counts_for(self, distance_m: float) -> float:
         """Encoder counts of a wheel travel of ``distance_m`` (m)."""
@@ -95,8 +116,8 @@ class DiffDriveGeometry:
 
     def wheel_travel(self, left_counts: int, right_counts: int) -> tuple[float, float]:
         """Left and right wheel travel (m) of encoder deltas (counts)."""
-        k = self.metres_per_count
-        return left_counts * k, right_counts * k
+        left, right = self.wheel_metres_per_count
+        return left_counts * left, right_counts * right
 
 
 def odometry_step(

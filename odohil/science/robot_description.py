@@ -14,8 +14,10 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
                              # standard deviations (x m, y m, theta rad), world axes
     [robot]                  # optional: which driver backend speaks to it
     protocol = "nomad150"    # an odohil.robots entry point (default nomad150)
-    # create2 only (defaults: the Create 2's; docs/create2.md):
-    # counts_per_rev = 508.8, wheel_diameter_m = 0.072, wheel_base_m = 0.235,
+    # differential drives (the create2 backend, logs with wheel counts; defaults: the
+    # Create 2's, docs/create2.md):
+    # counts_per_rev = 508.8, wheel_diameter_m = 0.072 (or [left, right]),
+    # wheel_base_m = 0.235,
     # full_mode = false
     # turns_exact: whether in-place turns carry no error (a synchronous drive);
     # default true for nomad150, false for any other protocol (a differential
@@ -318,14 +320,25 @@ def _robot(table: dict[str, Any]) -> RobotSettings:
             f"robot.protocol must be a backend name like {DEFAULT_PROTOCOL!r}, got {protocol!r}"
         )
     nominal = DiffDriveGeometry()
-    constants = {}
+    constants: dict[str, float] = {}
     for key, (low, high) in _DRIVE_RANGES.items():
-        value = _number(table.get(key, getattr(nominal, key)), f"robot.{key}")
-        if not low <= value <= high:
-            raise RobotDescriptionError(
-                f"robot.{key} must be in [{low:g}, {high:g}], got {value!r}"
-            )
-        constants[key] = value
+        given = table.get(key, getattr(nominal, key))
+        values = [given]
+        if key == "wheel_diameter_m" and isinstance(given, list):
+            if len(given) != 2:
+                raise RobotDescriptionError(
+                    f"robot.{key} must be one number or [left, right] in metres, got {given!r}"
+                )
+            values = given
+        for index, item in enumerate(values):
+            name = f"robot.{key}" if len(values) == 1 else f"robot.{key}[{index}]"
+            value = _number(item, name)
+            if not low <= value <= high:
+                raise RobotDescriptionError(f"{name} must be in [{low:g}, {high:g}], got {value!r}")
+            if index == 0:
+                constants[key] = value
+            else:
+                constants["right_wheel_diameter_m"] = value
     full_mode = table.get("full_mode", False)
     if not isinstance(full_mode, bool):
         raise RobotDescriptionError(f"robot.full_mode must be true or false, got {full_mode!r}")

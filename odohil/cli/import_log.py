@@ -1,0 +1,107 @@
+"""``odohil import LOG... --robot R --out trials.jsonl``: trials from a recorded
+log of any path (odometry and ground truth), written as a general-path trial
+file (odohil/session/path_trial_file.py; formats in docs/recording.md)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+from rich.console import Console
+from rich.table import Table
+
+from odohil.cli.exit_codes import EXIT_BAD_INPUT
+from odohil.cli.recording_options import (
+    MAX_TIME_DIFF_DEFAULT,
+    MAX_TRUTH_GAP_DEFAULT,
+    MIN_EDGE_REST_DEFAULT,
+    MIN_REST_DEFAULT,
+    ODOM_TOPIC_DEFAULT,
+    TRUTH_TOPIC_DEFAULT,
+    LogFormatOption,
+    MaxTimeDiffOption,
+    MaxTruthGapOption,
+    MinEdgeRestOption,
+    MinRestOption,
+    OdomTopicOption,
+    TimeOffsetOption,
+    TruthTopicOption,
+    import_options,
+)
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback
+from odohil.errors import OdohilError
+from odohil.session.logs import guess_format, read_recording
+from odohil.session.path_trial_file import summary_rows, write_path_trials
+from odohil.session.robot_file import load_robot_description
+
+
+def import_log(
+    logs: Annotated[
+        list[Path],
+        typer.Argument(
+            help="Log files: odohil CSV logs; TUM files in pairs (odometry, ground truth); "
+            "ROS 2 bags (folders or .mcap/.db3 files); optiodom run files or folders."
+        ),
+    ],
+    robot: Annotated[
+        Path,
+        typer.Option(
+            "--robot",
+            callback=robot_callback,
+            help=ROBOT_HELP + " Its [robot] geometry turns wheel counts into odometry; its "
+            "[measurement] pose_sigma, if given, is the ground truth's accuracy.",
+        ),
+    ],
+    out: Annotated[
+        Path, typer.Option("--out", help="The general-path trial file to write (JSON lines).")
+    ],
+    log_format: LogFormatOption = None,
+    odom_topic: OdomTopicOption = ODOM_TOPIC_DEFAULT,
+    truth_topic: TruthTopicOption = TRUTH_TOPIC_DEFAULT,
+    max_time_diff: MaxTimeDiffOption = MAX_TIME_DIFF_DEFAULT,
+    time_offset: TimeOffsetOption = 0.0,
+    min_rest: MinRestOption = MIN_REST_DEFAULT,
+    min_edge_rest: MinEdgeRestOption = MIN_EDGE_REST_DEFAULT,
+    max_truth_gap: MaxTruthGapOption = MAX_TRUTH_GAP_DEFAULT,
+) -> None:
+    """Cut a recording into trials (at rest, or by a trial column or file) and write them.
+
+    Exit 0 with a summary (trials, families, directions, distance); exit 2 on
+    a log, option or robot description that cannot be used (nothing written).
+    """
+    console = Console()
+    err = Console(stderr=True)
+    try:
+        options = import_options(
+            log_format,
+            odom_topic,
+            truth_topic,
+            max_time_diff,
+            time_offset,
+            min_rest,
+            min_edge_rest,
+            max_truth_gap,
+        )
+        description = load_robot_description(robot)
+        trials = read_recording(logs, description, options)
+        written = write_path_trials(out, trials, robot=robot.stem)
+    except (OdohilError, OSError) as exc:
+        err.print(f"[red]error:[/red] {exc}", highlight=False)
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+    read_as = options.format or guess_format(logs)
+    table = Table(title=f"{written} trials from {len(logs)} log path(s), read as {read_as}")
+    table.add_column("family")
+    table.add_column("direction")
+    table.add_column("trials", justify="right")
+    table.add_column("distance (m)", justify="right")
+    for family, direction, count, distance in summary_rows(trials):
+        table.add_row(family, direction, str(count), f"{distance:.3f}")
+    console.print(table)
+    total = sum(trial.path.distance_m for trial in trials)
+    console.print(f"wrote {written} trials ({total:.3f} m driven) to {out}", highlight=False)
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``import`` to the ``odohil`` app."""
+    app.command("import")(import_log)

@@ -1,0 +1,212 @@
+"""The optiodom data set's run files (Sousa et al. 2022; ../shared/data/optiodom-june).
+
+Layout: ``<kind>/<session>/<session>_run-NN.csv`` beside
+``<session>_metadata.csv``. A run file has no header and one row per 50 ms
+cycle: time since the run's start (s), ground-truth x, y (m) and heading
+(rad) in the run's start frame, then the right and the left wheel's encoder
+counts *in that cycle* (increments). Each run is one trial; the robot stands
+still at its start and end (the rests are found from the odometry,
+odohil/science/rest_cutting.py).
+
+Geometry: the raw counts do not depend on the nominal constants each session
+was configured with (some were deliberately wrong: ``Li`` 0.205 m, ``Di``
+0.085 m), so every run is read with one nominal geometry, the data set's
+:data:`OPTIODOM_GEOMETRY` (0.084 m wheels, 0.20 m wheel base, 64 counts x
+43.7 gear = 2796.8 counts per wheel turn), and the pooled trials share it.
+The metadata is read to check the run count ``N`` and the encoder
+(``encRes`` x ``ngear``) against the files.
+
+A path may be a run file, a session folder, or any folder above them (every
+``*_metadata.csv`` below it, in name order).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+
+from odohil.errors import RecordingError
+from odohil.science.diff_drive import DiffDriveGeometry
+from odohil.science.odometry_paths import integrate_ticks
+from odohil.science.path_trials import PathTrial
+from odohil.science.robot_description import RobotDescription
+from odohil.session.logs.files import read_text
+from odohil.session.logs.recording import ImportOptions, Recording, check_increasing, trials_of
+
+OPTIODOM_GEOMETRY = DiffDriveGeometry(
+    counts_per_rev=2796.8, wheel_diameter_m=0.084, wheel_base_m=0.20
+)
+"""The data set's nominal robot (its README): one geometry for all sessions."""
+RUN_COLUMNS = ("t_s", "true_x_m", "true_y_m", "true_theta_rad", "right_counts", "left_counts")
+"""What the six columns of a run file hold (the names messages use)."""
+MAX_RUNS = 10_000
+"""Most run files read in one import."""
+_RUN_NAME = re.compile(r"^(?P<session>.+)_run-(?P<run>\d+)\.csv$")
+_COUNTS_TOLERANCE = 1e-6
+
+
+def _metadata(path: Path) -> dict[str, list[str]]:
+    table: dict[str, list[str]] = {}
+    for line in read_text(path).splitlines():
+        fields = [field.strip() for field in line.split(",")]
+        if fields and fields[0]:
+            table[fields[0]] = [field for field in fields[1:] if field]
+    return table
+
+
+def _check_metadata(path: Path, runs: list[Path]) -> None:
+    table = _metadata(path)
+
+    def number(key: str) -> float:
+        values = table.get(key)
+        try:
+            return float(values[0]) if values else math.nan
+        except ValueError:
+            return math.nan
+
+    if table.get("type", [""])[0:1] != ["diff"]:
+        raise RecordingError(f"{path}: type: a differential drive (diff) is expected")
+    counts = number("encRes") * number("ngear")
+    if abs(counts - OPTIODOM_GEOMETRY.counts_per_rev) > _COUNTS_TOLERANCE * counts:
+        raise RecordingError(
+            f"{path}: encRes x ngear: {counts:g} counts per wheel turn; the data set's "
+            f"robot has {OPTIODOM_GEOMETRY.counts_per_rev:g}"
+        )
+    expected = number("N")
+    if expected != len(runs):
+        raise RecordingError(
+            f"{path}: N: the metadata lists {expected:g} runs, the folder holds {len(runs)} "
+            f"run files"
+        )
+
+
+def run_files(paths: list[Path]) -> list[Path]:
+    """The run files the paths name (module docstring), in order, each
+    session's metadata checked against its runs.
+
+    Raises:
+        RecordingError: a path that is neither a run file nor a folder with
+            sessions, a session without metadata, metadata that disagree.
+    """
+    found: list[Path] = []
+    for path in paths:
+        if path.is_dir():
+            metas = sorted(path.rglob("*_metadata.csv"))
+            if not metas:
+                raise RecordingError(f"{path}: no optiodom session (*_metadata.csv) below it")
+            for meta in metas:
+                session = meta.name.removesuffix("_metadata.csv")
+                runs = sorted(meta.parent.glob(f"{session}_run-*.csv"))
+                _check_metadata(meta, runs)
+                found.extend(runs)
+        else:
+            match = _RUN_NAME.match(path.name)
+            if match is None:
+                raise RecordingError(
+                    f"{path}: not an optiodom run file (<session>_run-NN.csv) or folder"
+                )
+            meta = path.parent / f"{match['session']}_metadata.csv"
+            if not meta.is_file():
+                raise RecordingError(f"{path}: its session's metadata {meta.name} is missing")
+            found.append(path)
+        if len(found) > MAX_RUNS:
+            raise RecordingError(f"at most {MAX_RUNS} run files are read in one import")
+    return found
+
+
+def read_run(path: Path) -> Recording:
+    """One run file as a recording with one given trial (the run).
+
+    Raises:
+        RecordingError: unreadable file, a row without six numbers (the
+            message names the line and the column), time not increasing.
+    """
+    rows: list[list[float]] = []
+    where: list[int] = []
+    for number, line in enumerate(read_text(path).splitlines(), start=1):
+        if not line.strip():
+            continue
+        fields = line.split(",")
+        if len(fields) != len(RUN_COLUMNS):
+            raise RecordingError(
+                f"{path} line {number}: {len(fields)} columns; a run row has "
+                f"{len(RUN_COLUMNS)} ({', '.join(RUN_COLUMNS)})"
+            )
+        values = []
+        for name, field in zip(RUN_COLUMNS, fields, strict=True):
+            try:
+                value = float(field)
+            except ValueError:
+                value = math.nan
+            if not math.isfinite(value):
+                raise RecordingError(
+                    f"{path} line {number}: {name}: not a finite number: {field.strip()!r}"
+                )
+            values.append(value)
+        rows.append(values)
+        where.append(number)
+    if not rows:
+        raise RecordingError(f"{path}: empty run file; no trial")
+    data = np.array(rows, dtype=np.float64)
+    lines = np.array(where, dtype=np.int64)
+    check_increasing(data[:, 0], lines, str(path), "t_s", "line")
+    per_count = OPTIODOM_GEOMETRY.metres_per_count
+    odometry = integrate_ticks(
+        np.cumsum(data[:, 5]),
+        np.cumsum(data[:, 4]),
+        per_count,
+        per_count,
+        OPTIODOM_GEOMETRY.wheel_base_m,
+    )
+    label = _RUN_NAME.match(path.name)
+    run = f"run-{label['run']}" if label else path.stem
+    return Recording(
+        source=str(path),
+        t_s=data[:, 0],
+        odometry=odometry,
+        truth=data[:, 1:4],
+        where=lines,
+        unit="line",
+        trial=(run,) * len(rows),
+    )
+
+
+def joined_runs(paths: list[Path], gap_s: float = 0.05) -> Recording:
+    """The runs the paths name (:func:`run_files`) as one recording with a
+    trial label per run (``<session>_run-NN``), each run's times shifted to
+    follow the previous run's after ``gap_s``, its odometry and ground truth as
+    read: what :func:`odohil.session.logs.csv_log.write_csv_log` writes as an
+    odohil log CSV that reads back to the same trials (each run's ground truth
+    stays in its own start frame; the trial column keeps them apart)."""
+    runs = [read_run(path) for path in run_files(paths)]
+    if not runs:
+        raise RecordingError("no optiodom run file given")
+    times, labels, offset = [], [], 0.0
+    for path, run in zip(run_files(paths), runs, strict=True):
+        times.append(run.t_s - run.t_s[0] + offset)
+        offset = float(times[-1][-1]) + gap_s
+        labels.extend([path.stem] * len(run.t_s))
+    t = np.concatenate(times)
+    return Recording(
+        source=", ".join(str(path) for path in paths),
+        t_s=t,
+        odometry=np.concatenate([run.odometry for run in runs]),
+        truth=np.concatenate([run.truth for run in runs]),
+        where=np.arange(2, 2 + len(t), dtype=np.int64),
+        unit="line",
+        trial=tuple(labels),
+    )
+
+
+def read_optiodom(
+    paths: list[Path], description: RobotDescription, options: ImportOptions
+) -> list[PathTrial]:
+    """The trials of optiodom run files and folders (module docstring), one
+    per run, numbered from 1 in file order."""
+    trials: list[PathTrial] = []
+    for path in run_files(paths):
+        trials.extend(trials_of(read_run(path), description, options, len(trials) + 1))
+    return trials

@@ -1,0 +1,26 @@
+"""Where the tests find the optiodom data set (../shared/data/optiodom-june
+beside the repository, or $ODOHIL_OPTIODOM) and the description of its robot."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from odohil.science.robot_description import RobotDescription
+from odohil.session.robot_file import load_robot_description
+
+ROOT = Path(__file__).resolve().parents[2]
+OPTIODOM = Path(os.environ.get("ODOHIL_OPTIODOM", ROOT.parent / "shared/data/optiodom-june"))
+OPTIODOM_ROBOT = ROOT / "docs/examples/optiodom.toml"
+
+needs_optiodom = pytest.mark.skipif(
+    not (OPTIODOM / "README.md").is_file(),
+    reason=f"the optiodom data set is not at {OPTIODOM} (set ODOHIL_OPTIODOM)",
+)
+
+
+def optiodom_robot() -> RobotDescription:
+    """The optiodom robot's description (docs/examples/optiodom.toml)."""
+    return load_robot_description(OPTIODOM_ROBOT)
