@@ -154,7 +154,7 @@ def edge_rests(
 
     def near(reference: int) -> np.ndarray:
         d_xy = np.hypot(p[:, 0] - p[reference, 0], p[:, 1] - p[reference, 1])
-        d_theta = np.abs(p[:, 2] - p[reference, 2])
+        d_theta = np.abs(wrap_angles(p[:, 2] - p[reference, 2]))
         return np.asarray((d_xy <= move_m) & (d_theta <= turn_rad), dtype=bool)
 
     if len(t) < 2:

@@ -41,7 +41,7 @@ def test_a_csv_log_becomes_a_trial_file_with_a_summary(tmp_path: Path) -> None:
     result = invoke("import", _log(tmp_path, varied_motions()), "--robot", "create2", "--out", out)
     assert result.exit_code == 0, result.output
     text = flat(result)
-    assert "4 trials from 1 log path(s)" in text
+    assert "4 trials from 1 log path(s), read as csv" in text
     assert "straight forward 1 1.000" in text
     assert "spin cw 1" in text
     assert "straight backward 1 0.450" in text

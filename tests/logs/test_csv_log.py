@@ -14,7 +14,7 @@ from odohil.errors import RecordingError
 from odohil.science.robot_description import RobotDescription
 from odohil.session.logs import ImportOptions, read_recording
 from odohil.session.logs.csv_log import write_csv_log
-from odohil.session.logs.optiodom import read_run
+from odohil.session.logs.optiodom import joined_runs, read_run
 from odohil.session.logs.recording import Recording
 from odohil.session.robot_file import load_robot_description
 from tests.logs.data import OPTIODOM, needs_optiodom, optiodom_robot
@@ -117,6 +117,19 @@ def test_wheel_counts_with_two_wheel_diameters_give_the_odometry(tmp_path: Path)
 
 
 @needs_optiodom
+def test_joined_runs_written_as_a_log_csv_read_back_to_the_same_trials(tmp_path: Path) -> None:
+    runs = sorted((OPTIODOM / "ivanjko").glob("*/*_run-0[1-3].csv"))
+    path = tmp_path / "straight.csv"
+    write_csv_log(path, joined_runs(runs))
+    direct = read_recording(runs, optiodom_robot(), ImportOptions(format="optiodom"))
+    from_csv = read_recording([path], optiodom_robot(), CSV)
+    assert len(from_csv) == len(direct) == 12
+    for a, b in zip(direct, from_csv, strict=True):
+        np.testing.assert_array_equal(a.pose_change, b.pose_change)
+        assert a.path.steps == b.path.steps
+
+
+@needs_optiodom
 @pytest.mark.parametrize("odometry", ["poses", "ticks"])
 def test_optiodom_straight_runs_as_a_log_csv_read_back_to_the_same_trials(
     tmp_path: Path, odometry: str
@@ -179,8 +192,21 @@ def test_a_robot_never_at_rest_is_refused(tmp_path: Path) -> None:
 
 def test_a_log_that_only_rests_has_no_trial(tmp_path: Path) -> None:
     log = synth_log([rest(5.0)])
-    with pytest.raises(RecordingError, match=r"log.csv line 2-\d+: no trial in the log"):
+    with pytest.raises(
+        RecordingError, match=r"log.csv line 2-\d+: no trial in the log: the odometry never moves"
+    ):
         read_recording([_write(tmp_path, log)], _robot(tmp_path), CSV)
+
+
+def test_a_robot_pushed_between_rests_is_no_trial(tmp_path: Path) -> None:
+    log = synth_log([rest(2.0), rest(1.0), rest(2.0), Motion(5.0, v=0.2), rest(2.0)])
+    # someone moves the robot 5 cm along the world x axis during 2-3 s: the wheels stay still
+    push = np.clip(log.t_s - log.t_s[0] - 2.0, 0.0, 1.0) * 0.05
+    log.truth[:, 0] += push
+    trials = read_recording([_write(tmp_path, log)], _robot(tmp_path), CSV)
+    assert len(trials) == 1
+    assert trials[0].family == "straight"
+    assert abs(trials[0].pose_change[0] - log.true_changes[0][0]) < 0.001
 
 
 def test_a_gap_in_the_ground_truth_names_where_it_starts(tmp_path: Path) -> None:
@@ -225,6 +251,13 @@ def test_a_trial_label_that_comes_back_is_refused(tmp_path: Path) -> None:
     labels = ("a",) * (n // 3) + ("b",) * (n // 3) + ("a",) * (n - 2 * (n // 3))
     with pytest.raises(RecordingError, match=r"trial: trial 'a' appears again"):
         read_recording([_write(tmp_path, log, labels)], _robot(tmp_path), CSV)
+
+
+def test_a_labelled_trial_whose_odometry_never_moves_is_refused(tmp_path: Path) -> None:
+    log = synth_log([rest(3.0)])
+    path = _write(tmp_path, log, ("x",) * len(log.t_s))
+    with pytest.raises(RecordingError, match=r"line 2-\d+: odo_x_m.*trial 'x' never moves"):
+        read_recording([path], _robot(tmp_path), CSV)
 
 
 def test_a_log_without_any_labelled_row_has_no_trial(tmp_path: Path) -> None:

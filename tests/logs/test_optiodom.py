@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 
 from odohil.errors import RecordingError
+from odohil.science.odometry_paths import odometry_end_pose
 from odohil.session.logs import ImportOptions, read_recording
+from odohil.session.logs.optiodom import read_run
 from tests.logs.data import OPTIODOM, needs_optiodom, optiodom_robot
 
 pytestmark = needs_optiodom
@@ -59,6 +61,24 @@ def test_circles_give_cw_and_ccw_arcs_of_a_few_dozen_legs() -> None:
         # degrees clockwise, -9 counter-clockwise (a turn-scale error)
         residual = np.degrees(trial.pose_change[2] - trial.path.encoder_end_pose()[2])
         assert 3.0 < residual * (1 if trial.direction == "cw" else -1) < 15.0
+
+
+def test_every_compressed_path_ends_where_its_odometry_ends() -> None:
+    """On the real runs: the legs and turns end where the counts, integrated
+    sample by sample, end (1e-9 m, 1e-12 rad; odohil/science/odometry_paths.py)."""
+    trials = read_recording([OPTIODOM], optiodom_robot(), OPTIONS)
+    assert len(trials) == 42 + 32 + 28
+    for trial in trials:
+        assert trial.span_s is not None
+        run = read_run(Path(trial.source))
+        first, last = np.searchsorted(run.t_s, trial.span_s)
+        odometry = run.odometry[first : last + 1]
+        x, y, theta = trial.path.encoder_end_pose()
+        ox, oy, otheta = odometry_end_pose(odometry)
+        assert abs(x - ox) < 1e-9
+        assert abs(y - oy) < 1e-9
+        assert abs(theta - otheta) < 1e-12
+        assert len(trial.path.legs.length_m) <= 70
 
 
 def test_squares_are_mixed_paths_of_both_senses() -> None:

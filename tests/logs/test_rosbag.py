@@ -162,3 +162,19 @@ def test_not_a_bag_is_refused(tmp_path: Path) -> None:
     junk.write_bytes(b"not an mcap file at all")
     with pytest.raises(RecordingError, match=r"junk.mcap: cannot read the bag"):
         read_recording([junk], optiodom_robot(), ImportOptions(format="rosbag"))
+
+
+def test_header_stamps_that_go_back_name_the_message(tmp_path: Path) -> None:
+    log = synth_log(varied_motions()[:3])
+    t = log.t_s.copy()
+    t[30] = t[28]  # stamped (and written) earlier: the bag holds it as its 30th message
+    bag = write_bag(
+        tmp_path / "run", SynthLog(t, log.odometry, log.truth, log.true_changes), StoragePlugin.MCAP
+    )
+    options = ImportOptions(format="rosbag", truth_topic="/mocap/robot/pose")
+    with pytest.raises(
+        RecordingError,
+        match=r"run /odom message 30: header.stamp must increase, got 1000.56 after 1000.56 "
+        r"\(message 29\)",
+    ):
+        read_recording([bag], optiodom_robot(), options)

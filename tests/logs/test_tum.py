@@ -100,3 +100,17 @@ def test_headings_come_from_the_quaternion_about_z(tmp_path: Path) -> None:
 
     for angle in (-3.0, -1.0, 0.0, 0.5, 3.1):
         assert math.isclose(heading_of(0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)), angle)
+
+
+def test_a_stretch_without_ground_truth_is_a_gap(tmp_path: Path) -> None:
+    log = synth_log(varied_motions())
+    paths = _pair(tmp_path, log)
+    lines = paths[1].read_text().splitlines()
+    del lines[200:240]  # 1.6 s of the capture lost during the first run
+    paths[1].write_text("\n".join(lines) + "\n")
+    with pytest.raises(
+        RecordingError,
+        match=r"odom.txt \(ground truth truth.txt\) line \d+: tx ty qz qw \(ground "
+        r"truth\): a gap in the ground truth of 1.6\d* s",
+    ):
+        read_recording(paths, optiodom_robot(), TUM)

@@ -8,6 +8,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from odohil.science.odometry_paths import (
     HEADING_STEP_RAD,
@@ -20,7 +22,8 @@ from odohil.science.odometry_paths import (
 )
 from odohil.science.paths import Leg, Turn
 
-END_POSE_TOLERANCE_M = 1e-9
+END_POSE_TOLERANCE_M = 2e-9
+"""1e-9 m of rounding, plus the 1 nm leg a path that never moves carries."""
 END_POSE_TOLERANCE_RAD = 1e-12
 PER_COUNT = math.pi * 0.084 / 2796.8  # the optiodom robot
 BASE = 0.20
@@ -131,3 +134,41 @@ def test_looser_bounds_give_fewer_legs() -> None:
     coarse = compress_odometry(poses, CompressionBounds(heading_step_rad=0.6))
     assert len(coarse.legs.length_m) < 0.6 * len(fine.legs.length_m)
     _assert_ends_where_odometry_ends(poses, coarse)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    speeds=st.lists(
+        st.tuples(
+            st.floats(-0.5, 0.5),  # v, m/s
+            st.floats(-2.0, 2.0),  # w, rad/s
+            st.integers(1, 80),  # samples at that speed
+        ),
+        min_size=1,
+        max_size=12,
+    ),
+    dt=st.sampled_from([0.01, 0.02, 0.05]),
+)
+def test_any_odometry_compresses_to_a_path_ending_where_it_ends(
+    speeds: list[tuple[float, float, int]], dt: float
+) -> None:
+    v = np.concatenate([np.full(n, a) for a, _, n in speeds])
+    w = np.concatenate([np.full(n, b) for _, b, n in speeds])
+    theta = np.concatenate([[0.0], np.cumsum(w * dt)])
+    chord = v * dt * np.sinc(w * dt / (2 * math.pi))
+    mid = theta[:-1] + 0.5 * w * dt
+    poses = np.stack(
+        [
+            np.concatenate([[0.0], np.cumsum(chord * np.cos(mid))]),
+            np.concatenate([[0.0], np.cumsum(chord * np.sin(mid))]),
+            theta,
+        ],
+        axis=1,
+    )
+    path = compress_odometry(poses)
+    _assert_ends_where_odometry_ends(poses, path)
+    assert np.all(path.legs.length_m <= LEG_MAX_M + 1e-12)
+    assert len(path.legs.length_m) <= len(poses)
+    family, direction = path_family(path)
+    assert family in ("straight", "spin", "arc", "mixed")
+    assert direction in ("forward", "backward", "cw", "ccw", "mixed")

@@ -67,6 +67,17 @@ def test_edge_rests_take_the_odometry_within_its_tolerance() -> None:
     assert edge_rests(t, moving, 0.2) == (None, None)
 
 
+def test_edge_rests_at_a_heading_near_pi_are_rests() -> None:
+    t = np.arange(0.0, 5.0, 0.05)
+    x = np.clip((t - 1.0) * 0.1, 0.0, 0.3)
+    jitter = np.where(np.arange(len(t)) % 2 == 0, 1e-4, -1e-4)
+    theta = np.angle(np.exp(1j * (math.pi + jitter)))  # wrapped: jumps between +pi and -pi
+    start, end = edge_rests(t, _poses(x, theta), 0.2)
+    assert start is not None
+    assert t[start[1]] > 0.95
+    assert end is not None
+
+
 def test_measured_change_is_in_the_start_frame_within_pi_of_the_encoder_turn() -> None:
     start = (2.0, -1.0, 3.0)
     change = (0.5, 0.1, 2 * math.pi + 0.2)  # a loop and a bit

@@ -123,31 +123,48 @@ def model_check(
     ``named``: input positions the robust fit already named outliers; they
     are outliers whatever their distance, and left out of the overall test.
     """
-    d2 = mahalanobis2(observations, params)
-    n = len(observations)
+    return distance_check(
+        mahalanobis2(observations, params),
+        [(o.line, o.trial, o.design.label()) for o in observations],
+        named,
+    )
+
+
+def distance_check(
+    d2: FloatArray,
+    labels: Sequence[tuple[int | None, int | None, str]],
+    named: Sequence[int] = (),
+    n_params: int = 4,
+) -> ModelCheck:
+    """The model check from each trial's squared Mahalanobis distance ``d2``
+    (chi^2(3) under the model), any model: ``labels`` per trial (line, trial
+    number, design or path label), ``named`` as in :func:`model_check`, and
+    ``n_params`` fitted parameters (the overall test has 3 n - n_params
+    degrees of freedom)."""
+    n = len(d2)
     p_each = special.chdtrc(3, d2)  # chi^2(3) tail; scipy.stats is 50x slower
     flagged = sorted(set(int(j) for j in np.flatnonzero(p_each < OUTLIER_LEVEL / n)) | set(named))
     outliers = tuple(
         Outlier(
             i,
-            observations[i].line,
+            labels[i][0],
             float(d2[i]),
             float(p_each[i]),
-            observations[i].trial,
-            observations[i].design.label(),
+            labels[i][1],
+            labels[i][2],
         )
         for i in flagged
     )
     kept = np.ones(n, dtype=bool)
     kept[list(named)] = False
-    dof = max(1, 3 * int(kept.sum()) - 4)
+    dof = max(1, 3 * int(kept.sum()) - n_params)
     chi2 = float(d2[kept].sum())
     p_value = float(special.chdtrc(dof, chi2))
     if outliers:
-        labels = [o.label() for o in outliers]
-        verb = "are outliers" if len(labels) > 1 else "is an outlier"
+        named_labels = [o.label() for o in outliers]
+        verb = "are outliers" if len(named_labels) > 1 else "is an outlier"
         verdict = (
-            f"{_join(labels)} {verb}: the model puts them beyond its "
+            f"{_join(named_labels)} {verb}: the model puts them beyond its "
             f"{100 * (1 - OUTLIER_LEVEL):g} % range (check the marks, or the run)"
         )
     elif p_value < FIT_LEVEL:

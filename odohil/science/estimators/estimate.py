@@ -13,8 +13,9 @@ from scipy import special, stats
 from odohil import units
 from odohil.errors import MeasurementError
 from odohil.science.estimators.checks import Criteria, design_misfit, model_check, sufficiency
-from odohil.science.estimators.intervals import profile_interval, satterthwaite_dof, t_interval
+from odohil.science.estimators.intervals import profile_interval, satterthwaite_dofs, t_interval
 from odohil.science.estimators.joint import JointFit, joint_estimate, start_phi
+from odohil.science.estimators.likelihood import GroupStats
 from odohil.science.estimators.observations import (
     DesignSummary,
     Observation,
@@ -38,7 +39,7 @@ from odohil.science.estimators.robust import (
 )
 from odohil.science.estimators.scores import sandwich_ratio, trial_scores
 from odohil.science.estimators.verdict import judge
-from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
+from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters, si_unit
 from odohil.science.paths import FloatArray
 
 Method = Literal["robust", "joint", "paper"]
@@ -107,25 +108,30 @@ def _dof(name: str, value: float, stderr: float, base: float) -> float:
     return min(base, max(2.0 * (value / stderr) ** 2, 1.0))
 
 
-def _honest_estimates(
-    groups: Sequence[TrialGroup], fit: JointFit, ratio: FloatArray
+def honest_estimates(
+    groups: Sequence[GroupStats], fit: JointFit, ratio: FloatArray
 ) -> tuple[ParameterEstimate, ...]:
-    """The intervals of a maximum-likelihood fit of ``groups``: profile
-    likelihood for the variance rates, widened by their sandwich ratio
-    (``ratio``, odohil/science/estimators/scores.py) when it exceeds 1,
-    Satterthwaite t for E_R and E_T (odohil/science/estimators/intervals.py)."""
+    """The intervals of a maximum-likelihood fit of ``groups``, every parameter
+    of its layout: profile likelihood for the variance rates, widened by their
+    sandwich ratio (``ratio``, odohil/science/estimators/scores.py) when it
+    exceeds 1, Satterthwaite t for the mean parameters (E_R, E_T, e_turn)
+    (odohil/science/estimators/intervals.py)."""
+    layout = fit.point.layout
     cov = np.array(fit.covariance, dtype=np.float64)
     diag = np.diag(cov)
     stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
+    values = fit.values
+    means = [i for i in layout.mean_index if math.isfinite(stderr[i])]
+    dofs = dict(zip(means, satterthwaite_dofs(groups, fit, means), strict=True)) if means else {}
     out = []
-    for index, (name, value) in enumerate(zip(PARAMETER_NAMES, fit.params.as_tuple(), strict=True)):
-        se = float(stderr[index])
+    for index, name in enumerate(layout.names):
+        value, se = float(values[index]), float(stderr[index])
         if not math.isfinite(se):
             out.append(ParameterEstimate.build(name, value, se))
             continue
-        if index < 2:
-            dof = satterthwaite_dof(groups, fit, index)
-            interval = t_interval(value, se, dof, "Student t, Satterthwaite degrees of freedom")
+        if index in dofs:
+            rule = "Student t, Satterthwaite degrees of freedom"
+            interval = t_interval(value, se, dofs[index], rule)
         else:
             interval = profile_interval(groups, fit, index, widen=float(ratio[index]))
         out.append(
@@ -134,7 +140,7 @@ def _honest_estimates(
                 value,
                 se,
                 interval.ci95,
-                SI_UNITS[name],
+                si_unit(name),
                 interval.ci_4sigma,
                 interval.method,
                 interval.dof,
@@ -343,7 +349,7 @@ def estimate(
             notes,
             criteria,
             converged=ml.converged,
-            intervals=_honest_estimates(groups, ml, ratio),
+            intervals=honest_estimates(groups, ml, ratio),
             **common,  # type: ignore[arg-type]
         )
     rob = robust_fit(observations, groups, ml)
@@ -383,7 +389,7 @@ def estimate(
         trials=diagnostics,
         excluded=excluded,
         ambiguous=ambiguous,
-        intervals=_honest_estimates(
+        intervals=honest_estimates(
             weighted_groups(observations, weights, {g.design: g.reference for g in groups}),
             rob.fit,
             sandwich_ratio(rob.scores, rob.information),

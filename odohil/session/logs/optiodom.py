@@ -174,6 +174,33 @@ def read_run(path: Path) -> Recording:
     )
 
 
+def joined_runs(paths: list[Path], gap_s: float = 0.05) -> Recording:
+    """The runs the paths name (:func:`run_files`) as one recording with a
+    trial label per run (``<session>_run-NN``), each run's times shifted to
+    follow the previous run's after ``gap_s``, its odometry and ground truth as
+    read: what :func:`odohil.session.logs.csv_log.write_csv_log` writes as an
+    odohil log CSV that reads back to the same trials (each run's ground truth
+    stays in its own start frame; the trial column keeps them apart)."""
+    runs = [read_run(path) for path in run_files(paths)]
+    if not runs:
+        raise RecordingError("no optiodom run file given")
+    times, labels, offset = [], [], 0.0
+    for path, run in zip(run_files(paths), runs, strict=True):
+        times.append(run.t_s - run.t_s[0] + offset)
+        offset = float(times[-1][-1]) + gap_s
+        labels.extend([path.stem] * len(run.t_s))
+    t = np.concatenate(times)
+    return Recording(
+        source=", ".join(str(path) for path in paths),
+        t_s=t,
+        odometry=np.concatenate([run.odometry for run in runs]),
+        truth=np.concatenate([run.truth for run in runs]),
+        where=np.arange(2, 2 + len(t), dtype=np.int64),
+        unit="line",
+        trial=tuple(labels),
+    )
+
+
 def read_optiodom(
     paths: list[Path], description: RobotDescription, options: ImportOptions
 ) -> list[PathTrial]:

@@ -18,7 +18,6 @@ white), each standard deviation at least :data:`SCATTER_FLOOR`.
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -30,6 +29,8 @@ from odohil.science.odometry_paths import CompressionBounds, compress_odometry, 
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray
 from odohil.science.rest_cutting import (
+    EDGE_MOVE_M,
+    EDGE_TURN_RAD,
     MIN_EDGE_REST_S,
     MIN_REST_S,
     edge_rests,
@@ -265,6 +266,11 @@ def trials_of(
         if not cuts:
             raise RecordingError(f"{rec.source}: trial: no row names a trial; no trial in the log")
         for label, first, last in cuts:
+            if not _odometry_moved(rec, first, last):
+                raise RecordingError(
+                    f"{rec.at(first)}-{int(rec.where[last])}: {rec.odometry_field}: the odometry "
+                    f"of trial {label!r} never moves; no trial"
+                )
             start, end = edge_rests(
                 rec.t_s[first : last + 1], rec.odometry[first : last + 1], options.min_edge_rest_s
             )
@@ -296,15 +302,29 @@ def trials_of(
             f"(odometry and ground "
             f"truth both still for {options.min_rest_s:g} s; --min-rest), so no trial can be cut"
         )
-    for start, end in itertools.pairwise(windows):
-        trials.append(_trial(rec, start, end, description, options, first_number + len(trials)))
+    start = windows[0]
+    for end in windows[1:]:
+        if _odometry_moved(rec, start[1], end[0]):
+            trials.append(_trial(rec, start, end, description, options, first_number + len(trials)))
+        # else only the ground truth moved between the rests (a capture glitch, a
+        # robot pushed): no trial; the later rest is where the next one starts
+        start = end
     if not trials:
         first, last = windows[0]
         raise RecordingError(
-            f"{rec.at(first)}-{int(rec.where[last])}: no trial in the log: the robot rests "
-            "only once (a trial is the motion between two rests)"
+            f"{rec.at(first)}-{int(rec.where[last])}: no trial in the log: the odometry "
+            "never moves between two rests (a trial is the motion between two rests)"
         )
     return trials
+
+
+def _odometry_moved(rec: Recording, first: int, last: int) -> bool:
+    """Whether the odometry leaves the pose it had at ``first`` before ``last``
+    by more than the edge tolerances (odohil/science/rest_cutting.py)."""
+    poses = rec.odometry[first : last + 1]
+    d_xy = np.hypot(poses[:, 0] - poses[0, 0], poses[:, 1] - poses[0, 1])
+    d_theta = np.abs(np.unwrap(poses[:, 2]) - poses[0, 2])
+    return bool(np.any(d_xy > EDGE_MOVE_M) or np.any(d_theta > EDGE_TURN_RAD))
 
 
 def associate(
