@@ -47,7 +47,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import PurePath
 from typing import Any, Literal, Protocol
 
 import numpy as np
@@ -556,10 +555,16 @@ def labels_of(trials: Sequence[PathTrial]) -> list[TrialLabel]:
     one_each = all(count == 1 for count in per_source.values())
     out = []
     for trial in trials:
-        run = str(PurePath(trial.source).parent) if one_each and trial.source else trial.source
+        run = _folder(trial.source) if one_each else trial.source
         turns = any(isinstance(s, Turn) and s.angle_rad != 0.0 for s in trial.path.steps)
         out.append(TrialLabel(trial.family, trial.direction, run, turns))
     return out
+
+
+def _folder(source: str) -> str:
+    """The folder part of a file name (``/`` or ``\\`` separated), else the name."""
+    cut = max(source.rfind("/"), source.rfind("\\"))
+    return source[:cut] if cut > 0 else source
 
 
 def path_misfit(
