@@ -66,6 +66,10 @@ PINNED_FRACTION = 0.05
 unfitted variance is pinned by the parameters and not tested."""
 MIN_GROUP = 2
 """Fewest trials in a tested group."""
+TURNING_RAD = 0.1
+"""Total turn (rad, about 6 deg) from which a general path counts as turning
+(a turn-scale error could bias it); a straight run's odometry, cut into legs,
+carries turns of a few mrad."""
 
 Kind = Literal["group", "spread", "order"]
 
@@ -548,7 +552,8 @@ def labels_of(trials: Sequence[PathTrial]) -> list[TrialLabel]:
     """The groups of general-path trials: their family and direction; the run
     (for the trial-order check) is their source, or the source's folder when
     every source holds one trial (a data set of one file per run, a folder per
-    session, as the optiodom data set)."""
+    session, as the optiodom data set); a trial turns when its turns add up to
+    :data:`TURNING_RAD` or more."""
     per_source: dict[str, int] = {}
     for trial in trials:
         per_source[trial.source] = per_source.get(trial.source, 0) + 1
@@ -556,7 +561,8 @@ def labels_of(trials: Sequence[PathTrial]) -> list[TrialLabel]:
     out = []
     for trial in trials:
         run = _folder(trial.source) if one_each else trial.source
-        turns = any(isinstance(s, Turn) and s.angle_rad != 0.0 for s in trial.path.steps)
+        turned = sum(abs(s.angle_rad) for s in trial.path.steps if isinstance(s, Turn))
+        turns = turned >= TURNING_RAD
         out.append(TrialLabel(trial.family, trial.direction, run, turns))
     return out
 
