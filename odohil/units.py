@@ -97,14 +97,23 @@ def wire_to_radians(angle_wire: float) -> float:
     return angle_wire * RADIANS_PER_WIRE_ANGLE
 
 
+def parameter_kind(name: str) -> str:
+    """The kind of a parameter name: ``e_turn`` for every turn-scale error
+    (``e_turn``, ``e_turn_spin``, ``e_turn_arc_cw``, ...), the name itself otherwise."""
+    return "e_turn" if name.startswith("e_turn") else name
+
+
 def parameter_to_paper(name: str, value_si: float) -> float:
     """A value (or standard error) of parameter ``name`` (E_R, E_T, K_theta,
-    K_rho) from SI to the paper's units: E_R rad/m to deg/m, K_theta rad^2/m
-    to deg^2/m, E_T and K_rho unchanged."""
+    K_rho, e_turn..., K_spin) from SI to the paper's units: E_R rad/m to
+    deg/m, K_theta rad^2/m to deg^2/m, K_spin rad^2/rad to deg^2/deg; E_T,
+    K_rho and e_turn unchanged."""
     if name == "E_R":
         return rad_per_m_to_deg_per_m(value_si)
     if name == "K_theta":
         return rad2_per_m_to_deg2_per_m(value_si)
+    if name == "K_spin":
+        return math.degrees(value_si)
     return value_si
 
 
@@ -115,6 +124,8 @@ def parameter_from_paper(name: str, value_paper: float) -> float:
         return deg_per_m_to_rad_per_m(value_paper)
     if name == "K_theta":
         return deg2_per_m_to_rad2_per_m(value_paper)
+    if name == "K_spin":
+        return math.radians(value_paper)
     return value_paper
 
 
@@ -127,10 +138,25 @@ DEFAULT_UNIT_SYSTEM: UnitSystem = "paper"
 """The one default of every command that prints parameters for people."""
 
 PARAMETER_UNIT_LABELS: dict[UnitSystem, dict[str, str]] = {
-    "paper": {"E_R": "deg/m", "E_T": "", "K_theta": "deg^2/m", "K_rho": "m"},
-    "si": {"E_R": "rad/m", "E_T": "", "K_theta": "rad^2/m", "K_rho": "m"},
+    "paper": {
+        "E_R": "deg/m",
+        "E_T": "",
+        "K_theta": "deg^2/m",
+        "K_rho": "m",
+        "e_turn": "",
+        "K_spin": "deg^2/deg",
+    },
+    "si": {
+        "E_R": "rad/m",
+        "E_T": "",
+        "K_theta": "rad^2/m",
+        "K_rho": "m",
+        "e_turn": "",
+        "K_spin": "rad^2/rad",
+    },
 }
-"""Each parameter's unit as people read it; E_T is a plain number (no unit: empty)."""
+"""Each parameter's unit as people read it; E_T and e_turn are plain numbers
+(no unit: empty). Keys are parameter kinds (:func:`parameter_kind`)."""
 NO_UNIT = "(no unit)"
 """What a unit column says for a plain number such as E_T."""
 
@@ -142,7 +168,7 @@ def parameter_in(name: str, value_si: float, system: UnitSystem) -> float:
 
 def parameter_unit(name: str, system: UnitSystem) -> str:
     """The unit of parameter ``name`` in ``system`` ("" for E_T, a plain number)."""
-    return PARAMETER_UNIT_LABELS[system][name]
+    return PARAMETER_UNIT_LABELS[system][parameter_kind(name)]
 
 
 def unit_column(name: str, system: UnitSystem) -> str:

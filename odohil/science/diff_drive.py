@@ -46,8 +46,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from odohil.errors import ParameterError
+from odohil.science.moments import TurnErrors
 from odohil.science.parameters import ErrorParameters
-from odohil.science.paths import EncoderPath, FloatArray, Leg, Turn, Variant
+from odohil.science.paths import EncoderPath, FloatArray, Leg, Turn, Variant, turn_class_index
 from odohil.science.simulator import (
     DEFAULT_SEGMENT_M,
     SeedLike,
@@ -275,6 +276,47 @@ def simulate_diff_drive(
             spin(x, y, theta, step.angle_rad, errors, rng)
             continue
         assert isinstance(step, Leg)
+        count = segments_per_leg(abs(step.length_m), segment_m)
+        seg.append(abs(step.length_m) / count)
+        drive_straight(x, y, theta, step.length_m / count, count, params, rng)
+    poses = np.stack([x, y, theta - path.winding_rad], axis=1)
+    return SimulationResult(pose_change=poses, trajectory=None, segment_m=np.array(seg))
+
+
+def simulate_turn_errors(
+    path: EncoderPath,
+    params: ErrorParameters,
+    turns: TurnErrors,
+    n_trials: int,
+    *,
+    seed: SeedLike = None,
+    segment_m: float = DEFAULT_SEGMENT_M,
+) -> SimulationResult:
+    """Simulate ``n_trials`` runs of ``path`` under the turn-error model of
+    :func:`odohil.science.moments.pose_moments`: legs as the paper's discrete
+    model (:func:`odohil.science.simulator.drive_straight`), each turn of
+    encoder angle a in class c turning a (1 + e_c), plus N(0, K_spin |a|) for
+    a spin; the centre does not move during a turn (unlike :func:`spin`, whose
+    wheels' diameter difference moves it). Pose changes as
+    :func:`odohil.science.simulator.simulate` reports them."""
+    if n_trials < 1:
+        raise ParameterError(f"n_trials must be at least 1, got {n_trials}")
+    if not math.isfinite(segment_m) or segment_m <= 0:
+        raise ParameterError(f"segment_m must be a positive length, got {segment_m!r}")
+    rng = make_rng(seed)
+    scales = turns.scales
+    x, y, theta = np.zeros(n_trials), np.zeros(n_trials), np.zeros(n_trials)
+    seg: list[float] = []
+    for step in path.steps:
+        if isinstance(step, Turn):
+            if step.angle_rad == 0.0:
+                continue
+            theta += step.angle_rad * (1.0 + scales[turn_class_index(step)])
+            if step.kind == "spin" and turns.k_spin > 0.0:
+                theta += rng.standard_normal(n_trials) * math.sqrt(
+                    turns.k_spin * abs(step.angle_rad)
+                )
+            continue
         count = segments_per_leg(abs(step.length_m), segment_m)
         seg.append(abs(step.length_m) / count)
         drive_straight(x, y, theta, step.length_m / count, count, params, rng)

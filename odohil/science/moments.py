@@ -17,7 +17,28 @@ Writing A(s) = (1+E_T) sigma(s) e^{i thetatilde(s)}:
     Cov(Delta,Z)= int A(s) (i K s) e^{-K s/2} ds                      (Stein's lemma)
     Var Delta   = K rho,   E[Delta] = net turn - winding + E_R u(rho)
 
-(K = K_theta). On a leg A is a complex exponential in s, and for s < s' both
+(K = K_theta).
+
+Turn errors (a differential drive, :class:`TurnErrors`): a turn of encoder
+angle a in class c (spin or arc, ccw or cw: odohil/science/paths.py
+TURN_CLASSES) really turns a (1 + e_c), and a spin adds N(0, K_spin |a|).
+Then thetatilde(s) gains sum_c e_c P_c(s) (P_c(s) the signed angle of the
+class-c turns before s), and the heading noise X(s) = W(s) + the spins'
+noise before s has the variance V(s) = K s + K_spin S(s) (S(s) the |angle|
+spun before s), with independent increments. Every factor above is
+E[e^{i(X(s) -+ X(s'))}], so the formulas hold with K s replaced by V(s):
+e^{-K|s - s'|/2} by e^{-|V(s) - V(s')|/2}, e^{-(4K min + K|s - s'|)/2} by
+e^{-(3 V(s) + V(s'))/2} (s < s'), the K_rho term's e^{-2Ks} by e^{-2V(s)},
+and Cov(Delta, Z) = int A(s) i V(s) e^{-V(s)/2} ds (Stein's lemma again:
+Delta's noise is X(s) plus later independent increments). Var Delta =
+K rho + K_spin S(rho), E[Delta] gains sum_c e_c P_c(rho). V jumps only
+between legs, so on every leg it is K s plus a constant and the one-leg
+integrals below are unchanged; only the factors between legs gain the jumps.
+tests/science/test_turn_moments.py checks all of it against a Monte Carlo
+simulation of the discrete model (odohil/science/diff_drive.py
+:func:`~odohil.science.diff_drive.simulate_turn_errors`).
+
+On a leg A is a complex exponential in s, and for s < s' both
 kernels factorise, so pairs of distinct legs reduce to products of one-leg
 integrals (a recurrence over legs, O(legs)); same-leg double integrals reduce
 to one-dimensional ones. A one-leg integral whose integrand turns or decays
@@ -39,7 +60,7 @@ import numpy.typing as npt
 
 from odohil.science.closed_forms import ObservableMeans
 from odohil.science.parameters import ErrorParameters
-from odohil.science.paths import EncoderPath, FloatArray
+from odohil.science.paths import TURN_CLASSES, EncoderPath, FloatArray
 
 _NODES = 12
 """Gauss-Legendre nodes per panel."""
@@ -66,6 +87,45 @@ class PoseMoments:
     def mean_square_distance(self) -> float:
         """<x^2 + y^2>, m^2: the expected phi5 (a raw second moment)."""
         return float(self.cov[0, 0] + self.cov[1, 1] + self.mean[0] ** 2 + self.mean[1] ** 2)
+
+
+@dataclass(frozen=True)
+class TurnErrors:
+    """A differential drive's turn errors (module docstring), per turn class.
+
+    Attributes:
+        spin_ccw, spin_cw, arc_ccw, arc_cw: e_turn of the turns of that class
+            (no unit; a turn of encoder angle a really turns a (1 + e_turn)).
+        k_spin: heading variance per radian spun in place, rad^2/rad (arcs
+            carry none of their own: their noise is K_theta's along the legs).
+    """
+
+    spin_ccw: float = 0.0
+    spin_cw: float = 0.0
+    arc_ccw: float = 0.0
+    arc_cw: float = 0.0
+    k_spin: float = 0.0
+
+    @classmethod
+    def uniform(cls, e_turn: float, k_spin: float = 0.0) -> TurnErrors:
+        """One e_turn for every turn."""
+        return cls(e_turn, e_turn, e_turn, e_turn, k_spin)
+
+    @classmethod
+    def of(cls, scales: FloatArray, k_spin: float = 0.0) -> TurnErrors:
+        """From the (4,) e_turn of :attr:`scales`' order and K_spin."""
+        spin_ccw, spin_cw, arc_ccw, arc_cw = (float(v) for v in scales)
+        return cls(spin_ccw, spin_cw, arc_ccw, arc_cw, k_spin)
+
+    @property
+    def scales(self) -> FloatArray:
+        """(4,) e_turn in the order of odohil/science/paths.py TURN_CLASSES."""
+        return np.array([self.spin_ccw, self.spin_cw, self.arc_ccw, self.arc_cw])
+
+    @property
+    def exact(self) -> bool:
+        """Whether every turn is exact (all zero)."""
+        return not np.any(self.scales) and self.k_spin == 0.0
 
 
 @lru_cache(maxsize=1)
@@ -96,7 +156,7 @@ def _phi2(z: ComplexArray) -> ComplexArray:
 
 
 def _long_leg_integrals(
-    length: FloatArray, omega: FloatArray, k: float
+    length: FloatArray, omega: FloatArray, k: float | FloatArray
 ) -> tuple[ComplexArray, ...]:
     """The seven one-leg integrals of :func:`pose_moments` in closed form, for
     legs with (2|E_R| + 2K) L > 2, where every argument below has |z| >= 1/3
@@ -122,12 +182,15 @@ def _long_leg_integrals(
     return (i_mean, i_tail, i_same_abs, i_stein, i_f, i_same_sq, i_noise)
 
 
-def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
+def pose_moments(
+    path: EncoderPath, params: ErrorParameters, turns: TurnErrors | None = None
+) -> PoseMoments:
     """Mean vector and 3x3 covariance of (x, y, Delta) for one trial of ``path``.
 
     Args:
         path: the encoder path.
         params: the error parameters (SI).
+        turns: the turns' errors (None: exact turns, the paper's model).
 
     Returns:
         A :class:`PoseMoments` in SI (m, rad).
@@ -140,7 +203,19 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
     omega = params.e_r * legs.sign
     # A(a_j + t) = alpha_j e^{i omega_j t} on leg j, t in [0, L_j]
     phase = legs.heading_rad + params.e_r * legs.start_signed_m
+    # the spins' heading variance before each leg (the jumps of V), rad^2
+    jump = np.zeros(length.size)
+    turn_mean, turn_var = 0.0, 0.0
+    if turns is not None and not turns.exact:
+        table = path.turns
+        scales = turns.scales
+        phase = phase + scales @ table.before_rad
+        jump = turns.k_spin * table.spin_before_rad
+        turn_mean = float(scales @ table.total_rad)
+        turn_var = turns.k_spin * table.spin_total_rad
     alpha = gain * legs.sign * np.exp(1j * phase)
+    # V(s) at each leg's start: K a_j + J_j
+    v_start = k * start + jump
 
     # legs whose integrands turn by a bounded phase: one Gauss-Legendre panel;
     # the others by closed forms in phi1, phi2 (cost independent of the length)
@@ -175,7 +250,7 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
         ):
             target[long_leg] = value
 
-    mean_legs = alpha * np.exp(-0.5 * k * start) * i_mean  # m_j
+    mean_legs = alpha * np.exp(-0.5 * v_start) * i_mean  # m_j
     mean_z = complex(mean_legs.sum())
 
     # E|Z|^2: same legs, then pairs i < j through S_j = sum_{i<j} B_i e^{-K(a_j - e_i)/2}
@@ -183,27 +258,29 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
     tail = (alpha * i_tail).tolist()  # B_i
     head = np.conj(alpha * i_mean).tolist()  # conj C_j
     shrink = np.exp(-0.5 * k * length).tolist()
+    jumps = np.exp(-0.5 * np.diff(jump, prepend=0.0)).tolist()
     running, cross = 0.0j, 0.0j
-    for b, c_conj, g in zip(tail, head, shrink, strict=True):
+    for b, c_conj, g, h in zip(tail, head, shrink, jumps, strict=True):
+        running *= h
         cross += running * c_conj
         running = running * g + b
     abs_sq = params.k_rho * path.distance_m + same_abs + 2.0 * cross.real
 
     # E[Z^2]: kernel e^{-3Ks/2} e^{-Ks'/2} for s < s'
     sq_alpha = alpha * alpha
-    f_legs = alpha * np.exp(-1.5 * k * start) * i_f
+    f_legs = alpha * np.exp(-1.5 * v_start) * i_f
     before = np.concatenate(([0.0j], np.cumsum(f_legs)[:-1]))
-    same_sq = sq_alpha * np.exp(-2.0 * k * start) * i_same_sq
-    noise = params.k_rho / gain**2 * sq_alpha * np.exp(-2.0 * k * start) * i_noise
+    same_sq = sq_alpha * np.exp(-2.0 * v_start) * i_same_sq
+    noise = params.k_rho / gain**2 * sq_alpha * np.exp(-2.0 * v_start) * i_noise
     sq = complex(2.0 * (same_sq.sum() + (before * mean_legs).sum()) + noise.sum())
 
     cov_delta_z = complex(
-        (1j * k * alpha * np.exp(-0.5 * k * start) * (start * i_mean + i_stein)).sum()
+        (1j * alpha * np.exp(-0.5 * v_start) * (v_start * i_mean + k * i_stein)).sum()
     )
 
     c_abs = abs_sq - abs(mean_z) ** 2  # Var x + Var y
     c_sq = sq - mean_z * mean_z  # Var x - Var y + 2i Cov(x, y)
-    var_delta = k * path.distance_m
+    var_delta = k * path.distance_m + turn_var
     cov = np.array(
         [
             [(c_abs + c_sq.real) / 2.0, c_sq.imag / 2.0, cov_delta_z.real],
@@ -211,7 +288,9 @@ def pose_moments(path: EncoderPath, params: ErrorParameters) -> PoseMoments:
             [cov_delta_z.real, cov_delta_z.imag, var_delta],
         ]
     )
-    mean_delta = path.net_turn_rad - path.winding_rad + params.e_r * path.signed_distance_m
+    mean_delta = (
+        path.net_turn_rad - path.winding_rad + params.e_r * path.signed_distance_m + turn_mean
+    )
     mean = np.array([mean_z.real, mean_z.imag, mean_delta])
     return PoseMoments(mean=mean, cov=cov)
 
@@ -233,3 +312,226 @@ def observable_means(path: EncoderPath, params: ErrorParameters) -> ObservableMe
         x=x,
         y=y,
     )
+
+
+@dataclass(frozen=True)
+class PathSet:
+    """Many paths' legs and turns as padded arrays (T paths x M legs), for
+    :func:`batch_moments`. Padding legs have length 0 and sign 0 (they add
+    nothing).
+
+    Attributes:
+        heading_rad, sign, length_m, start_arc_m, start_signed_m: (T, M) as
+            in :class:`~odohil.science.paths.LegTable`.
+        before_rad: (T, 4, M) per turn class, the signed angle turned before each leg.
+        spin_before_rad: (T, M) |angle| spun before each leg, rad.
+        total_rad: (T, 4) per turn class, the path's signed total, rad.
+        spin_total_rad: (T,) |angle| spun over the path, rad.
+        distance_m, signed_distance_m: (T,) per path, m.
+        heading_offset_rad: (T,) net encoder turn minus winding, rad.
+    """
+
+    heading_rad: FloatArray
+    sign: FloatArray
+    length_m: FloatArray
+    start_arc_m: FloatArray
+    start_signed_m: FloatArray
+    before_rad: FloatArray
+    spin_before_rad: FloatArray
+    total_rad: FloatArray
+    spin_total_rad: FloatArray
+    distance_m: FloatArray
+    signed_distance_m: FloatArray
+    heading_offset_rad: FloatArray
+    paths: tuple[EncoderPath, ...]
+
+    @classmethod
+    def of(cls, paths: tuple[EncoderPath, ...]) -> PathSet:
+        """The padded tables of ``paths``."""
+        t, m = len(paths), max(p.legs.length_m.size for p in paths)
+        tables = {
+            name: np.zeros((t, m))
+            for name in ("heading_rad", "sign", "length_m", "start_arc_m", "start_signed_m")
+        }
+        before = np.zeros((t, 4, m))
+        spin_before = np.zeros((t, m))
+        for i, path in enumerate(paths):
+            n = path.legs.length_m.size
+            for name, table in tables.items():
+                table[i, :n] = getattr(path.legs, name)
+            before[i, :, :n] = path.turns.before_rad
+            spin_before[i, :n] = path.turns.spin_before_rad
+        return cls(
+            before_rad=before,
+            spin_before_rad=spin_before,
+            total_rad=np.array([p.turns.total_rad for p in paths]),
+            spin_total_rad=np.array([p.turns.spin_total_rad for p in paths]),
+            distance_m=np.array([p.distance_m for p in paths]),
+            signed_distance_m=np.array([p.signed_distance_m for p in paths]),
+            heading_offset_rad=np.array([p.net_turn_rad - p.winding_rad for p in paths]),
+            paths=paths,
+            **tables,
+        )
+
+
+BATCH_COLUMNS = ("E_R", "E_T", "K_theta", "K_rho", *TURN_CLASSES, "K_spin")
+"""The columns of :func:`batch_moments`' parameter rows (SI)."""
+_MAX_HALF_VARIANCE = 600.0
+"""Above this V/2 the batch's running sums could overflow: those rows are
+done path by path by :func:`pose_moments` (its recurrence never overflows)."""
+
+
+_PANEL_NODES = ((0.1, 4), (0.6, 6), (_PANEL_RATE_LENGTH, _NODES))
+"""Gauss-Legendre nodes by (2|E_R| + 2K) L: the panel error is about
+(load)^(2n) / (2n)!, below 1e-12 relative in each class."""
+
+
+@lru_cache(maxsize=8)
+def _gauss_legendre_n(nodes: int) -> tuple[FloatArray, FloatArray]:
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    return (x + 1.0) / 2.0, w / 2.0
+
+
+def _panel_integrals(
+    length: FloatArray, omega: FloatArray, k: FloatArray, nodes: int
+) -> tuple[ComplexArray, ...]:
+    """The seven one-leg integrals of :func:`pose_moments` by one
+    Gauss-Legendre panel of ``nodes`` nodes, legs as flat arrays."""
+    x, w = _gauss_legendre_n(nodes)
+    leg = length[:, None]
+    t = leg * x
+    wt = leg * w
+    om = omega[:, None]
+    kt = k[:, None] * t
+    e1 = np.exp(1j * om * t - 0.5 * kt)
+    shrink = np.exp(-kt)  # >= e^-1 on a panel leg (K L <= 1)
+    c3t = (1j * om - 1.5 * k[:, None]) * t
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ratio = np.where(c3t == 0, 1.0, np.expm1(c3t) / c3t)
+
+    def total(values: ComplexArray) -> ComplexArray:
+        sums: ComplexArray = (wt * values).sum(axis=-1)
+        return sums
+
+    return (
+        total(e1),
+        total(e1 / shrink) * np.exp(-0.5 * k * length),
+        total((leg - t) * e1),
+        total(t * e1),
+        total(e1 * shrink),
+        total(e1 * t * ratio),
+        total(e1 * e1 * shrink),
+    )
+
+
+def _all_leg_integrals(paths: PathSet, q: FloatArray) -> list[ComplexArray]:
+    """The seven one-leg integrals of every leg at every row of ``q``, (Q, T, M)
+    each. They depend on a row only through E_R and K_theta, so each distinct
+    pair is done once (finite-difference rows mostly move other parameters)."""
+    pairs, inverse = np.unique(q[:, [0, 2]], axis=0, return_inverse=True)
+    e_r = pairs[:, 0, None, None]
+    k = pairs[:, 1, None, None]
+    length = paths.length_m[None]
+    omega = e_r * paths.sign[None]
+    shape = omega.shape
+    kk = np.broadcast_to(k, shape)
+    ll = np.broadcast_to(length, shape)
+    integrals = [np.zeros(shape, dtype=np.complex128) for _ in range(7)]
+    load = (2.0 * np.abs(e_r) + 2.0 * k) * length
+    valid = np.broadcast_to(length > 0, shape)
+    low = 0.0
+    for high, nodes in _PANEL_NODES:
+        chosen = valid & (load > low) & (load <= high) if low else valid & (load <= high)
+        low = high
+        if not np.any(chosen):
+            continue
+        values = _panel_integrals(ll[chosen], omega[chosen], kk[chosen], nodes)
+        for target, value in zip(integrals, values, strict=True):
+            target[chosen] = value
+    long_leg = valid & (load > _PANEL_RATE_LENGTH)
+    if np.any(long_leg):
+        exact = _long_leg_integrals(ll[long_leg], omega[long_leg], kk[long_leg])
+        for target, value in zip(integrals, exact, strict=True):
+            target[long_leg] = value
+    return [values[inverse.reshape(-1)] for values in integrals]
+
+
+def _exclusive_cumsum(values: ComplexArray) -> ComplexArray:
+    """sum_{i<j} values_i along the last axis (no subtraction: no cancellation)."""
+    out = np.zeros_like(values)
+    np.cumsum(values[..., :-1], axis=-1, out=out[..., 1:])
+    return out
+
+
+def batch_moments(paths: PathSet, values: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """:func:`pose_moments` of every path at every parameter row, vectorised.
+
+    Args:
+        paths: the paths (T of them).
+        values: (Q, 9) rows of :data:`BATCH_COLUMNS` (SI; E_T > -1, rates >= 0).
+
+    Returns:
+        means (Q, T, 3) and covariances (Q, T, 3, 3), as :func:`pose_moments`
+        gives them (tests/science/test_turn_moments.py checks that they agree).
+    """
+    q = np.asarray(values, dtype=np.float64).reshape(-1, 9)
+    e_r, gain, k, k_rho = (q[:, i, None, None] for i in range(4))
+    gain = 1.0 + gain
+    scales = q[:, 4:8]
+    k_spin = q[:, 8, None, None]
+    length, start, sign = paths.length_m[None], paths.start_arc_m[None], paths.sign[None]
+    phase = (
+        paths.heading_rad[None]
+        + e_r * paths.start_signed_m[None]
+        + np.einsum("qc,tcm->qtm", scales, paths.before_rad)
+    )
+    jump = k_spin * paths.spin_before_rad[None]
+    alpha = gain * sign * np.exp(1j * phase)
+    v_start = k * start + jump
+    v_end = v_start + k * length
+    kk = np.broadcast_to(k, v_start.shape)
+    integrals = _all_leg_integrals(paths, q)
+    i_mean, i_tail, i_same_abs, i_stein, i_f, i_same_sq, i_noise = integrals
+
+    mean_legs = alpha * np.exp(-0.5 * v_start) * i_mean
+    mean_z = mean_legs.sum(axis=-1)
+    same_abs = 2.0 * (np.abs(alpha) ** 2 * i_same_abs.real).sum(axis=-1)
+    # pairs i < j: conj C_j e^{-V(a_j)/2} sum_{i<j} B_i e^{V(e_i)/2}
+    safe = np.minimum(v_end, 2.0 * _MAX_HALF_VARIANCE)
+    grow = alpha * i_tail * np.exp(0.5 * safe)
+    running = _exclusive_cumsum(grow)
+    cross = (running * np.conj(alpha * i_mean) * np.exp(-0.5 * v_start)).sum(axis=-1)
+    abs_sq = k_rho[..., 0] * paths.distance_m[None] + same_abs + 2.0 * cross.real
+    f_legs = alpha * np.exp(-1.5 * v_start) * i_f
+    before = _exclusive_cumsum(f_legs)
+    same_sq = alpha * alpha * np.exp(-2.0 * v_start) * i_same_sq
+    noise = k_rho / gain**2 * alpha * alpha * np.exp(-2.0 * v_start) * i_noise
+    sq = 2.0 * (same_sq.sum(axis=-1) + (before * mean_legs).sum(axis=-1)) + noise.sum(axis=-1)
+    cov_dz = (1j * alpha * np.exp(-0.5 * v_start) * (v_start * i_mean + kk * i_stein)).sum(axis=-1)
+    c_abs = abs_sq - np.abs(mean_z) ** 2
+    c_sq = sq - mean_z * mean_z
+    var_delta = q[:, 2, None] * paths.distance_m[None] + q[:, 8, None] * paths.spin_total_rad[None]
+    mean_delta = (
+        paths.heading_offset_rad[None]
+        + q[:, 0, None] * paths.signed_distance_m[None]
+        + scales @ paths.total_rad.T
+    )
+    means = np.stack([mean_z.real, mean_z.imag, mean_delta], axis=-1)
+    covs = np.empty((*means.shape[:2], 3, 3))
+    covs[..., 0, 0] = (c_abs + c_sq.real) / 2.0
+    covs[..., 1, 1] = (c_abs - c_sq.real) / 2.0
+    covs[..., 0, 1] = covs[..., 1, 0] = c_sq.imag / 2.0
+    covs[..., 0, 2] = covs[..., 2, 0] = cov_dz.real
+    covs[..., 1, 2] = covs[..., 2, 1] = cov_dz.imag
+    covs[..., 2, 2] = var_delta
+    # rows whose running sums would overflow: path by path
+    overflow = np.nonzero((v_end > 2.0 * _MAX_HALF_VARIANCE).any(axis=-1))
+    for row, path_index in zip(*overflow, strict=True):
+        r = q[row]
+        moments = pose_moments(
+            paths.paths[path_index],
+            ErrorParameters(float(r[0]), float(r[1]), float(r[2]), float(r[3])),
+            TurnErrors.of(r[4:8], float(r[8])),
+        )
+        means[row, path_index], covs[row, path_index] = moments.mean, moments.cov
+    return means, covs

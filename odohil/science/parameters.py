@@ -11,6 +11,17 @@ from odohil.errors import ParameterError
 PARAMETER_NAMES = ("E_R", "E_T", "K_theta", "K_rho")
 SI_UNITS = {"E_R": "rad/m", "E_T": "1", "K_theta": "rad^2/m", "K_rho": "m"}
 PAPER_UNITS = {"E_R": "deg/m", "E_T": "1", "K_theta": "deg^2/m", "K_rho": "m"}
+TURN_SI_UNITS = {"e_turn": "1", "K_spin": "rad^2/rad"}
+"""A differential drive's turn errors (odohil/science/moments.py TurnErrors):
+the turn-scale error (one per turn class: ``e_turn``, ``e_turn_spin``,
+``e_turn_arc_cw``, ...) and the spins' heading variance per radian."""
+
+
+def si_unit(name: str) -> str:
+    """The SI unit of any parameter, the four and the turn errors."""
+    if name in SI_UNITS:
+        return SI_UNITS[name]
+    return TURN_SI_UNITS[units.parameter_kind(name)]
 
 
 @dataclass(frozen=True)

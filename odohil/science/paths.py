@@ -57,6 +57,10 @@ class Leg:
 
 TurnKind = Literal["spin", "arc"]
 TURN_KINDS: tuple[TurnKind, ...] = ("spin", "arc")
+TURN_CLASSES: tuple[str, ...] = ("spin ccw", "spin cw", "arc ccw", "arc cw")
+"""The four classes of turns a turn-scale error may differ between: kind
+(spin, arc) and direction (ccw: positive angle, cw: negative); the rows of
+:class:`TurnTable`."""
 
 
 @dataclass(frozen=True)
@@ -103,22 +107,61 @@ class LegTable:
 
 
 @dataclass(frozen=True)
+class TurnTable:
+    """The turns of a path by class (:data:`TURN_CLASSES`), for turn-error models.
+
+    Attributes:
+        before_rad: (4, n_legs) per class, the sum of the encoder angles
+            (signed, rad) of that class's turns before each leg.
+        total_rad: (4,) per class, the sum over the whole path.
+        spin_before_rad: (n_legs,) sum of |angle| of the spins before each leg, rad.
+        spin_total_rad: sum of |angle| of every spin, rad.
+    """
+
+    before_rad: FloatArray
+    total_rad: FloatArray
+    spin_before_rad: FloatArray
+    spin_total_rad: float
+
+    @property
+    def total_abs_rad(self) -> FloatArray:
+        """(4,) per class, the sum of |angle| over the path, rad."""
+        out: FloatArray = np.abs(self.total_rad)
+        return out
+
+
+def turn_class_index(turn: Turn) -> int:
+    """The row of :data:`TURN_CLASSES` a (non-zero) turn belongs to."""
+    return (0 if turn.kind == "spin" else 2) + (0 if turn.angle_rad > 0 else 1)
+
+
+@dataclass(frozen=True)
 class EncoderPath:
     """A sequence of legs and in-place turns, as measured by the encoders."""
 
     steps: tuple[Step, ...]
     name: str = ""
     _legs: LegTable = field(init=False, repr=False, compare=False)
+    _turns: TurnTable = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         if not any(isinstance(step, Leg) for step in self.steps):
             raise ParameterError("a path needs at least one leg")
         heading, arc, signed = 0.0, 0.0, 0.0
         rows: list[tuple[float, float, float, float, float]] = []
+        by_class, spun = np.zeros(4), 0.0
+        before: list[FloatArray] = []
+        spin_before: list[float] = []
         for step in self.steps:
             if isinstance(step, Turn):
                 heading += step.angle_rad
+                if step.angle_rad != 0.0:
+                    by_class[turn_class_index(step)] += step.angle_rad
+                    if step.kind == "spin":
+                        spun += abs(step.angle_rad)
                 continue
+            before.append(by_class.copy())
+            spin_before.append(spun)
             sign = 1.0 if step.length_m > 0 else -1.0
             rows.append((heading, sign, abs(step.length_m), arc, signed))
             arc += abs(step.length_m)
@@ -132,11 +175,23 @@ class EncoderPath:
             start_signed_m=table[:, 4].copy(),
         )
         object.__setattr__(self, "_legs", legs)
+        turns = TurnTable(
+            before_rad=np.array(before, dtype=np.float64).T.copy(),
+            total_rad=by_class,
+            spin_before_rad=np.array(spin_before, dtype=np.float64),
+            spin_total_rad=spun,
+        )
+        object.__setattr__(self, "_turns", turns)
 
     @property
     def legs(self) -> LegTable:
         """The legs as arrays (see :class:`LegTable`)."""
         return self._legs
+
+    @property
+    def turns(self) -> TurnTable:
+        """The turns by class (see :class:`TurnTable`)."""
+        return self._turns
 
     @property
     def distance_m(self) -> float:

@@ -12,9 +12,10 @@ from scipy import special
 
 from odohil import units
 from odohil.errors import MeasurementError
-from odohil.science.estimators.checks import Criteria, model_check, sufficiency
-from odohil.science.estimators.intervals import profile_interval, satterthwaite_dof, t_interval
+from odohil.science.estimators.checks import Criteria, design_misfit, model_check, sufficiency
+from odohil.science.estimators.intervals import profile_interval, satterthwaite_dofs, t_interval
 from odohil.science.estimators.joint import JointFit, joint_estimate, start_phi
+from odohil.science.estimators.likelihood import GroupStats
 from odohil.science.estimators.observations import (
     DesignSummary,
     Observation,
@@ -38,7 +39,7 @@ from odohil.science.estimators.robust import (
 )
 from odohil.science.estimators.scores import sandwich_ratio, trial_scores
 from odohil.science.estimators.verdict import judge
-from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
+from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters, si_unit
 from odohil.science.paths import FloatArray
 
 Method = Literal["robust", "joint", "paper"]
@@ -100,25 +101,30 @@ def _dof(name: str, value: float, stderr: float, base: float) -> float:
     return min(base, max(2.0 * (value / stderr) ** 2, 1.0))
 
 
-def _honest_estimates(
-    groups: Sequence[TrialGroup], fit: JointFit, ratio: FloatArray
+def honest_estimates(
+    groups: Sequence[GroupStats], fit: JointFit, ratio: FloatArray
 ) -> tuple[ParameterEstimate, ...]:
-    """The intervals of a maximum-likelihood fit of ``groups``: profile
-    likelihood for the variance rates, widened by their sandwich ratio
-    (``ratio``, odohil/science/estimators/scores.py) when it exceeds 1,
-    Satterthwaite t for E_R and E_T (odohil/science/estimators/intervals.py)."""
+    """The intervals of a maximum-likelihood fit of ``groups``, every parameter
+    of its layout: profile likelihood for the variance rates, widened by their
+    sandwich ratio (``ratio``, odohil/science/estimators/scores.py) when it
+    exceeds 1, Satterthwaite t for the mean parameters (E_R, E_T, e_turn)
+    (odohil/science/estimators/intervals.py)."""
+    layout = fit.point.layout
     cov = np.array(fit.covariance, dtype=np.float64)
     diag = np.diag(cov)
     stderr = np.sqrt(np.where(np.isfinite(diag), np.clip(diag, 0.0, None), np.inf))
+    values = fit.values
+    means = [i for i in layout.mean_index if math.isfinite(stderr[i])]
+    dofs = dict(zip(means, satterthwaite_dofs(groups, fit, means), strict=True)) if means else {}
     out = []
-    for index, (name, value) in enumerate(zip(PARAMETER_NAMES, fit.params.as_tuple(), strict=True)):
-        se = float(stderr[index])
+    for index, name in enumerate(layout.names):
+        value, se = float(values[index]), float(stderr[index])
         if not math.isfinite(se):
             out.append(ParameterEstimate.build(name, value, se))
             continue
-        if index < 2:
-            dof = satterthwaite_dof(groups, fit, index)
-            interval = t_interval(value, se, dof, "Student t, Satterthwaite degrees of freedom")
+        if index in dofs:
+            rule = "Student t, Satterthwaite degrees of freedom"
+            interval = t_interval(value, se, dofs[index], rule)
         else:
             interval = profile_interval(groups, fit, index, widen=float(ratio[index]))
         out.append(
@@ -127,7 +133,7 @@ def _honest_estimates(
                 value,
                 se,
                 interval.ci95,
-                SI_UNITS[name],
+                si_unit(name),
                 interval.ci_4sigma,
                 interval.method,
                 interval.dof,
@@ -154,13 +160,18 @@ def build_result(
     ambiguous: Sequence[int] = (),
     intervals: tuple[ParameterEstimate, ...] = (),
     turns_exact: bool = True,
+    check_covariance: FloatArray | None = None,
+    backward: Sequence[bool] | None = None,
 ) -> EstimateResult:
-    """Assemble the result, run both checks and give the verdict.
+    """Assemble the result, run the checks and give the verdict.
 
     ``check_params``: where the model check is evaluated (the maximum-likelihood
-    fit; ``params`` when None). ``named_outliers``: input positions the robust
-    fit named outliers. ``intervals``: the parameters with their intervals
-    (else the Wald rule of :func:`_estimates`).
+    fit; ``params`` when None), ``check_covariance`` its covariance (else
+    ``covariance``). ``named_outliers``: input positions the robust
+    fit named outliers (left out of the misfit checks too). ``intervals``: the
+    parameters with their intervals (else the Wald rule of :func:`_estimates`).
+    ``backward``: which trials were driven backwards (``observations`` are in
+    the forward view), for the misfit checks' groups.
     """
     cov = np.array(covariance, dtype=np.float64)
     estimates, stderr = _estimates(params, cov, len(observations))
@@ -171,6 +182,14 @@ def build_result(
     corr[~np.isfinite(corr)] = math.nan
     np.fill_diagonal(corr, 1.0)
     check = model_check(observations, check_params or params, named_outliers)
+    kept = [i for i in range(len(observations)) if i not in set(named_outliers)]
+    flags = list(backward) if backward is not None else None
+    misfit = design_misfit(
+        [observations[i] for i in kept],
+        check_params or params,
+        cov if check_covariance is None else np.asarray(check_covariance, dtype=np.float64),
+        [flags[i] for i in kept] if flags is not None else None,
+    )
     verdict = judge(
         observations,
         converged,
@@ -184,6 +203,7 @@ def build_result(
         check.verdict,
         ambiguous,
         turns_exact,
+        misfit,
     )
     if ambiguous:
         notes = (
@@ -206,6 +226,7 @@ def build_result(
         gaussian=gaussian,
         trials=trials,
         excluded=excluded,
+        misfit=misfit,
     )
 
 
@@ -280,6 +301,7 @@ def estimate(
     if method not in METHODS:
         raise MeasurementError(f"method must be one of {METHODS}, got {method!r}")
     observations, excluded = leave_out(_numbered(observations), exclude)
+    backward = [o.design.backward for o in observations]
     observations = [forward_view(o) for o in observations]
     if not observations:
         raise MeasurementError("no trials to estimate from")
@@ -292,6 +314,7 @@ def estimate(
         "ambiguous": ambiguous,
         "check_params": ml.params,
         "turns_exact": turns_exact,
+        "backward": backward,
     }
     if method == "paper":
         return build_result(
@@ -302,6 +325,7 @@ def estimate(
             paper.covariance,
             (*paper_notes(paper), "model check at the joint maximum-likelihood fit"),
             criteria,
+            check_covariance=ml.covariance,
             **common,  # type: ignore[arg-type]
         )
     state = f"converged in {ml.iterations} steps" if ml.converged else "DID NOT CONVERGE"
@@ -318,7 +342,7 @@ def estimate(
             notes,
             criteria,
             converged=ml.converged,
-            intervals=_honest_estimates(groups, ml, ratio),
+            intervals=honest_estimates(groups, ml, ratio),
             **common,  # type: ignore[arg-type]
         )
     rob = robust_fit(observations, groups, ml)
@@ -358,10 +382,11 @@ def estimate(
         trials=diagnostics,
         excluded=excluded,
         ambiguous=ambiguous,
-        intervals=_honest_estimates(
+        intervals=honest_estimates(
             weighted_groups(observations, weights, {g.design: g.reference for g in groups}),
             rob.fit,
             sandwich_ratio(rob.scores, rob.information),
         ),
         turns_exact=turns_exact,
+        backward=backward,
     )

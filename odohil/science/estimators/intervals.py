@@ -48,13 +48,12 @@ from scipy import stats
 
 from odohil.science.estimators.joint import JointFit, designs_of
 from odohil.science.estimators.likelihood import (
+    GroupStats,
     LikelihoodValue,
     ModelPoint,
     evaluate,
-    model_point,
     with_moments,
 )
-from odohil.science.estimators.observations import TrialGroup
 from odohil.science.paths import FloatArray
 
 FOUR_SIGMA = 4.0
@@ -68,6 +67,9 @@ _INNER_TOLERANCE = 1e-6
 """The nuisance re-fit stops when its Newton decrement (about twice the NLL
 still to gain) is below this."""
 _SECANT_STEPS = 8
+_BISECTION_STEPS = 40
+_BRACKET_TOLERANCE = 1e-3
+"""Bisection stops when the bracket in log K is this narrow."""
 _ROOT_TOLERANCE = 0.01
 """A bound is accepted when |r(psi) - q| is below this (in units of the root)."""
 
@@ -106,51 +108,65 @@ def t_interval(value: float, stderr: float, dof: float, rule: str) -> Interval:
 
 
 def satterthwaite_dof(
-    groups: Sequence[TrialGroup], fit: JointFit, index: int, cox_reid: bool = True
+    groups: Sequence[GroupStats], fit: JointFit, index: int, cox_reid: bool = True
 ) -> float:
-    """nu = 2 SE^4 / Var(SE^2) of parameter ``index`` (0: E_R, 1: E_T), the
-    variance of SE^2 by the delta method through log K_theta and log K_rho."""
+    """nu = 2 SE^4 / Var(SE^2) of parameter ``index`` (0: E_R, 1: E_T, or
+    another mean parameter of the layout), the variance of SE^2 by the delta
+    method through the log variance rates (log K_theta and log K_rho, and
+    log K_spin where the layout has it)."""
+    return satterthwaite_dofs(groups, fit, (index,), cox_reid)[0]
+
+
+def satterthwaite_dofs(
+    groups: Sequence[GroupStats], fit: JointFit, indices: Sequence[int], cox_reid: bool = True
+) -> list[float]:
+    """:func:`satterthwaite_dof` of several parameters at the cost of one
+    (the model is moved once per log rate)."""
+    none = [math.inf] * len(indices)
     info = fit.value.information
     if info is None:
-        return math.inf
+        return none
     try:
         cov = np.linalg.inv(info)
     except np.linalg.LinAlgError:
-        return math.inf
-    var = float(cov[index, index])
-    if not (var > 0 and math.isfinite(var)):
-        return math.inf
-    designs = designs_of(groups)
+        return none
+    wanted = list(indices)
+    var = np.diag(cov)[wanted]
+    rates = list(fit.point.layout.log_rates)
     h = 0.05
-    grad = np.zeros(2)
-    for j, k in enumerate((2, 3)):
+    grad = np.zeros((len(rates), len(wanted)))
+    for j, k in enumerate(rates):
         phi = fit.point.phi.copy()
         phi[k] += h
-        moved = evaluate(groups, model_point(phi, designs, derivatives=True), cox_reid)
+        moved = evaluate(groups, fit.point.moved(phi, derivatives=True), cox_reid)
         if moved.information is None:
-            return math.inf
+            return none
         try:
-            grad[j] = (float(np.linalg.inv(moved.information)[index, index]) - var) / h
+            grad[j] = (np.diag(np.linalg.inv(moved.information))[wanted] - var) / h
         except np.linalg.LinAlgError:
-            return math.inf
-    spread = float(grad @ cov[2:, 2:] @ grad)
-    if spread <= 0:
-        return math.inf
-    return min(2.0 * var**2 / spread, 1e6)
+            return none
+    spread = np.einsum("ji,jk,ki->i", grad, cov[np.ix_(rates, rates)], grad)
+    out = []
+    for v, s2 in zip(var, spread, strict=True):
+        ok = v > 0 and math.isfinite(v) and s2 > 0
+        out.append(min(2.0 * float(v) ** 2 / float(s2), 1e6) if ok else math.inf)
+    return out
 
 
 class _Profile:
     """The Cox-Reid adjusted profile NLL of one log K, with warm starts."""
 
     def __init__(
-        self, groups: Sequence[TrialGroup], fit: JointFit, index: int, cox_reid: bool
+        self, groups: Sequence[GroupStats], fit: JointFit, index: int, cox_reid: bool
     ) -> None:
         self.groups = [g for g in groups if g.n > 0]
         self.designs = designs_of(self.groups)
         self.index = index
-        self.free = [i for i in range(4) if i != index]
+        self.layout = fit.point.layout
+        self.free = [i for i in range(self.layout.size) if i != index]
         self.cox_reid = cox_reid
-        self.anchor: ModelPoint = model_point(fit.point.phi, self.designs, derivatives=True)
+        self.model = fit.point.model
+        self.anchor: ModelPoint = self.model.point(fit.point.phi, self.designs, derivatives=True)
         self.psi_hat = float(fit.point.phi[index])
         self.evaluations = 0
         base = self.refit(self.psi_hat, fit.point.phi)
@@ -158,7 +174,7 @@ class _Profile:
         self.last = fit.point.phi.copy()
 
     def _value(self, phi: FloatArray) -> LikelihoodValue:
-        point = with_moments(self.anchor, model_point(phi, self.designs, derivatives=False))
+        point = with_moments(self.anchor, self.model.point(phi, self.designs, derivatives=False))
         return evaluate(self.groups, point, self.cox_reid)
 
     def refit(self, psi: float, start: FloatArray) -> tuple[float, FloatArray]:
@@ -185,9 +201,7 @@ class _Profile:
             while t > 0.05:
                 new = phi.copy()
                 new[free] += t * step
-                new[1] = max(new[1], -0.99)
-                for k in (2, 3):
-                    new[k] = float(np.clip(new[k], *_LOG_K_RANGE))
+                new[free] = self.layout.bounded(new, *_LOG_K_RANGE)[free]
                 trial = self._value(new)
                 if trial.nll <= value.nll + 1e-9:
                     break
@@ -198,8 +212,16 @@ class _Profile:
         return value.nll, phi
 
     def root(self, psi: float) -> float:
-        """Signed root of the deviance at psi."""
+        """Signed root of the deviance at psi. The re-fit starts from the last
+        point; when that gives a deviance above 1 it is re-fitted from the
+        estimate too and the lower one kept (a warm start far from psi's own
+        optimum can stop, after its few steps, well above it: the deviance
+        then jumps about and the bound lands almost on the estimate)."""
         nll, phi = self.refit(psi, self.last)
+        if not (math.isfinite(nll) and 2.0 * (nll - self.reference) <= 1.0):
+            again, other = self.refit(psi, self.anchor.phi)
+            if again < nll or not math.isfinite(nll):
+                nll, phi = again, other
         if not math.isfinite(nll):
             return math.copysign(math.inf, psi - self.psi_hat)
         self.last = phi
@@ -214,6 +236,7 @@ class _Profile:
         target = side * q
         a, ra = self.psi_hat, 0.0
         b = self.psi_hat + side * max(abs(guess), 1e-6)
+        inner, outer = self.psi_hat, math.nan  # the bracket: short of the target, past it
         for _ in range(_SECANT_STEPS):
             b = float(np.clip(b, *_LOG_K_RANGE))
             rb = self.root(b)
@@ -221,25 +244,52 @@ class _Profile:
                 return b
             if b == limit and (rb - target) * side < 0:
                 return side * math.inf
+            if math.isfinite(rb):
+                if (rb - target) * side < 0:
+                    inner = b if (b - inner) * side > 0 else inner
+                elif math.isnan(outer) or (outer - b) * side > 0:
+                    outer = b
             if not math.isfinite(rb) or (rb - ra) * (b - a) <= 0:
                 # r must rise with psi: step half-way back toward the last good point
                 b = 0.5 * (a + b)
                 continue
             slope = (rb - ra) / (b - a)
             a, ra, b = b, rb, b + (target - rb) / slope
-        return b
+        return self._bisect(target, side, inner, outer, limit)
+
+    def _bisect(
+        self, target: float, side: float, inner: float, outer: float, limit: float
+    ) -> float:
+        """Bisection on the bracket [inner, outer] when the secant did not
+        converge (r far from linear in psi: an estimate at the floor of log K,
+        where the deviance grows like K = e^psi)."""
+        if math.isnan(outer):
+            if (self.root(limit) - target) * side < 0:
+                return side * math.inf
+            outer = limit
+        middle = 0.5 * (inner + outer)
+        for _ in range(_BISECTION_STEPS):
+            middle = 0.5 * (inner + outer)
+            r = self.root(middle)
+            if abs(r - target) < _ROOT_TOLERANCE or abs(outer - inner) < _BRACKET_TOLERANCE:
+                return middle
+            if math.isfinite(r) and (r - target) * side < 0:
+                inner = middle
+            else:
+                outer = middle
+        return middle
 
 
 def profile_interval(
-    groups: Sequence[TrialGroup],
+    groups: Sequence[GroupStats],
     fit: JointFit,
     index: int,
     cox_reid: bool = True,
     widen: float = 1.0,
 ) -> Interval:
-    """The profile-likelihood interval of K_theta (index 2) or K_rho (3) at
-    both levels (see the module docstring), SI. ``widen`` (at least 1)
-    multiplies the deviance threshold: the sandwich ratio of
+    """The profile-likelihood interval of K_theta (index 2) or K_rho (3), or
+    another log rate of the layout (K_spin), at both levels (see the module
+    docstring), SI. ``widen`` (at least 1) multiplies the deviance threshold: the sandwich ratio of
     odohil/science/estimators/scores.py when the data spread more than the
     model says."""
     widen = max(widen, 1.0) if math.isfinite(widen) else 1.0

@@ -8,39 +8,47 @@ Fisher scoring with Levenberg damping (each step solves
 from the paper-method start this converges in a few steps. If it does not,
 ``scipy.optimize.minimize`` (L-BFGS-B on the exact score) takes over from the
 best point. Standard errors come from the expected information at the optimum.
+
+Any model of :mod:`odohil.science.estimators.likelihood` (a
+:class:`~odohil.science.estimators.likelihood.MomentModel` and its
+:class:`~odohil.science.estimators.likelihood.Layout`) is fitted the same way;
+the start point's model is the one fitted.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize
 
 from odohil.science.estimators.likelihood import (
+    DESIGN_MODEL,
+    GroupStats,
+    Layout,
     LikelihoodValue,
     ModelPoint,
+    MomentModel,
     evaluate,
     from_phi,
-    model_point,
-    phi_jacobian,
     to_phi,
     with_moments,
 )
-from odohil.science.estimators.observations import TrialGroup
 from odohil.science.parameters import ErrorParameters
-from odohil.science.paths import Design, FloatArray
+from odohil.science.paths import FloatArray
 
 DECREMENT_TOLERANCE = 1e-8
 """Converged when score^T I^-1 score (the squared step in standard errors) is below this."""
 _MAX_ITERATIONS = 60
 _MAX_LOG_STEP = 2.0
 """Largest change of log K in one step (a factor e^2)."""
+_FLOOR_JUMP = 10.0
+"""A log K step below -this goes to the floor at once (see :func:`_limit`)."""
 _LOG_K_FLOOR = math.log(1e-14)
 _LOG_K_CEILING = math.log(1e2)
-_FALLBACK_SCALE = np.array([1e-3, 1e-2, 1.0, 1.0])
+_FALLBACK_SCALE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -48,8 +56,9 @@ class JointFit:
     """The optimum of the likelihood.
 
     Attributes:
-        params: the estimate, SI.
-        covariance: (4, 4) inverse expected information, SI (inf where singular).
+        params: the estimate of the four parameters, SI.
+        covariance: (p, p) inverse expected information, SI (inf where
+            singular), in the order of the layout (the four first).
         point: the model at the optimum, with derivatives (for warm starts).
         value: the likelihood there.
         iterations: scoring steps taken.
@@ -63,10 +72,15 @@ class JointFit:
     iterations: int
     converged: bool
 
+    @property
+    def values(self) -> FloatArray:
+        """(p,) every parameter of the layout, SI."""
+        return self.point.layout.to_si(self.point.phi)
 
-def designs_of(groups: Sequence[TrialGroup]) -> list[Design]:
-    """The distinct designs of the groups, in order."""
-    return list(dict.fromkeys(g.design for g in groups if g.n > 0))
+
+def designs_of(groups: Sequence[GroupStats]) -> list[Hashable]:
+    """The distinct keys (designs) of the groups, in order."""
+    return list(dict.fromkeys(g.key for g in groups if g.n > 0))
 
 
 def start_phi(params: ErrorParameters, floor: ErrorParameters | None = None) -> FloatArray:
@@ -88,24 +102,48 @@ def _solve(info: FloatArray, rhs: FloatArray, damping: float) -> FloatArray:
     return result
 
 
-def _limit(phi: FloatArray, step: FloatArray) -> FloatArray:
+def _limit(phi: FloatArray, step: FloatArray, layout: Layout) -> FloatArray:
+    """phi + step with every log K moving at most _MAX_LOG_STEP (the whole
+    step scaled down), except that a variance rate the step would shrink by
+    more than e^_FLOOR_JUMP goes straight to the floor (a rate the data put
+    at 0 would otherwise take ten steps to get there; a wrong jump is
+    rejected like any step that does not improve the fit)."""
     step = step.copy()
-    largest = float(np.max(np.abs(step[2:])))
+    rates = [i for i in layout.log_rates if step[i] >= -_FLOOR_JUMP]
+    jumps = [i for i in layout.log_rates if step[i] < -_FLOOR_JUMP]
+    largest = float(np.max(np.abs(step[rates]))) if rates else 0.0
     if largest > _MAX_LOG_STEP:
         step *= _MAX_LOG_STEP / largest
-    new = phi + step
-    new[2:] = np.clip(new[2:], _LOG_K_FLOOR, _LOG_K_CEILING)
-    new[1] = max(new[1], -0.99)
-    return new
+    step[jumps] = _LOG_K_FLOOR - phi[jumps]
+    return layout.bounded(phi + step, _LOG_K_FLOOR, _LOG_K_CEILING)
 
 
-def decrement(value: LikelihoodValue) -> float:
+def decrement(value: LikelihoodValue, held: Sequence[int] = ()) -> float:
     """score^T I^-1 score: the squared length of the remaining Newton step in
-    standard-error units."""
+    standard-error units (over the parameters not ``held``)."""
     assert value.gradient is not None
     assert value.information is not None
-    step = _solve(value.information, value.gradient, 0.0)
-    return float(abs(value.gradient @ step))
+    free = [i for i in range(value.gradient.size) if i not in held]
+    step = _solve(value.information[np.ix_(free, free)], value.gradient[free], 0.0)
+    return float(abs(value.gradient[free] @ step))
+
+
+def held_at_floor(phi: FloatArray, value: LikelihoodValue, layout: Layout) -> list[int]:
+    """The variance rates at the floor of log K whose score still pushes them
+    down: the optimum is on the boundary (K = 0 for all practical purposes),
+    so they are held there and the others are fitted (and converge)."""
+    if value.gradient is None:
+        return []
+    return [i for i in layout.log_rates if phi[i] <= _LOG_K_FLOOR + 1e-9 and value.gradient[i] > 0]
+
+
+def _free_step(value: LikelihoodValue, held: Sequence[int], damping: float) -> FloatArray:
+    assert value.gradient is not None
+    assert value.information is not None
+    free = [i for i in range(value.gradient.size) if i not in held]
+    step = np.zeros(value.gradient.size)
+    step[free] = _solve(value.information[np.ix_(free, free)], -value.gradient[free], damping)
+    return step
 
 
 def covariance_si(point: ModelPoint, value: LikelihoodValue) -> FloatArray:
@@ -113,17 +151,18 @@ def covariance_si(point: ModelPoint, value: LikelihoodValue) -> FloatArray:
     for parameters the information does not determine)."""
     assert value.information is not None
     info = value.information
+    size = info.shape[0]
     scale = np.sqrt(np.clip(np.diag(info), 0.0, None))
     if np.any(scale == 0):
-        cov_phi = np.full((4, 4), math.inf)
+        cov_phi = np.full((size, size), math.inf)
     else:
         scaled = info / np.outer(scale, scale)
         eigen = np.linalg.eigvalsh(scaled)
         if eigen[0] <= 1e-12 * eigen[-1]:
-            cov_phi = np.full((4, 4), math.inf)
+            cov_phi = np.full((size, size), math.inf)
         else:
             cov_phi = np.linalg.inv(scaled) / np.outer(scale, scale)
-    jac = phi_jacobian(from_phi(point.phi))
+    jac = point.layout.jacobian(point.phi)
     with np.errstate(invalid="ignore"):
         cov: FloatArray = jac @ cov_phi @ jac.T
     cov[~np.isfinite(cov)] = math.inf
@@ -137,7 +176,7 @@ def _distance(value: LikelihoodValue, delta: FloatArray) -> float:
 
 
 def refine(
-    groups: Sequence[TrialGroup],
+    groups: Sequence[GroupStats],
     start: ModelPoint,
     max_iterations: int = _MAX_ITERATIONS,
     reuse_within: float = 0.0,
@@ -156,8 +195,8 @@ def refine(
     :mod:`odohil.science.estimators.likelihood`); a step is kept when it
     shrinks the Newton decrement.
     """
-    designs = designs_of(groups)
     point = start
+    layout = start.layout
     value = evaluate(groups, point, cox_reid)
     if not math.isfinite(value.nll):
         raise FloatingPointError("the start point gives a singular covariance")
@@ -167,21 +206,24 @@ def refine(
     while iterations < max_iterations:
         assert value.gradient is not None
         assert value.information is not None
-        if decrement(value) < DECREMENT_TOLERANCE:
+        held = held_at_floor(point.phi, value, layout)
+        if decrement(value, held) < DECREMENT_TOLERANCE:
             converged = True
             break
         iterations += 1
-        step = _solve(value.information, -value.gradient, damping)
-        trial_phi = _limit(point.phi, step)
+        step = _free_step(value, held, damping)
+        trial_phi = _limit(point.phi, step, layout)
         if cox_reid:
             # an estimating equation (score + adjustment = 0): steps are kept
             # when they shrink the Newton decrement
             if reuse_within > 0 and _distance(value, trial_phi - point.anchor) < reuse_within:
-                moved = with_moments(point, model_point(trial_phi, designs, derivatives=False))
+                moved = with_moments(point, point.moved(trial_phi, derivatives=False))
             else:
-                moved = model_point(trial_phi, designs, derivatives=True)
+                moved = point.moved(trial_phi, derivatives=True)
             trial = evaluate(groups, moved, cox_reid=True)
-            if trial.gradient is not None and decrement(trial) < decrement(value):
+            if trial.gradient is not None and decrement(
+                trial, held_at_floor(trial_phi, trial, layout)
+            ) < decrement(value, held):
                 point, value = moved, trial
                 damping = 0.0 if damping <= 1e-3 else damping / 10.0
             else:
@@ -189,13 +231,13 @@ def refine(
                 if damping > 1e8:
                     break
             continue
-        moved = model_point(trial_phi, designs, derivatives=False)
+        moved = point.moved(trial_phi, derivatives=False)
         trial = evaluate(groups, moved)
         if trial.nll <= value.nll + 1e-12 * abs(value.nll):
             if reuse_within > 0 and _distance(value, trial_phi - point.anchor) < reuse_within:
                 point = with_moments(point, moved)
             else:
-                point = model_point(trial_phi, designs, derivatives=True)
+                point = point.moved(trial_phi, derivatives=True)
             value = evaluate(groups, point, cox_reid)
             damping = 0.0 if damping <= 1e-3 else damping / 10.0
         else:
@@ -207,40 +249,54 @@ def refine(
     )
 
 
-def _scipy_fit(groups: Sequence[TrialGroup], start: FloatArray) -> FloatArray:
+def _scipy_fit(
+    groups: Sequence[GroupStats], start: FloatArray, model: MomentModel = DESIGN_MODEL
+) -> FloatArray:
     """L-BFGS-B on the NLL in scaled phi (the fallback)."""
-    designs = designs_of(groups)
-    first = evaluate(groups, model_point(start, designs, derivatives=True))
+    keys = designs_of(groups)
+    layout = model.layout
+    first = evaluate(groups, model.point(start, keys, derivatives=True))
     assert first.information is not None
     diag = np.diag(first.information)
     scale = np.where(diag > 0, 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0)), _FALLBACK_SCALE)
+    scale[list(layout.log_rates)] = np.where(diag > 0, scale, 1.0)[list(layout.log_rates)]
 
     def fun(u: FloatArray) -> tuple[float, FloatArray]:
-        value = evaluate(groups, model_point(start + scale * u, designs, derivatives=True))
+        value = evaluate(groups, model.point(start + scale * u, keys, derivatives=True))
         if value.gradient is None:
-            return 1e300, np.zeros(4)
+            return 1e300, np.zeros(layout.size)
         return value.nll, value.gradient * scale
 
-    bounds = [(None, None), ((-0.99 - start[1]) / scale[1], None)] + [
-        ((_LOG_K_FLOOR - start[i]) / scale[i], (_LOG_K_CEILING - start[i]) / scale[i])
-        for i in (2, 3)
-    ]
+    bounds: list[tuple[float | None, float | None]] = [(None, None)] * layout.size
+    for index, floor in layout.floors:
+        bounds[index] = ((floor - start[index]) / scale[index], None)
+    for i in layout.log_rates:
+        bounds[i] = ((_LOG_K_FLOOR - start[i]) / scale[i], (_LOG_K_CEILING - start[i]) / scale[i])
     result = optimize.minimize(
-        fun, np.zeros(4), jac=True, method="L-BFGS-B", bounds=bounds, options={"maxiter": 500}
+        fun,
+        np.zeros(layout.size),
+        jac=True,
+        method="L-BFGS-B",
+        bounds=bounds,
+        options={"maxiter": 500},
     )
     best: FloatArray = start + scale * np.asarray(result.x, dtype=np.float64)
     return best
 
 
 def joint_estimate(
-    groups: Sequence[TrialGroup], start: FloatArray, cox_reid: bool = False
+    groups: Sequence[GroupStats],
+    start: FloatArray,
+    cox_reid: bool = False,
+    model: MomentModel = DESIGN_MODEL,
 ) -> JointFit:
     """Maximum-likelihood estimate from phi ``start`` (see :func:`start_phi`);
-    ``cox_reid``: of the adjusted likelihood."""
-    designs = designs_of(groups)
-    fit = refine(groups, model_point(start, designs, derivatives=True), cox_reid=cox_reid)
+    ``cox_reid``: of the adjusted likelihood; ``model``: whose likelihood
+    (the four-parameter design model by default)."""
+    keys = designs_of(groups)
+    fit = refine(groups, model.point(start, keys, derivatives=True), cox_reid=cox_reid)
     if fit.converged:
         return fit
-    rescue = _scipy_fit(groups, fit.point.phi)
-    second = refine(groups, model_point(rescue, designs, derivatives=True), cox_reid=cox_reid)
+    rescue = _scipy_fit(groups, fit.point.phi, model)
+    second = refine(groups, model.point(rescue, keys, derivatives=True), cox_reid=cox_reid)
     return second if second.value.nll <= fit.value.nll else fit

@@ -29,24 +29,156 @@ derivatives of the model are neglected, and the term's dependence on b is
 taken as 0). This is the adjusted profile likelihood of Cox and Reid (1987)
 for the variance rates with the mean parameters as nuisance; like REML it
 removes most of the small-sample downward bias of K_theta and K_rho.
+
+Other models. Everything here, in :mod:`~odohil.science.estimators.joint` and
+in :mod:`~odohil.science.estimators.intervals` works on any parameter vector
+phi described by a :class:`Layout` (which entries are log variance rates, which
+are the mean parameters of the Cox-Reid adjustment) and any moments keyed by
+a hashable key (a :class:`MomentModel`). The default, :data:`DESIGN_MODEL`, is
+the four-parameter model of forth-and-back designs keyed by
+:class:`~odohil.science.paths.Design`; the general-path model with turn errors
+(:mod:`odohil.science.estimators.paths`) keys each trial by its number and adds
+e_turn and log K_spin.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Hashable, Iterable, Sequence
+from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Protocol
 
 import numpy as np
 
-from odohil.science.estimators.observations import TrialGroup, align_heading
+from odohil.science.estimators.observations import align_heading
 from odohil.science.fisher import moment_derivatives
 from odohil.science.moments import pose_moments
-from odohil.science.parameters import ErrorParameters
+from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, EncoderPath, FloatArray
 
 _LOG_2PI = math.log(2.0 * math.pi)
+
+
+@dataclass(frozen=True)
+class Layout:
+    """What each entry of a parameter vector phi is.
+
+    Attributes:
+        names: the parameters' names, in order (SI values are phi, or exp(phi)
+            for the log rates).
+        log_rates: indices of the variance rates, held as their logarithms.
+        mean_index: indices of the mean parameters (the nuisance parameters of
+            the Cox-Reid adjustment).
+        floors: (index, lowest value) of the other parameters with a bound
+            (1 + E_T and 1 + e_turn stay positive).
+    """
+
+    names: tuple[str, ...]
+    log_rates: tuple[int, ...]
+    mean_index: tuple[int, ...]
+    floors: tuple[tuple[int, float], ...] = ()
+
+    @property
+    def size(self) -> int:
+        """Number of parameters."""
+        return len(self.names)
+
+    def to_si(self, phi: FloatArray) -> FloatArray:
+        """The SI values of phi (exp of the log rates)."""
+        out = np.array(phi, dtype=np.float64)
+        out[list(self.log_rates)] = np.exp(out[list(self.log_rates)])
+        return out
+
+    def jacobian(self, phi: FloatArray) -> FloatArray:
+        """d(SI values)/d(phi), diagonal."""
+        scale = np.ones(self.size)
+        rates = list(self.log_rates)
+        scale[rates] = np.exp(np.asarray(phi, dtype=np.float64)[rates])
+        return np.diag(scale)
+
+    def bounded(self, phi: FloatArray, low: float, high: float) -> FloatArray:
+        """phi with the log rates clipped to [low, high] and the floors applied."""
+        out = np.array(phi, dtype=np.float64)
+        rates = list(self.log_rates)
+        out[rates] = np.clip(out[rates], low, high)
+        for index, floor in self.floors:
+            out[index] = max(out[index], floor)
+        return out
+
+
+FOUR_PARAMETERS = Layout(PARAMETER_NAMES, (2, 3), (0, 1), ((1, -0.99),))
+"""phi = (E_R rad/m, E_T, log K_theta, log K_rho): the paper's model."""
+
+
+class GroupStats(Protocol):
+    """What the likelihood needs of a group of trials that share their model
+    moments and measurement covariance (:class:`~odohil.science.estimators.observations.TrialGroup`
+    for designs, one trial each for general paths)."""
+
+    @property
+    def key(self) -> Hashable:
+        """The key of the group's moments in a :class:`ModelPoint`."""
+        ...
+
+    @property
+    def reference(self) -> float:
+        """The heading the group's Delta are unwrapped near, rad."""
+        ...
+
+    @property
+    def n(self) -> int:
+        """Number of trials."""
+        ...
+
+    @property
+    def weight(self) -> float:
+        """Sum of the trials' weights."""
+        ...
+
+    @property
+    def total(self) -> FloatArray:
+        """Weighted sum of v, (3,)."""
+        ...
+
+    @property
+    def outer(self) -> FloatArray:
+        """Weighted sum of v v^T, (3, 3)."""
+        ...
+
+    @property
+    def measurement_cov(self) -> FloatArray:
+        """Mean measurement covariance, (3, 3)."""
+        ...
+
+
+class MomentModel(Protocol):
+    """Moments (and their phi-derivatives) of every key at a phi."""
+
+    @property
+    def layout(self) -> Layout:
+        """The parameter vector's layout."""
+        ...
+
+    def point(self, phi: FloatArray, keys: Iterable[Hashable], derivatives: bool) -> ModelPoint:
+        """The model at ``phi`` for ``keys``, with derivatives if asked."""
+        ...
+
+
+class _DesignModel:
+    """The four-parameter model of forth-and-back designs (keys: :class:`Design`)."""
+
+    @property
+    def layout(self) -> Layout:
+        return FOUR_PARAMETERS
+
+    def point(self, phi: FloatArray, keys: Iterable[Hashable], derivatives: bool) -> ModelPoint:
+        designs = [k for k in keys if isinstance(k, Design)]
+        return model_point(phi, designs, derivatives)
+
+
+DESIGN_MODEL: MomentModel = _DesignModel()
+"""The default model: :func:`model_point` of forth-and-back designs."""
 
 
 def to_phi(params: ErrorParameters) -> FloatArray:
@@ -61,36 +193,50 @@ def from_phi(phi: FloatArray) -> ErrorParameters:
     )
 
 
-def phi_jacobian(params: ErrorParameters) -> FloatArray:
-    """d(SI parameters)/d(phi): diag(1, 1, K_theta, K_rho)."""
-    return np.diag([1.0, 1.0, params.k_theta, params.k_rho])
-
-
 @dataclass(frozen=True)
 class ModelPoint:
-    """The model's moments of every design at one phi, with derivatives in phi.
+    """The model's moments of every design (key) at one phi, with derivatives in phi.
 
     Attributes:
-        phi: (4,) the point.
-        means: per design, (3,) mean of v.
-        covs: per design, (3, 3) model covariance of v.
-        d_means: per design, (4, 3) d mean / d phi (None when not computed).
-        d_covs: per design, (4, 3, 3) d cov / d phi (None when not computed).
+        phi: (p,) the point (p = 4 for :data:`FOUR_PARAMETERS`).
+        means: per key, (3,) mean of v.
+        covs: per key, (3, 3) model covariance of v.
+        d_means: per key, (p, 3) d mean / d phi (None when not computed).
+        d_covs: per key, (p, 3, 3) d cov / d phi (None when not computed).
         anchor: the phi where the derivatives were evaluated (``phi`` unless
             they were carried over from a nearby point by :func:`with_moments`).
+        model: the model that made it (to move to another phi).
     """
 
     phi: FloatArray
-    means: dict[Design, FloatArray]
-    covs: dict[Design, FloatArray]
-    d_means: dict[Design, FloatArray] | None
-    d_covs: dict[Design, FloatArray] | None
+    means: dict[Hashable, FloatArray]
+    covs: dict[Hashable, FloatArray]
+    d_means: dict[Hashable, FloatArray] | None
+    d_covs: dict[Hashable, FloatArray] | None
     anchor: FloatArray
+    model: MomentModel = field(default=DESIGN_MODEL, repr=False, compare=False)
+
+    @property
+    def layout(self) -> Layout:
+        """The parameter vector's layout."""
+        return self.model.layout
+
+    def moved(self, phi: FloatArray, derivatives: bool) -> ModelPoint:
+        """The same model at another phi, for the same keys."""
+        return self.model.point(phi, list(self.means), derivatives)
 
 
 def with_moments(point: ModelPoint, moved: ModelPoint) -> ModelPoint:
     """``moved``'s phi and moments with ``point``'s derivatives (and anchor)."""
-    return ModelPoint(moved.phi, moved.means, moved.covs, point.d_means, point.d_covs, point.anchor)
+    return ModelPoint(
+        moved.phi,
+        moved.means,
+        moved.covs,
+        point.d_means,
+        point.d_covs,
+        point.anchor,
+        moved.model,
+    )
 
 
 @lru_cache(maxsize=64)
@@ -103,10 +249,10 @@ def model_point(phi: FloatArray, designs: Iterable[Design], derivatives: bool) -
     """Evaluate the moments (and, if asked, their phi-derivatives) of each design."""
     params = from_phi(phi)
     scale = np.array([1.0, 1.0, params.k_theta, params.k_rho])
-    means: dict[Design, FloatArray] = {}
-    covs: dict[Design, FloatArray] = {}
-    d_means: dict[Design, FloatArray] = {}
-    d_covs: dict[Design, FloatArray] = {}
+    means: dict[Hashable, FloatArray] = {}
+    covs: dict[Hashable, FloatArray] = {}
+    d_means: dict[Hashable, FloatArray] = {}
+    d_covs: dict[Hashable, FloatArray] = {}
     for design in designs:
         if derivatives:
             d = moment_derivatives(design_path(design), params)
@@ -133,8 +279,8 @@ class LikelihoodValue:
 
     Attributes:
         nll: negative log-likelihood (inf where a covariance is singular).
-        gradient: (4,) d NLL / d phi, or None.
-        information: (4, 4) expected Fisher information in phi, or None.
+        gradient: (p,) d NLL / d phi, or None.
+        information: (p, p) expected Fisher information in phi, or None.
     """
 
     nll: float
@@ -142,17 +288,17 @@ class LikelihoodValue:
     information: FloatArray | None
 
 
-def _stack(groups: Sequence[TrialGroup], point: ModelPoint) -> tuple[FloatArray, ...]:
+def _stack(groups: Sequence[GroupStats], point: ModelPoint) -> tuple[FloatArray, ...]:
     n = np.array([g.weight for g in groups], dtype=np.float64)
     s = np.array([g.total for g in groups])
     t = np.array([g.outer for g in groups])
-    mu = np.array([align_heading(point.means[g.design], g.reference) for g in groups])
-    cov = np.array([point.covs[g.design] + g.measurement_cov for g in groups])
+    mu = np.array([align_heading(point.means[g.key], g.reference) for g in groups])
+    cov = np.array([point.covs[g.key] + g.measurement_cov for g in groups])
     return n, s, t, mu, cov
 
 
 def evaluate(
-    groups: Sequence[TrialGroup], point: ModelPoint, cox_reid: bool = False
+    groups: Sequence[GroupStats], point: ModelPoint, cox_reid: bool = False
 ) -> LikelihoodValue:
     """NLL of the grouped trials at ``point``; score and information too when
     ``point`` carries derivatives. ``cox_reid``: the adjusted NLL (see the
@@ -177,8 +323,8 @@ def evaluate(
     )
     if point.d_means is None or point.d_covs is None:
         return LikelihoodValue(nll, None, None)
-    d_mu = np.array([point.d_means[g.design] for g in groups])  # (G, 4, 3)
-    d_cov = np.array([point.d_covs[g.design] for g in groups])  # (G, 4, 3, 3)
+    d_mu = np.array([point.d_means[g.key] for g in groups])  # (G, p, 3)
+    d_cov = np.array([point.d_covs[g.key] for g in groups])  # (G, p, 3, 3)
     resid = s - n[:, None] * mu
     w = np.einsum("gij,gajk->gaik", inv, d_cov)  # S^-1 dS_a
     grad = (
@@ -189,7 +335,16 @@ def evaluate(
     mean_info = np.einsum("g,gai,gij,gbj->ab", n, d_mu, inv, d_mu)
     info = mean_info + 0.5 * np.einsum("g,gaij,gbji->ab", n, w, w)
     if cox_reid:
-        adjustment = _cox_reid(mean_info[:2, :2], n, d_mu, np.asarray(inv, np.float64), w)
+        layout = point.layout
+        mean_index = list(layout.mean_index)
+        adjustment = _cox_reid(
+            mean_info[np.ix_(mean_index, mean_index)],
+            n,
+            d_mu,
+            np.asarray(inv, np.float64),
+            w,
+            layout,
+        )
         if adjustment is not None:
             nll += adjustment[0]
             grad = grad + adjustment[1]
@@ -197,15 +352,23 @@ def evaluate(
 
 
 def _cox_reid(
-    info_bb: FloatArray, n: FloatArray, d_mu: FloatArray, inv: FloatArray, w: FloatArray
+    info_bb: FloatArray,
+    n: FloatArray,
+    d_mu: FloatArray,
+    inv: FloatArray,
+    w: FloatArray,
+    layout: Layout = FOUR_PARAMETERS,
 ) -> tuple[float, FloatArray] | None:
     """(1/2 log det I_bb, its gradient in phi), or None when I_bb is singular."""
     sign, logdet = np.linalg.slogdet(info_bb)
     if sign <= 0 or not math.isfinite(logdet):
         return None
     inv_bb = np.linalg.inv(info_bb)
-    # d I_bb / d phi_a = -sum W dmu_b^T S^-1 dS_a S^-1 dmu_c, for a = log K_theta, log K_rho
-    d_info = -np.einsum("g,gbi,gaij,gjk,gck->abc", n, d_mu[:, :2], w, inv, d_mu[:, :2])
-    grad = np.zeros(4)
-    grad[2:] = 0.5 * np.einsum("bc,acb->a", inv_bb, d_info[2:])
+    # d I_bb / d phi_a = -sum W dmu_b^T S^-1 dS_a S^-1 dmu_c, for a = the log rates
+    mean_index = list(layout.mean_index)
+    rates = list(layout.log_rates)
+    d_b = d_mu[:, mean_index]
+    d_info = -np.einsum("g,gbi,gaij,gjk,gck->abc", n, d_b, w[:, rates], inv, d_b)
+    grad = np.zeros(d_mu.shape[1])
+    grad[rates] = 0.5 * np.einsum("bc,acb->a", inv_bb, d_info)
     return 0.5 * float(logdet), grad

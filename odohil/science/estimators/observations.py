@@ -108,6 +108,11 @@ class TrialGroup:
     measurement_total: FloatArray = field(default_factory=lambda: np.zeros((3, 3)))
     weight: float = 0.0
 
+    @property
+    def key(self) -> Design:
+        """The group's key in a model point: its design."""
+        return self.design
+
     def unwrapped(self, pose_change: FloatArray) -> FloatArray:
         """The pose change with Delta within pi of the reference."""
         return align_heading(pose_change, self.reference)

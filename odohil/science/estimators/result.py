@@ -8,9 +8,12 @@ from typing import Any
 
 from scipy import special
 
+from odohil.science.estimators.misfit import MisfitCheck
 from odohil.science.estimators.verdict import TRUSTED, Verdict
-from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS, ErrorParameters
+from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters, si_unit
 
+VARIANCE_RATES = ("K_theta", "K_rho", "K_spin")
+"""The parameters that are variance rates (positive, intervals in log K)."""
 Z95 = 1.959963984540054
 _FOUR_SIGMA_UPPER = float(special.ndtr(4.0))
 """The 97.5 % quantile of the standard normal."""
@@ -66,10 +69,10 @@ class ParameterEstimate:
         wide_q = four_sigma_quantile(dof) if dof is not None else 4.0
         ci = _wald(name, value, stderr, quantile)
         wide = _wald(name, value, stderr, max(wide_q, quantile))
-        rule = "symmetric in log K" if name in ("K_theta", "K_rho") else "symmetric"
+        rule = "symmetric in log K" if name in VARIANCE_RATES else "symmetric"
         if dof is not None:
             rule += f", Student t (nu = {dof:.1f})"
-        return cls(name, value, stderr, ci, SI_UNITS[name], wide, f"Wald, {rule}", dof)
+        return cls(name, value, stderr, ci, si_unit(name), wide, f"Wald, {rule}", dof)
 
     def contains(self, truth: float, level: str = "4sigma") -> bool:
         """Whether ``truth`` lies in the interval at ``level`` (``95`` or
@@ -97,7 +100,7 @@ def four_sigma_quantile(dof: float) -> float:
 
 
 def _wald(name: str, value: float, stderr: float, q: float) -> tuple[float, float]:
-    if name in ("K_theta", "K_rho"):
+    if name in VARIANCE_RATES:
         if value > 0 and math.isfinite(stderr):
             spread = math.exp(min(q * stderr / value, 700.0))
             return (value / spread, value * spread)
@@ -251,14 +254,17 @@ class TrialDiagnostic:
         design: its design's label.
         clean_probability: the robust fit's probability that it is not an
             outlier (1 for the Gaussian methods).
-        influence: per parameter (E_R, E_T, K_theta, K_rho), how far leaving
-            it out moves the estimate, in standard errors.
+        influence: per parameter (E_R, E_T, K_theta, K_rho, then the turn
+            errors where fitted), how far leaving it out moves the estimate,
+            in standard errors.
+        names: the parameters of ``influence``, in order.
     """
 
     trial: int
     design: str
     clean_probability: float
-    influence: tuple[float, float, float, float]
+    influence: tuple[float, ...]
+    names: tuple[str, ...] = PARAMETER_NAMES
 
     def to_json_dict(self) -> dict[str, Any]:
         """{"trial", "design", "clean_probability", "influence": {name: SE}}."""
@@ -266,9 +272,7 @@ class TrialDiagnostic:
             "trial": self.trial,
             "design": self.design,
             "clean_probability": round(self.clean_probability, 6),
-            "influence": {
-                n: round(v, 4) for n, v in zip(PARAMETER_NAMES, self.influence, strict=True)
-            },
+            "influence": {n: round(v, 4) for n, v in zip(self.names, self.influence, strict=True)},
         }
 
 
@@ -281,9 +285,11 @@ class EstimateResult:
         n_trials: number of trials used.
         params: the point estimate (SI).
         parameters: per parameter value, stderr, interval (order E_R, E_T,
-            K_theta, K_rho).
-        covariance: (4 x 4) covariance of the estimate, SI.
-        correlation: (4 x 4) correlation matrix (nan where a stderr is inf).
+            K_theta, K_rho, then a general-path fit's turn errors: ``e_turn``
+            or ``e_turn_spin``/``e_turn_arc``/..., and ``K_spin``;
+            odohil/science/estimators/paths.py).
+        covariance: (p x p) covariance of the estimate, SI, in that order.
+        correlation: (p x p) correlation matrix (nan where a stderr is inf).
         model_check: see :class:`ModelCheck`.
         sufficiency: see :class:`Sufficiency`.
         notes: how the estimate was made (designs used, convergence).
@@ -293,6 +299,8 @@ class EstimateResult:
             beside the robust one (empty for the other methods).
         trials: per trial, its weight and influence (robust method).
         excluded: trial numbers left out on request.
+        misfit: the group-bias, spread and trial-order checks
+            (odohil/science/estimators/misfit.py), or None when not run.
     """
 
     method: str
@@ -309,15 +317,26 @@ class EstimateResult:
     gaussian: tuple[ParameterEstimate, ...] = ()
     trials: tuple[TrialDiagnostic, ...] = ()
     excluded: tuple[int, ...] = ()
+    misfit: MisfitCheck | None = None
 
     def parameter(self, name: str) -> ParameterEstimate:
-        """The estimate of one parameter by name."""
-        return self.parameters[PARAMETER_NAMES.index(name)]
+        """The estimate of one parameter by name (KeyError when it was not
+        estimated, e.g. ``e_turn`` of a four-parameter fit)."""
+        for estimate in self.parameters:
+            if estimate.name == name:
+                return estimate
+        raise KeyError(f"no parameter {name!r} in this estimate")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """The estimated parameters' names, in order (the four first)."""
+        return tuple(p.name for p in self.parameters)
 
     def to_json_dict(self) -> dict[str, Any]:
         """{"verdict", "method", "n_trials", "parameters", "correlation",
-        "model_check", "sufficiency", "notes", "excluded", and for the robust
-        method "gaussian_ml" and "trials"}, SI; non-finite numbers as null."""
+        "model_check", "sufficiency", "notes", "excluded", "misfit" (when run),
+        and for the robust method "gaussian_ml" and "trials"}, SI; non-finite
+        numbers as null."""
         out: dict[str, Any] = {
             "verdict": self.verdict.to_json_dict(),
             "method": self.method,
@@ -329,6 +348,8 @@ class EstimateResult:
             "notes": list(self.notes),
             "excluded": list(self.excluded),
         }
+        if self.misfit is not None:
+            out["misfit"] = self.misfit.to_json_dict()
         if self.gaussian:
             out["gaussian_ml"] = {p.name: p.to_json_dict() for p in self.gaussian}
         if self.trials:

@@ -21,6 +21,11 @@ inverse of the weighted expected information (outliers contribute nothing).
 Per-trial influence: how far leaving trial i out moves each parameter, in its
 standard errors, by one Newton step from the fit: I^-1 g_i, with g_i the
 trial's (weighted) score.
+
+The EM works on any trials behind the small :class:`RobustTrials` interface
+(:func:`robust_em`): the trials of forth-and-back designs here
+(:func:`robust_fit`), general-path trials in
+:mod:`odohil.science.estimators.paths`.
 """
 
 from __future__ import annotations
@@ -28,12 +33,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from odohil.science.estimators.checks import mahalanobis2
 from odohil.science.estimators.joint import JointFit, refine
-from odohil.science.estimators.likelihood import phi_jacobian
+from odohil.science.estimators.likelihood import GroupStats
 from odohil.science.estimators.observations import Observation, TrialGroup
 from odohil.science.estimators.scores import trial_scores
 from odohil.science.moments import pose_moments
@@ -62,11 +68,12 @@ class RobustFit:
         fit: the weighted, Cox-Reid adjusted fit at convergence.
         clean_probability: per trial (input order), the probability of the
             clean component, r_i.
-        influence: (n, 4) per trial, the change of each parameter (SI order
-            E_R, E_T, K_theta, K_rho) when it is left out, in standard errors.
-        scores: (n, 4) per trial, its weighted score in phi at the fit
+        influence: (n, p) per trial, the change of each parameter (SI order
+            E_R, E_T, K_theta, K_rho, then the layout's others) when it is
+            left out, in standard errors.
+        scores: (n, p) per trial, its weighted score in phi at the fit
             (odohil/science/estimators/scores.py).
-        information: (4, 4) the weighted expected information in phi at the fit.
+        information: (p, p) the weighted expected information in phi at the fit.
         em_iterations: EM iterations taken.
         converged: EM and the last M-step both converged.
     """
@@ -113,7 +120,6 @@ def _references(groups: Sequence[TrialGroup]) -> dict[Design, float]:
 
 def mixture_nll(observations: Sequence[Observation], params: ErrorParameters) -> float:
     """Negative log-likelihood of the mixture at ``params`` (constants dropped)."""
-    total = 0.0
     log_det: dict[tuple[Design, bytes], float] = {}
     d2 = mahalanobis2(observations, params)
     moments = {}
@@ -125,57 +131,105 @@ def mixture_nll(observations: Sequence[Observation], params: ErrorParameters) ->
             cov = moments[obs.design].cov + obs.measurement_cov
             sign, value = np.linalg.slogdet(0.5 * (cov + cov.T))
             log_det[key] = value if sign > 0 else math.inf
-    for obs, q in zip(observations, d2, strict=True):
-        clean = math.log1p(-EPSILON) - 0.5 * float(q)
-        broad = math.log(EPSILON) - 1.5 * math.log(INFLATION) - 0.5 * float(q) / INFLATION
-        total += 0.5 * log_det[(obs.design, obs.measurement_cov.tobytes())] - float(
-            np.logaddexp(clean, broad)
-        )
-    return total
+    dets = np.array([log_det[(o.design, o.measurement_cov.tobytes())] for o in observations])
+    return mixture_terms(d2, dets)
+
+
+class RobustTrials(Protocol):
+    """What the EM needs of a set of trials."""
+
+    def __len__(self) -> int:
+        """Number of trials."""
+        ...
+
+    def distances(self, fit: JointFit) -> FloatArray:
+        """Each trial's squared Mahalanobis distance from the model at ``fit``."""
+        ...
+
+    def groups(self, weights: FloatArray) -> Sequence[GroupStats]:
+        """The trials as likelihood groups, residuals weighted."""
+        ...
+
+    def scores(self, fit: JointFit, weights: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(n, p) weighted scores and (p, p) weighted information at ``fit``."""
+        ...
+
+    def mixture_nll(self, fit: JointFit) -> float:
+        """Negative log-likelihood of the mixture at ``fit`` (constants dropped)."""
+        ...
+
+
+@dataclass(frozen=True)
+class _DesignTrials:
+    """Trials of forth-and-back designs as :class:`RobustTrials`."""
+
+    observations: Sequence[Observation]
+    references: dict[Design, float]
+
+    def __len__(self) -> int:
+        return len(self.observations)
+
+    def distances(self, fit: JointFit) -> FloatArray:
+        return mahalanobis2(self.observations, fit.params)
+
+    def groups(self, weights: FloatArray) -> Sequence[GroupStats]:
+        return weighted_groups(self.observations, weights, self.references)
+
+    def scores(self, fit: JointFit, weights: FloatArray) -> tuple[FloatArray, FloatArray]:
+        return trial_scores(self.observations, fit.point.phi, weights)
+
+    def mixture_nll(self, fit: JointFit) -> float:
+        return mixture_nll(self.observations, fit.params)
+
+
+def mixture_terms(d2: FloatArray, log_det: FloatArray) -> float:
+    """The mixture's negative log-likelihood from each trial's squared
+    distance and log det of its covariance (constants dropped)."""
+    q = np.asarray(d2, dtype=np.float64)
+    clean = math.log1p(-EPSILON) - 0.5 * q
+    broad = math.log(EPSILON) - 1.5 * math.log(INFLATION) - 0.5 * q / INFLATION
+    return float((0.5 * np.asarray(log_det) - np.logaddexp(clean, broad)).sum())
 
 
 def robust_fit(
     observations: Sequence[Observation], groups: Sequence[TrialGroup], start: JointFit
 ) -> RobustFit:
-    """EM from ``start`` (the Gaussian fit of ``groups``, the unweighted trials),
-    and from the Gaussian fit without the trial farthest from it (a gross error
-    can drag the Gaussian fit so far that it no longer stands out, above all
-    at small n); the start whose EM ends at the lower mixture NLL wins."""
-    best = _em(observations, groups, start)
-    d2 = mahalanobis2(observations, start.params)
-    if len(observations) > 8 and float(d2.max()) > _RESTART_D2:
+    """EM from ``start`` (the Gaussian fit of ``groups``, the unweighted trials);
+    see :func:`robust_em`."""
+    return robust_em(_DesignTrials(observations, _references(groups)), start)
+
+
+def robust_em(trials: RobustTrials, start: JointFit) -> RobustFit:
+    """EM from ``start`` (the Gaussian fit of the unweighted trials), and from
+    the Gaussian fit without the trial farthest from it (a gross error can drag
+    the Gaussian fit so far that it no longer stands out, above all at small
+    n); the start whose EM ends at the lower mixture NLL wins."""
+    best = _em(trials, start)
+    d2 = trials.distances(start)
+    if len(trials) > 8 and float(d2.max()) > _RESTART_D2:
         worst = int(np.argmax(d2))
-        weights = np.ones(len(observations))
+        weights = np.ones(len(trials))
         weights[worst] = 1.0 / INFLATION
         try:
-            other = refine(
-                weighted_groups(observations, weights, _references(groups)),
-                start.point,
-                cox_reid=True,
-            )
-            second = _em(observations, groups, other)
+            other = refine(trials.groups(weights), start.point, cox_reid=True)
+            second = _em(trials, other)
         except (FloatingPointError, np.linalg.LinAlgError):
             return best
-        if mixture_nll(observations, second.fit.params) < mixture_nll(
-            observations, best.fit.params
-        ):
+        if trials.mixture_nll(second.fit) < trials.mixture_nll(best.fit):
             return second
     return best
 
 
-def _em(
-    observations: Sequence[Observation], groups: Sequence[TrialGroup], start: JointFit
-) -> RobustFit:
+def _em(trials: RobustTrials, start: JointFit) -> RobustFit:
     """EM from ``start``."""
-    references = _references(groups)
     fit = start
-    r = np.ones(len(observations))
+    r = np.ones(len(trials))
     converged = False
     iterations = 0
     for iterations in range(1, _MAX_EM + 1):  # noqa: B007
-        r = clean_probability(mahalanobis2(observations, fit.params))
+        r = clean_probability(trials.distances(fit))
         weights = r + (1.0 - r) / INFLATION
-        new = refine(weighted_groups(observations, weights, references), fit.point, cox_reid=True)
+        new = refine(trials.groups(weights), fit.point, cox_reid=True)
         assert new.value.information is not None
         step = new.point.phi - fit.point.phi
         moved = math.sqrt(max(0.0, float(step @ new.value.information @ step)))
@@ -184,7 +238,7 @@ def _em(
             converged = True
             break
     weights = r + (1.0 - r) / INFLATION
-    scores, information = trial_scores(observations, fit.point.phi, weights)
+    scores, information = trials.scores(fit, weights)
     return RobustFit(
         fit,
         r,
@@ -203,7 +257,7 @@ def influence(scores: FloatArray, information: FloatArray, fit: JointFit) -> Flo
     if not np.all(np.isfinite(fit.covariance)) or scores.shape[0] == 0:
         return out
     cov_phi = np.linalg.pinv(information)
-    jac = phi_jacobian(fit.params)
+    jac = fit.point.layout.jacobian(fit.point.phi)
     shift = (scores @ cov_phi.T) @ jac.T
     stderr = np.sqrt(np.clip(np.diag(jac @ cov_phi @ jac.T), 0.0, None))
     with np.errstate(divide="ignore", invalid="ignore"):

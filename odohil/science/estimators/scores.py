@@ -20,14 +20,16 @@ curvature overstates what they know about K (Royall 1986; Chandler and Bate
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 
 import numpy as np
 
-from odohil.science.estimators.joint import designs_of
 from odohil.science.estimators.likelihood import ModelPoint, model_point
-from odohil.science.estimators.observations import Observation, TrialGroup, align_heading
+from odohil.science.estimators.observations import Observation, align_heading
 from odohil.science.paths import FloatArray
+
+ScoredTrial = tuple[Hashable, FloatArray, FloatArray]
+"""(key of its moments in a model point, pose change (3,), measurement covariance (3, 3))."""
 
 
 def trial_scores(
@@ -36,21 +38,30 @@ def trial_scores(
     """(scores, information): the (n, 4) per-trial scores g_i in phi and the
     (4, 4) weighted expected information sum w_i I_i (mean part weighted,
     covariance part as in the robust M-step), both at ``phi``."""
-    n = len(observations)
-    designs = designs_of([TrialGroup(o.design, 0.0, n=1) for o in observations])
+    designs = list(dict.fromkeys(o.design for o in observations))
     point: ModelPoint = model_point(phi, designs, derivatives=True)
+    rows = [(o.design, o.pose_change, o.measurement_cov) for o in observations]
+    return point_scores(point, rows, weights)
+
+
+def point_scores(
+    point: ModelPoint, trials: Sequence[ScoredTrial], weights: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`trial_scores` of any model: (n, p) scores and (p, p) weighted
+    information at ``point`` (which carries derivatives for every key)."""
     assert point.d_means is not None
     assert point.d_covs is not None
-    scores = np.zeros((n, 4))
-    information = np.zeros((4, 4))
-    for i, obs in enumerate(observations):
+    n, size = len(trials), point.layout.size
+    scores = np.zeros((n, size))
+    information = np.zeros((size, size))
+    for i, (key, pose, measurement_cov) in enumerate(trials):
         w_i = float(weights[i])
-        mean = align_heading(point.means[obs.design], float(obs.pose_change[2]))
-        cov = point.covs[obs.design] + obs.measurement_cov
+        mean = align_heading(point.means[key], float(pose[2]))
+        cov = point.covs[key] + measurement_cov
         inv = np.linalg.inv(0.5 * (cov + cov.T))
-        resid = obs.pose_change - mean
-        d_mu = point.d_means[obs.design]
-        w = np.einsum("ij,ajk->aik", inv, point.d_covs[obs.design])  # S^-1 dS_a
+        resid = pose - mean
+        d_mu = point.d_means[key]
+        w = np.einsum("ij,ajk->aik", inv, point.d_covs[key])  # S^-1 dS_a
         inv_rr = w_i * inv @ np.outer(resid, resid)
         scores[i] = -w_i * d_mu @ inv @ resid + 0.5 * (
             np.einsum("aii->a", w) - np.einsum("aij,ji->a", w, inv_rr)
@@ -60,18 +71,18 @@ def trial_scores(
 
 
 def sandwich_ratio(scores: FloatArray, information: FloatArray) -> FloatArray:
-    """Per parameter, (J^-1 K J^-1)_kk / (J^-1)_kk with K = n / (n - 4) sum
-    g_i g_i^T (the usual small-sample correction for the four fitted
-    parameters); inf where the information is singular, nan with fewer than
-    five trials."""
-    n = scores.shape[0]
-    if n <= 4:
-        return np.full(4, np.nan)
+    """Per parameter, (J^-1 K J^-1)_kk / (J^-1)_kk with K = n / (n - p) sum
+    g_i g_i^T (the usual small-sample correction for the p fitted
+    parameters, 4 in the paper's model); inf where the information is
+    singular, nan with p or fewer trials."""
+    n, size = scores.shape
+    if n <= size:
+        return np.full(size, np.nan)
     try:
         cov = np.linalg.inv(information)
     except np.linalg.LinAlgError:
-        return np.full(4, np.inf)
-    spread = n / (n - 4.0) * scores.T @ scores
+        return np.full(size, np.inf)
+    spread = n / (n - float(size)) * scores.T @ scores
     sandwich = cov @ spread @ cov
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio: FloatArray = np.diag(sandwich) / np.diag(cov)
