@@ -55,7 +55,8 @@ from tests.wizard.test_wizard import _marks, _prompt, _spawn, _type_all
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
 RUN_PLAN = "k=0.5,l=0.2,n=2"
 """Two one-way 0.2 m trials (about 1.3 s of motion each): the fewest that estimate."""
-WIZARD_PLAN = "k=0.5,l=0.2,n=1"
+WIZARD_PLAN = "k=0.5,l=0.2,n=2"
+"""The same two trials: the wizard refuses a one-trial plan before anything moves."""
 
 
 @pytest.fixture(scope="module")
@@ -165,11 +166,14 @@ def _measurement_case(emulator: EmulatorProcess, tmp_path: Path, robot: Path, si
         child = _spawn(["--port", emulator.device, "--session", str(folder)])
         child.expect(_prompt(0))
         _type_all(child, values, "Trial 1 solved")
+        values = _marks(child, truth)  # trial 2
+        child.expect(_prompt(0))
+        _type_all(child, values, "Trial 2 solved")
         child.expect(pexpect.EOF)
         child.wait()
-        # one trial gives no estimate: the wizard says so and exits 3 (not trusted)
-        assert child.exitstatus == 3, (case, child.before)
-    _every_trial_once(folder, 1)
+        # two trials cannot pin four parameters: the estimate may be judged untrusted (3)
+        assert child.exitstatus in (0, 3), (case, child.before)
+    _every_trial_once(folder, 2)
 
 
 # -- which signals: every one whose default action ends the process ------------------
