@@ -10,14 +10,15 @@ Motion cases run ``odohil run --measure fake``; measurement cases run the
 wizard in a pseudo-terminal, whose distance prompt really waits.
 
 The ends nobody listed (:func:`test_every_other_end_stops_the_robot_within_half_a_second`):
-SIGUSR1, SIGUSR2, SIGALRM and SIGPIPE (caught: odohil's own stop path) and
+SIGUSR1, SIGUSR2, SIGALRM and SIGPIPE (caught: odohil's own stop path), SIGTSTP
+(Ctrl-Z: during a motion it takes the same path instead of suspending odohil) and
 kill -9 (uncatchable: the guardian's stop, odohil/driver/guardian.py) in the
 middle of a motion, on the fake Nomad (whose own watchdog would stop it after
 2 s: too late) and on the fake Create 2 (which has none). Through the truth
 socket's command log, a stop reaches the robot within 0.5 s of the signal; the
 robot is still once its braking time has passed and does not move afterwards;
 the journal is consistent, and a resume completes the session (after SIGUSR1,
-whose journal the other caught signals share, and after kill -9).
+whose journal the other caught signals share, after SIGTSTP and after kill -9).
 """
 
 from __future__ import annotations
@@ -240,7 +241,10 @@ def test_a_signal_someone_else_handles_or_ignores_is_left_to_them() -> None:
 
 # -- every other end: the signals nobody listed, and kill -9 ------------------------
 
-OTHER_ENDS = (signal.SIGUSR1, signal.SIGUSR2, signal.SIGALRM, signal.SIGPIPE, signal.SIGKILL)
+OTHER_ENDS = (
+    signal.SIGUSR1, signal.SIGUSR2, signal.SIGALRM, signal.SIGPIPE, signal.SIGTSTP, signal.SIGKILL,
+)  # fmt: skip
+"""SIGTSTP (Ctrl-Z) suspends by default: before, odohil froze and the Create 2 drove on."""
 STOP_WITHIN_S = 0.5
 """From the signal (odohil's end is later) to the stop reaching the robot, s."""
 
@@ -313,23 +317,29 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
     case = f"{signal.Signals(signum).name} mid-motion on the fake {fake.name}"
     folder = tmp_path / "session"
     command = [
-        ODOHIL, "run", "--port", fake.process.device, "--truth-socket", fake.process.truth_socket,
+        ODOHIL, "run", "--allow-few-trials",
+        "--port", fake.process.device, "--truth-socket", fake.process.truth_socket,
         "--robot", fake.robot, "--plan", fake.plan, "--measure", "fake",
         "--session", str(folder), "--json",
     ]  # fmt: skip
     process = subprocess.Popen(
         command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
     )
-    _wait_for(process, folder, ev.MOTION_START, 30)
-    deadline = time.monotonic() + 5
-    while not fake.moving_pose()[0]:
-        assert time.monotonic() < deadline, f"{case}: the robot never moved"
-        time.sleep(0.01)
-    time.sleep(0.2)
-    assert fake.moving_pose()[0], case
-    signalled = time.monotonic()
-    process.send_signal(signum)
-    _, err = process.communicate(timeout=30)
+    try:
+        _wait_for(process, folder, ev.MOTION_START, 30)
+        deadline = time.monotonic() + 5
+        while not fake.moving_pose()[0]:
+            assert time.monotonic() < deadline, f"{case}: the robot never moved"
+            time.sleep(0.01)
+        time.sleep(0.2)
+        assert fake.moving_pose()[0], case
+        signalled = time.monotonic()
+        process.send_signal(signum)
+        _, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:  # a suspended odohil (SIGTSTP before): the guardian stops it
+            process.kill()
+            process.wait()
     record_property("exit_seen_after_signal_s", round(time.monotonic() - signalled, 4))
     if signum == signal.SIGKILL:
         assert process.returncode == -signal.SIGKILL, (case, err)
@@ -366,7 +376,7 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
         assert [(r.data["trial"], r.data["attempt"]) for r in records if r.kind == ev.VOID] == [
             (1, 1)
         ], case
-    if signum not in (signal.SIGUSR1, signal.SIGKILL):
+    if signum not in (signal.SIGUSR1, signal.SIGTSTP, signal.SIGKILL):
         return  # the same journal as SIGUSR1's (and SIGTERM's, resumed above): spare the time
     resumed = subprocess.run(
         [ODOHIL, "resume", str(folder), "--json", "--from-here"],
