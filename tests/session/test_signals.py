@@ -43,8 +43,10 @@ from odohil.session import state as ev
 from odohil.session.journal import read_journal
 from odohil.session.signals import (
     HANDLED_SIGNALS,
+    MOTION_SIGNALS,
     RAISED_SIGNALS,
     SignalReceived,
+    motion_signals_raise,
     signal_name,
     signals_raise,
 )
@@ -217,6 +219,30 @@ def test_each_one_raises_the_same_way_out_and_is_named() -> None:
     assert taken >= len(_present(ENDING_BY_DEFAULT)) - 3  # SIGINT, SIGXFSZ, a runner's SIGALRM
     if hasattr(signal, "SIGRTMIN"):
         assert signal_name(signal.SIGRTMIN + 3) == "SIGRTMIN+3"
+
+
+def test_ctrl_z_raises_only_during_a_motion() -> None:
+    """SIGTSTP, SIGTTIN and SIGTTOU at their default raise within
+    :func:`motion_signals_raise` (the engine's drive) and get their default
+    back after it; one someone else handles is left to them."""
+    assert set(MOTION_SIGNALS) == _present(("SIGTSTP", "SIGTTIN", "SIGTTOU"))
+    assert all(signal.getsignal(s) == signal.SIG_DFL for s in MOTION_SIGNALS)
+    for signum in MOTION_SIGNALS:
+        with motion_signals_raise(), pytest.raises(SignalReceived) as caught:
+            signal.raise_signal(signum)
+        assert caught.value.signum == signum
+        assert signal.getsignal(signum) == signal.SIG_DFL
+
+    def theirs(signum: int, frame: object) -> None:
+        pass
+
+    previous = signal.signal(signal.SIGTSTP, theirs)
+    try:
+        with motion_signals_raise():
+            assert signal.getsignal(signal.SIGTSTP) is theirs
+            signal.raise_signal(signal.SIGTSTP)  # theirs: nothing raised
+    finally:
+        signal.signal(signal.SIGTSTP, previous)
 
 
 def test_a_signal_someone_else_handles_or_ignores_is_left_to_them() -> None:
