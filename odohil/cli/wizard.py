@@ -78,7 +78,12 @@ from odohil.session.engine import (
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
-from odohil.session.preflight import check_session_folder, check_turns, default_variant
+from odohil.session.preflight import (
+    check_estimable,
+    check_session_folder,
+    check_turns,
+    default_variant,
+)
 from odohil.session.robot import Robot
 from odohil.session.robot_file import load_robot_description, read_robot_toml
 from odohil.session.robots import open_robot
@@ -568,6 +573,16 @@ def plan_checks(plan: Plan, max_leg_m: float) -> list[Check]:
     return [Check("plan feasible", not problems, detail)]
 
 
+def estimable_check(plan: Plan, description: RobotDescription) -> Check:
+    """Can trials of this plan, all driven, give an estimate of the four
+    parameters (:func:`odohil.session.preflight.check_estimable`)?"""
+    try:
+        check_estimable(plan, description)
+    except OdohilError as exc:
+        return Check("plan estimable", False, str(exc))
+    return Check("plan estimable", True, "its trials can identify the four parameters")
+
+
 def floor_check(plan: Plan, description: RobotDescription) -> Check:
     """Does the plan fit the robot description's free floor ([floor] length_m)?"""
     try:
@@ -668,7 +683,12 @@ def _prepare(
     except OdohilError as exc:
         _fail(console, Check("plan feasible", False, str(exc)))
     warn_turns(console, plan, description)
-    for check in [*plan_checks(plan, max_leg_m), floor_check(plan, description)]:
+    checks = [
+        *plan_checks(plan, max_leg_m),
+        estimable_check(plan, description),
+        floor_check(plan, description),
+    ]
+    for check in checks:
         if not check.ok:
             _fail(console, check)
         console.print(check_line(check))

@@ -71,7 +71,12 @@ from odohil.session.plan import Plan
 from odohil.session.plausibility import far_window, judge
 from odohil.session.pose_source import MeasuredPose, PoseSource, TrialContext
 from odohil.session.robot import Robot, SampleCallback
-from odohil.session.signals import SignalReceived, signal_name, signals_held
+from odohil.session.signals import (
+    SignalReceived,
+    motion_signals_raise,
+    signal_name,
+    signals_held,
+)
 from odohil.session.sources import MeasurementSource, as_pose_source
 from odohil.session.start_pose import StartPose, check_start
 from odohil.session.state import (
@@ -546,8 +551,9 @@ class SessionEngine:
                 "start": start,
             },
         )
-        self._log(ev.MOTION_START, ids)
-        record = self.robot.drive(design, self.motion.drive_settings(), self.on_sample)
+        with motion_signals_raise():  # Ctrl-Z mid-motion stops the robot, not odohil alone
+            self._log(ev.MOTION_START, ids)
+            record = self.robot.drive(design, self.motion.drive_settings(), self.on_sample)
         opened = self.state.open_trial
         assert opened is not None
         ctx = replace(

@@ -42,7 +42,7 @@ from typing import Any
 
 from odohil.errors import JournalError
 from odohil.session.bounded_io import MIB, read_fd_bytes, read_file_bytes
-from odohil.session.signals import HANDLED_SIGNALS
+from odohil.session.signals import HELD_SIGNALS
 
 JOURNAL_NAME = "journal.jsonl"
 """File name of the journal inside a session folder."""
@@ -434,7 +434,7 @@ def _signals_deferred() -> Iterator[None]:
 
     previous = {
         signum: signal.signal(signum, hold)
-        for signum in HANDLED_SIGNALS
+        for signum in HELD_SIGNALS
         if signal.getsignal(signum) not in (signal.SIG_IGN, None)
     }
     try:

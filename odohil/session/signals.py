@@ -11,6 +11,17 @@ and the command exits with 128 + the signal number. While the robot is being
 stopped, :func:`signals_held` holds further signals back so that none of them
 skips the stop.
 
+The signals whose default action suspends the process (:data:`MOTION_SIGNALS`:
+SIGTSTP, Ctrl-Z; SIGTTIN and SIGTTOU, a background odohil reading or writing
+its terminal) would freeze odohil in the middle of a motion while the robot
+drives on (the Create 2 has no watchdog, and the guardian sees nothing: odohil
+still lives). So while a motion is under way (:func:`motion_signals_raise`,
+entered by the engine around each drive) they raise :class:`SignalReceived`
+too and end the session like SIGTERM (exit 128 + N, 148 for SIGTSTP; the
+session resumes as after any signal). Outside a motion the robot stands still
+and they keep their default: Ctrl-Z at a prompt suspends odohil as usual.
+SIGSTOP cannot be caught: only the robot's own watchdog (the Nomad's) covers it.
+
 The list is computed from the platform (:func:`signal.valid_signals`) less
 the signals whose default action does not end a process (ignore, stop,
 continue), SIGKILL and SIGSTOP (they cannot be caught), and the four a faulting
@@ -73,6 +84,16 @@ HANDLED_SIGNALS = ENDING_SIGNALS
 """Every signal that ends a session cleanly (held back during the stop)."""
 RAISED_SIGNALS = tuple(s for s in ENDING_SIGNALS if s != signal.SIGINT)
 """The signals :func:`signals_raise` turns into :class:`SignalReceived`."""
+MOTION_SIGNALS: tuple[int, ...] = tuple(
+    int(getattr(signal, name))
+    for name in ("SIGTSTP", "SIGTTIN", "SIGTTOU")
+    if hasattr(signal, name)
+)
+"""The catchable signals whose default action suspends the process: they end
+the session only during a motion (:func:`motion_signals_raise`)."""
+HELD_SIGNALS = (*HANDLED_SIGNALS, *MOTION_SIGNALS)
+"""Held back while the robot is stopped and while a journal record is written:
+a suspension there would leave the stop or the record half done."""
 
 
 def signal_name(signum: int) -> str:
@@ -136,11 +157,33 @@ def signals_raise() -> Iterator[None]:
 
 
 @contextlib.contextmanager
+def motion_signals_raise() -> Iterator[None]:
+    """Within (a motion): every signal of :data:`MOTION_SIGNALS` at its default
+    action raises :class:`SignalReceived` instead of suspending odohil while the
+    robot drives (main thread only; one someone else handles or ignores is left
+    to them; the previous handlers come back afterwards)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {
+        signum: signal.signal(signum, _raise)
+        for signum in MOTION_SIGNALS
+        if signal.getsignal(signum) in (signal.SIG_DFL, _raise)
+    }
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+@contextlib.contextmanager
 def signals_held() -> Iterator[list[int]]:
-    """Within: every handled signal is held back and only listed (the list is
-    yielded); the stop and the journal it guards are bounded in time, and the
-    exit status stays that of the first way out. Ignored signals stay ignored,
-    and so do handlers set outside Python."""
+    """Within: every handled signal (and Ctrl-Z, :data:`HELD_SIGNALS`) is held
+    back and only listed (the list is yielded); the stop and the journal it
+    guards are bounded in time, and the exit status stays that of the first
+    way out. Ignored signals stay ignored, and so do handlers set outside
+    Python."""
     if threading.current_thread() is not threading.main_thread():
         yield []
         return
@@ -151,7 +194,7 @@ def signals_held() -> Iterator[list[int]]:
 
     previous = {
         signum: signal.signal(signum, hold)
-        for signum in HANDLED_SIGNALS
+        for signum in HELD_SIGNALS
         if signal.getsignal(signum) not in (signal.SIG_IGN, None)
     }
     try:

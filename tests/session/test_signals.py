@@ -10,14 +10,15 @@ Motion cases run ``odohil run --measure fake``; measurement cases run the
 wizard in a pseudo-terminal, whose distance prompt really waits.
 
 The ends nobody listed (:func:`test_every_other_end_stops_the_robot_within_half_a_second`):
-SIGUSR1, SIGUSR2, SIGALRM and SIGPIPE (caught: odohil's own stop path) and
+SIGUSR1, SIGUSR2, SIGALRM and SIGPIPE (caught: odohil's own stop path), SIGTSTP
+(Ctrl-Z: during a motion it takes the same path instead of suspending odohil) and
 kill -9 (uncatchable: the guardian's stop, odohil/driver/guardian.py) in the
 middle of a motion, on the fake Nomad (whose own watchdog would stop it after
 2 s: too late) and on the fake Create 2 (which has none). Through the truth
 socket's command log, a stop reaches the robot within 0.5 s of the signal; the
 robot is still once its braking time has passed and does not move afterwards;
 the journal is consistent, and a resume completes the session (after SIGUSR1,
-whose journal the other caught signals share, and after kill -9).
+whose journal the other caught signals share, after SIGTSTP and after kill -9).
 """
 
 from __future__ import annotations
@@ -42,8 +43,10 @@ from odohil.session import state as ev
 from odohil.session.journal import read_journal
 from odohil.session.signals import (
     HANDLED_SIGNALS,
+    MOTION_SIGNALS,
     RAISED_SIGNALS,
     SignalReceived,
+    motion_signals_raise,
     signal_name,
     signals_raise,
 )
@@ -55,7 +58,8 @@ from tests.wizard.test_wizard import _marks, _prompt, _spawn, _type_all
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
 RUN_PLAN = "k=0.5,l=0.2,n=2"
 """Two one-way 0.2 m trials (about 1.3 s of motion each): the fewest that estimate."""
-WIZARD_PLAN = "k=0.5,l=0.2,n=1"
+WIZARD_PLAN = "k=0.5,l=0.2,n=2"
+"""The same two trials: the wizard refuses a one-trial plan before anything moves."""
 
 
 @pytest.fixture(scope="module")
@@ -165,11 +169,14 @@ def _measurement_case(emulator: EmulatorProcess, tmp_path: Path, robot: Path, si
         child = _spawn(["--port", emulator.device, "--session", str(folder)])
         child.expect(_prompt(0))
         _type_all(child, values, "Trial 1 solved")
+        values = _marks(child, truth)  # trial 2
+        child.expect(_prompt(0))
+        _type_all(child, values, "Trial 2 solved")
         child.expect(pexpect.EOF)
         child.wait()
-        # one trial gives no estimate: the wizard says so and exits 3 (not trusted)
-        assert child.exitstatus == 3, (case, child.before)
-    _every_trial_once(folder, 1)
+        # two trials cannot pin four parameters: the estimate may be judged untrusted (3)
+        assert child.exitstatus in (0, 3), (case, child.before)
+    _every_trial_once(folder, 2)
 
 
 # -- which signals: every one whose default action ends the process ------------------
@@ -214,6 +221,30 @@ def test_each_one_raises_the_same_way_out_and_is_named() -> None:
         assert signal_name(signal.SIGRTMIN + 3) == "SIGRTMIN+3"
 
 
+def test_ctrl_z_raises_only_during_a_motion() -> None:
+    """SIGTSTP, SIGTTIN and SIGTTOU at their default raise within
+    :func:`motion_signals_raise` (the engine's drive) and get their default
+    back after it; one someone else handles is left to them."""
+    assert set(MOTION_SIGNALS) == _present(("SIGTSTP", "SIGTTIN", "SIGTTOU"))
+    assert all(signal.getsignal(s) == signal.SIG_DFL for s in MOTION_SIGNALS)
+    for signum in MOTION_SIGNALS:
+        with motion_signals_raise(), pytest.raises(SignalReceived) as caught:
+            signal.raise_signal(signum)
+        assert caught.value.signum == signum
+        assert signal.getsignal(signum) == signal.SIG_DFL
+
+    def theirs(signum: int, frame: object) -> None:
+        pass
+
+    previous = signal.signal(signal.SIGTSTP, theirs)
+    try:
+        with motion_signals_raise():
+            assert signal.getsignal(signal.SIGTSTP) is theirs
+            signal.raise_signal(signal.SIGTSTP)  # theirs: nothing raised
+    finally:
+        signal.signal(signal.SIGTSTP, previous)
+
+
 def test_a_signal_someone_else_handles_or_ignores_is_left_to_them() -> None:
     def theirs(signum: int, frame: object) -> None:
         pass
@@ -236,7 +267,10 @@ def test_a_signal_someone_else_handles_or_ignores_is_left_to_them() -> None:
 
 # -- every other end: the signals nobody listed, and kill -9 ------------------------
 
-OTHER_ENDS = (signal.SIGUSR1, signal.SIGUSR2, signal.SIGALRM, signal.SIGPIPE, signal.SIGKILL)
+OTHER_ENDS = (
+    signal.SIGUSR1, signal.SIGUSR2, signal.SIGALRM, signal.SIGPIPE, signal.SIGTSTP, signal.SIGKILL,
+)  # fmt: skip
+"""SIGTSTP (Ctrl-Z) suspends by default: before, odohil froze and the Create 2 drove on."""
 STOP_WITHIN_S = 0.5
 """From the signal (odohil's end is later) to the stop reaching the robot, s."""
 
@@ -309,23 +343,29 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
     case = f"{signal.Signals(signum).name} mid-motion on the fake {fake.name}"
     folder = tmp_path / "session"
     command = [
-        ODOHIL, "run", "--port", fake.process.device, "--truth-socket", fake.process.truth_socket,
+        ODOHIL, "run", "--allow-few-trials",
+        "--port", fake.process.device, "--truth-socket", fake.process.truth_socket,
         "--robot", fake.robot, "--plan", fake.plan, "--measure", "fake",
         "--session", str(folder), "--json",
     ]  # fmt: skip
     process = subprocess.Popen(
         command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
     )
-    _wait_for(process, folder, ev.MOTION_START, 30)
-    deadline = time.monotonic() + 5
-    while not fake.moving_pose()[0]:
-        assert time.monotonic() < deadline, f"{case}: the robot never moved"
-        time.sleep(0.01)
-    time.sleep(0.2)
-    assert fake.moving_pose()[0], case
-    signalled = time.monotonic()
-    process.send_signal(signum)
-    _, err = process.communicate(timeout=30)
+    try:
+        _wait_for(process, folder, ev.MOTION_START, 30)
+        deadline = time.monotonic() + 5
+        while not fake.moving_pose()[0]:
+            assert time.monotonic() < deadline, f"{case}: the robot never moved"
+            time.sleep(0.01)
+        time.sleep(0.2)
+        assert fake.moving_pose()[0], case
+        signalled = time.monotonic()
+        process.send_signal(signum)
+        _, err = process.communicate(timeout=30)
+    finally:
+        if process.poll() is None:  # a suspended odohil (SIGTSTP before): the guardian stops it
+            process.kill()
+            process.wait()
     record_property("exit_seen_after_signal_s", round(time.monotonic() - signalled, 4))
     if signum == signal.SIGKILL:
         assert process.returncode == -signal.SIGKILL, (case, err)
@@ -362,7 +402,7 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
         assert [(r.data["trial"], r.data["attempt"]) for r in records if r.kind == ev.VOID] == [
             (1, 1)
         ], case
-    if signum not in (signal.SIGUSR1, signal.SIGKILL):
+    if signum not in (signal.SIGUSR1, signal.SIGTSTP, signal.SIGKILL):
         return  # the same journal as SIGUSR1's (and SIGTERM's, resumed above): spare the time
     resumed = subprocess.run(
         [ODOHIL, "resume", str(folder), "--json", "--from-here"],
