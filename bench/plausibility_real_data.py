@@ -27,6 +27,7 @@ from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.science.robot_description import ParameterPriors
 from odohil.session.plausibility import judge
 from odohil.session.pose_source import MeasuredPose, Pose
+from odohil.units import wrap_angle
 
 WHEEL_D_M, WHEEL_BASE_M, COUNTS_PER_TURN = 0.084, 0.20, 2796.8
 POSE_SIGMA = np.array([0.0005, 0.0005, 0.001])
@@ -50,8 +51,8 @@ def runs(folder: Path) -> list[tuple[Pose, Pose, list[tuple[float, ...]], float]
             path.append((float(row[0]), x, y, theta))
         if math.hypot(x, y) < 1.0:
             continue  # an in-place turn
-        encoders = (x, y, math.remainder(theta, 2 * math.pi))
-        true = (float(rows[-1, 1]), float(rows[-1, 2]), math.remainder(rows[-1, 3], 2 * math.pi))
+        encoders = (x, y, wrap_angle(theta))
+        true = (float(rows[-1, 1]), float(rows[-1, 2]), wrap_angle(float(rows[-1, 3])))
         farthest = float(np.hypot(rows[:, 1], rows[:, 2]).max())
         found.append((encoders, true, path, farthest))
     return found

@@ -11,6 +11,7 @@ import typer
 from rich.console import Console
 from rich.table import Table
 
+from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
 from odohil.cli.recording_options import (
     MAX_TIME_DIFF_DEFAULT,
@@ -49,8 +50,8 @@ def import_log(
         typer.Option(
             "--robot",
             callback=robot_callback,
-            help=ROBOT_HELP + " Its [robot] geometry turns wheel counts into odometry; its "
-            "[measurement] pose_sigma, if given, is the ground truth's accuracy.",
+            help=ROBOT_HELP + " Its \\[robot] geometry turns wheel counts into odometry; its "
+            "\\[measurement] pose_sigma, if given, is the ground truth's accuracy.",
         ),
     ],
     out: Annotated[
@@ -90,7 +91,10 @@ def import_log(
         err.print(f"[red]error:[/red] {exc}", highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     read_as = options.format or guess_format(logs)
-    table = Table(title=f"{written} trials from {len(logs)} log path(s), read as {read_as}")
+    table = Table(
+        title=f"{units.plural(written, 'trial')} from {units.plural(len(logs), 'log path')}, "
+        f"read as {read_as}"
+    )
     table.add_column("family")
     table.add_column("direction")
     table.add_column("trials", justify="right")
@@ -99,7 +103,9 @@ def import_log(
         table.add_row(family, direction, str(count), f"{distance:.3f}")
     console.print(table)
     total = sum(trial.path.distance_m for trial in trials)
-    console.print(f"wrote {written} trials ({total:.3f} m driven) to {out}", highlight=False)
+    console.print(
+        f"wrote {units.plural(written, 'trial')} ({total:.3f} m driven) to {out}", highlight=False
+    )
 
 
 def register(app: typer.Typer) -> None:

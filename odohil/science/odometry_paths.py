@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from odohil.errors import MeasurementError
+from odohil.science.frames import rotate_points
 from odohil.science.path_trials import Direction
 from odohil.science.paths import EncoderPath, FloatArray, Leg, Step, Turn, TurnKind
 from odohil.units import wrap_angle
@@ -113,10 +114,10 @@ def in_start_frame(poses: FloatArray) -> FloatArray:
     if not np.all(np.isfinite(poses)):
         raise MeasurementError("odometry poses must be finite")
     theta = np.unwrap(poses[:, 2])
-    x0, y0, t0 = poses[0, 0], poses[0, 1], theta[0]
-    c, s = math.cos(t0), math.sin(t0)
-    dx, dy = poses[:, 0] - x0, poses[:, 1] - y0
-    return np.stack([c * dx + s * dy, -s * dx + c * dy, theta - t0], axis=1)
+    t0 = theta[0]
+    offsets = poses[:, :2] - poses[0, :2]
+    x, y = rotate_points(np.array([-t0]), offsets)
+    return np.stack([x[0], y[0], theta - t0], axis=1)
 
 
 def integrate_ticks(

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from odohil import units
 from odohil.errors import OdohilError, TrialFileError
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import TURN_KINDS, EncoderPath, Leg, Step, Turn
@@ -209,7 +210,7 @@ def parse_path_trials(text: str, source: str = "trial file") -> list[PathTrial]:
             raise TrialFileError(f"{where}: not JSON: {exc.msg}") from None
         trials.append(_trial(record, where))
         if len(trials) > MAX_TRIALS:
-            raise TrialFileError(f"{source}: more than {MAX_TRIALS} trials")
+            raise TrialFileError(f"{source}: more than {units.plural(MAX_TRIALS, 'trial')}")
     expected = header.get("trials")
     if expected is not None and expected != len(trials):
         raise TrialFileError(

@@ -12,7 +12,10 @@ import typer
 from typer.testing import CliRunner
 
 from odohil import __version__
-from odohil.cli.app import COMMAND_MODULES, app
+from odohil.cli.app import app
+
+COMMANDS = sorted(typer.main.get_command(app).commands)  # type: ignore[attr-defined]
+"""Every command by the name a user types (``import`` lives in import_log.py)."""
 
 SECTION = re.compile(r"\[(serial|robot|floor|measurement|screws)\]")
 
@@ -31,7 +34,7 @@ def sources_of(command: str) -> list[str]:
     return texts
 
 
-@pytest.mark.parametrize("command", COMMAND_MODULES)
+@pytest.mark.parametrize("command", COMMANDS)
 def test_toml_section_names_are_printed(command: str) -> None:
     shown = help_of(command)
     wanted = {m.group(0) for text in sources_of(command) for m in SECTION.finditer(text)}
@@ -45,7 +48,7 @@ def test_section_names_reach_run_and_wizard_help() -> None:
     assert "robot.toml [serial] baud" in help_of("wizard")
 
 
-@pytest.mark.parametrize("command", ["", *COMMAND_MODULES])
+@pytest.mark.parametrize("command", ["", *COMMANDS])
 def test_flags_show_no_metavar(command: str) -> None:
     shown = help_of(*([command] if command else []))
     assert "<bool>" not in shown

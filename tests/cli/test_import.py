@@ -41,7 +41,7 @@ def test_a_csv_log_becomes_a_trial_file_with_a_summary(tmp_path: Path) -> None:
     result = invoke("import", _log(tmp_path, varied_motions()), "--robot", "create2", "--out", out)
     assert result.exit_code == 0, result.output
     text = flat(result)
-    assert "4 trials from 1 log path(s), read as csv" in text
+    assert "4 trials from 1 log path, read as csv" in text
     assert "straight forward 1 1.000" in text
     assert "spin cw 1" in text
     assert "straight backward 1 0.450" in text
@@ -94,7 +94,10 @@ def test_a_log_never_at_rest_exits_2_and_writes_nothing(tmp_path: Path) -> None:
     result = invoke("import", log, "--robot", "create2", "--out", out)
     assert result.exit_code == 2
     text = flat(result)
-    assert "log.csv: odo_x_m/odo_y_m/odo_theta_rad, true_x_m/true_y_m/true_theta_rad:" in text
+    # rich wraps a long path mid-word: compare without white space
+    assert "log.csv:odo_x_m/odo_y_m/odo_theta_rad,true_x_m/true_y_m/true_theta_rad:" in "".join(
+        text.split()
+    )
     assert "the robot is never at rest" in text
     assert not out.exists()
 
@@ -104,7 +107,7 @@ def test_a_missing_log_and_an_unknown_robot_exit_2(tmp_path: Path) -> None:
     result = invoke("import", tmp_path / "none.csv", "--robot", "create2", "--out", out)
     assert result.exit_code == 2
     assert "cannot read" in flat(result)
-    assert "none.csv" in flat(result)
+    assert "none.csv" in "".join(flat(result).split())
     result = invoke("import", tmp_path / "none.csv", "--robot", "nosuchrobot", "--out", out)
     assert result.exit_code == 2
     assert "--robot" in flat(result)

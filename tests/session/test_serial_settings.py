@@ -134,7 +134,7 @@ def test_an_unknown_robot_protocol_is_refused_before_anything_moves(tmp_path: Pa
             "--robot",
             str(robot),
             "--plan",
-            "k=1,l=1,n=2",
+            "k=0.5,l=1,n=2",
             "--measure",
             "fake",
             "--truth-socket",

@@ -54,6 +54,7 @@ from typing import Any, Literal, Protocol
 import numpy as np
 from scipy import special
 
+from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray, Turn
@@ -159,7 +160,9 @@ class BiasTest:
                 f"allows (F = {self.statistic:.3g}, {self.detail}, p = {self.p_value:.2g})"
             )
         where = (
-            f"all {self.n} trials" if self.group == "all" else f"the {self.n} {self.group} trials"
+            f"all {units.plural(self.n, 'trial')}"
+            if self.group == "all"
+            else f"the {units.plural(self.n, self.group + ' trial')}"
         )
         return (
             f"{axis} residual {self.size_text()} on {where} "
@@ -382,7 +385,10 @@ def _spread_test(
     _, cell, mean, count, se, turns = best
     axis_name = "heading" if AXES[axis] == "theta" else AXES[axis]
     size = _signed_text(AXES[axis], mean)
-    detail = f"most on the {count} {cell} trials: {axis_name} {size}; {g - 1} and {n - g} dof"
+    detail = (
+        f"most on the {units.plural(count, cell + ' trial')}: {axis_name} {size}; "
+        f"{g - 1} and {n - g} dof"
+    )
     return BiasTest("spread", "groups", AXES[axis], g, mean, se, f, p, detail=detail, turns=turns)
 
 
@@ -606,7 +612,9 @@ def path_misfit(
     ``parameter_cov`` is the covariance of the parameters the Jacobians are
     taken in, SI)."""
     if len(predictions) != len(trials):
-        raise ParameterError(f"{len(trials)} trials but {len(predictions)} predictions")
+        raise ParameterError(
+            f"{units.plural(len(trials), 'trial')} but {len(predictions)} predictions"
+        )
     n = len(trials)
     residuals = np.empty((n, 3))
     covs = np.empty((n, 3, 3))
