@@ -18,11 +18,35 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
+import numpy.typing as npt
 
 from odohil.errors import MeasurementError
 from odohil.science.paths import EncoderPath, FloatArray
 
 Direction = Literal["forward", "backward", "cw", "ccw", "mixed"]
+
+
+def checked_measurement(
+    where: str, pose_change: npt.ArrayLike, measurement_cov: npt.ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """A trial's measured pose change (3,) and its covariance (3, 3), checked:
+    finite, the covariance made symmetric and positive semi-definite.
+
+    Raises:
+        MeasurementError: naming ``where``.
+    """
+    pose = np.asarray(pose_change, dtype=np.float64).reshape(-1)
+    if pose.shape != (3,) or not np.all(np.isfinite(pose)):
+        raise MeasurementError(
+            f"{where}: the pose change must be 3 finite numbers, got {pose_change!r}"
+        )
+    cov = np.asarray(measurement_cov, dtype=np.float64)
+    if cov.shape != (3, 3) or not np.all(np.isfinite(cov)):
+        raise MeasurementError(f"{where}: the measurement covariance must be finite 3x3")
+    cov = 0.5 * (cov + cov.T)
+    if np.linalg.eigvalsh(cov)[0] < -1e-12 * max(1.0, float(np.abs(cov).max())):
+        raise MeasurementError(f"{where}: the measurement covariance is not positive semi-definite")
+    return pose, cov
 
 
 @dataclass(frozen=True)
@@ -54,20 +78,7 @@ class PathTrial:
     direction: Direction = "mixed"
 
     def __post_init__(self) -> None:
-        pose = np.asarray(self.pose_change, dtype=np.float64).reshape(-1)
-        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
-            raise MeasurementError(
-                f"{self.where()}: the pose change must be 3 finite numbers, "
-                f"got {self.pose_change!r}"
-            )
-        cov = np.asarray(self.measurement_cov, dtype=np.float64)
-        if cov.shape != (3, 3) or not np.all(np.isfinite(cov)):
-            raise MeasurementError(f"{self.where()}: the measurement covariance must be finite 3x3")
-        cov = 0.5 * (cov + cov.T)
-        if np.linalg.eigvalsh(cov)[0] < -1e-12 * max(1.0, float(np.abs(cov).max())):
-            raise MeasurementError(
-                f"{self.where()}: the measurement covariance is not positive semi-definite"
-            )
+        pose, cov = checked_measurement(self.where(), self.pose_change, self.measurement_cov)
         object.__setattr__(self, "pose_change", pose)
         object.__setattr__(self, "measurement_cov", cov)
 

@@ -267,7 +267,7 @@ def test_a_log_without_any_labelled_row_has_no_trial(tmp_path: Path) -> None:
 
 
 def test_not_a_regular_file_is_refused_before_reading(tmp_path: Path) -> None:
-    with pytest.raises(RecordingError, match=r"not a regular file"):
+    with pytest.raises(RecordingError, match=r"is a directory: odohil reads only regular files"):
         read_recording([tmp_path], _robot(tmp_path), CSV)
     with pytest.raises(RecordingError, match=r"cannot read .*nothing.csv"):
         read_recording([tmp_path / "nothing.csv"], _robot(tmp_path), CSV)

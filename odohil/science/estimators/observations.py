@@ -20,8 +20,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from odohil.errors import MeasurementError
 from odohil.science.grouping import by_design
+from odohil.science.path_trials import checked_measurement
 from odohil.science.paths import Design, FloatArray
 from odohil.units import angle_near, circular_mean
 
@@ -49,20 +49,7 @@ class Observation:
     trial: int | None = None
 
     def __post_init__(self) -> None:
-        pose = np.asarray(self.pose_change, dtype=np.float64).reshape(-1)
-        if pose.shape != (3,) or not np.all(np.isfinite(pose)):
-            raise MeasurementError(
-                f"{self.where()}: the pose change must be 3 finite numbers, "
-                f"got {self.pose_change!r}"
-            )
-        cov = np.asarray(self.measurement_cov, dtype=np.float64)
-        if cov.shape != (3, 3) or not np.all(np.isfinite(cov)):
-            raise MeasurementError(f"{self.where()}: the measurement covariance must be finite 3x3")
-        cov = 0.5 * (cov + cov.T)
-        if np.linalg.eigvalsh(cov)[0] < -1e-12 * max(1.0, float(np.abs(cov).max())):
-            raise MeasurementError(
-                f"{self.where()}: the measurement covariance is not positive semi-definite"
-            )
+        pose, cov = checked_measurement(self.where(), self.pose_change, self.measurement_cov)
         object.__setattr__(self, "pose_change", pose)
         object.__setattr__(self, "measurement_cov", cov)
 

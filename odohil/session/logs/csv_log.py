@@ -34,7 +34,7 @@ from odohil.errors import RecordingError
 from odohil.science.odometry_paths import integrate_ticks
 from odohil.science.path_trials import PathTrial
 from odohil.science.robot_description import RobotDescription
-from odohil.session.logs.files import read_text
+from odohil.session.logs.files import finite_number, read_text
 from odohil.session.logs.recording import ImportOptions, Recording, check_increasing, trials_of
 
 TIME_COLUMN = "t_s"
@@ -76,16 +76,6 @@ def _header(path: Path, fields: list[str], line: int) -> tuple[str, ...]:
     return names
 
 
-def _number(path: Path, line: int, name: str, text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not math.isfinite(value):
-        raise RecordingError(f"{path} line {line}: {name}: not a finite number: {text!r}")
-    return value
-
-
 def read_csv_log(path: Path, description: RobotDescription) -> Recording:
     """One odohil log CSV as a recording (module docstring).
 
@@ -112,16 +102,16 @@ def read_csv_log(path: Path, description: RobotDescription) -> Recording:
                 f"{path} line {number}: {len(fields)} fields; the header names {len(names)}"
             )
         row = dict(zip(names, (field.strip() for field in fields), strict=True))
-        times.append(_number(path, number, TIME_COLUMN, row[TIME_COLUMN]))
+        times.append(finite_number(path, number, TIME_COLUMN, row[TIME_COLUMN]))
         odo_names = POSE_COLUMNS if POSE_COLUMNS[0] in row else TICK_COLUMNS
-        odometry.append([_number(path, number, name, row[name]) for name in odo_names])
+        odometry.append([finite_number(path, number, name, row[name]) for name in odo_names])
         given = [row[name] for name in TRUTH_COLUMNS]
         if all(value == "" for value in given):
             truth.append([math.nan] * 3)
         else:
             truth.append(
                 [
-                    _number(path, number, name, value)
+                    finite_number(path, number, name, value)
                     for name, value in zip(TRUTH_COLUMNS, given, strict=True)
                 ]
             )

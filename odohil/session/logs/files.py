@@ -7,53 +7,54 @@ it is opened: a typo on the command line must not hang or exhaust the machine.
 
 from __future__ import annotations
 
-import os
-import stat
+import math
 from pathlib import Path
 
 from odohil.errors import RecordingError
+from odohil.session.bounded_io import check_regular_file, read_file_text
 
 MAX_TEXT_BYTES = 512 * 1024 * 1024
 """Largest text log read, bytes (about 5 million rows of a CSV log)."""
+MAX_LINE_BYTES = 64 * 1024
+"""Longest line of a text log read, bytes."""
 MAX_BAG_BYTES = 16 * 1024 * 1024 * 1024
 """Largest bag file read, bytes (a bag is read message by message)."""
 
 
 def check_regular(path: Path, max_bytes: int) -> int:
-    """The size of the regular file ``path`` in bytes.
+    """The size of the regular file ``path`` in bytes (never opened).
 
     Raises:
         RecordingError: no such file, not a regular file, or larger than
             ``max_bytes``; the message names the file.
     """
-    try:
-        info = os.stat(path)
-    except OSError as exc:
-        raise RecordingError(f"cannot read {path}: {exc.strerror or exc}") from None
-    if not stat.S_ISREG(info.st_mode):
-        raise RecordingError(f"cannot read {path}: not a regular file")
-    if info.st_size > max_bytes:
-        raise RecordingError(
-            f"cannot read {path}: {info.st_size} bytes; at most {max_bytes} bytes are read"
-        )
-    return info.st_size
+    return check_regular_file(path, "log", RecordingError, max_bytes).st_size
 
 
 def read_text(path: Path, max_bytes: int = MAX_TEXT_BYTES) -> str:
-    """The UTF-8 text of the regular file ``path``, at most ``max_bytes``.
+    """The UTF-8 text of the regular file ``path``, at most ``max_bytes``, read
+    in bounded pieces (odohil/session/bounded_io.py).
 
     Raises:
-        RecordingError: see :func:`check_regular`, or the file is not UTF-8 text.
+        RecordingError: see :func:`check_regular`, a line longer than
+            :data:`MAX_LINE_BYTES`, or the file is not UTF-8 text.
     """
-    check_regular(path, max_bytes)
+    return read_file_text(
+        path, what="log", max_bytes=max_bytes, error=RecordingError, max_line_bytes=MAX_LINE_BYTES
+    )
+
+
+def finite_number(path: Path, line: int, name: str, text: str) -> float:
+    """The finite number ``text`` of field ``name`` on line ``line`` of ``path``.
+
+    Raises:
+        RecordingError: not a number, or not finite; the message names the
+            file, the line and the field.
+    """
     try:
-        with open(path, "rb") as stream:
-            data = stream.read(max_bytes + 1)
-    except OSError as exc:
-        raise RecordingError(f"cannot read {path}: {exc.strerror or exc}") from None
-    if len(data) > max_bytes:
-        raise RecordingError(f"cannot read {path}: more than {max_bytes} bytes")
-    try:
-        return data.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise RecordingError(f"{path}: not UTF-8 text (byte {exc.start})") from None
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise RecordingError(f"{path} line {line}: {name}: not a finite number: {text.strip()!r}")
+    return value

@@ -33,7 +33,7 @@ from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.odometry_paths import integrate_ticks
 from odohil.science.path_trials import PathTrial
 from odohil.science.robot_description import RobotDescription
-from odohil.session.logs.files import read_text
+from odohil.session.logs.files import finite_number, read_text
 from odohil.session.logs.recording import ImportOptions, Recording, check_increasing, trials_of
 
 OPTIODOM_GEOMETRY = DiffDriveGeometry(
@@ -135,17 +135,10 @@ def read_run(path: Path) -> Recording:
                 f"{path} line {number}: {len(fields)} columns; a run row has "
                 f"{len(RUN_COLUMNS)} ({', '.join(RUN_COLUMNS)})"
             )
-        values = []
-        for name, field in zip(RUN_COLUMNS, fields, strict=True):
-            try:
-                value = float(field)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise RecordingError(
-                    f"{path} line {number}: {name}: not a finite number: {field.strip()!r}"
-                )
-            values.append(value)
+        values = [
+            finite_number(path, number, name, field)
+            for name, field in zip(RUN_COLUMNS, fields, strict=True)
+        ]
         rows.append(values)
         where.append(number)
     if not rows:

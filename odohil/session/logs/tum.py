@@ -22,7 +22,7 @@ from odohil.errors import RecordingError
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
-from odohil.session.logs.files import read_text
+from odohil.session.logs.files import finite_number, read_text
 from odohil.session.logs.recording import (
     ImportOptions,
     IntArray,
@@ -65,17 +65,10 @@ def read_tum(path: Path) -> tuple[FloatArray, FloatArray, IntArray]:
                 f"{path} line {number}: {len(fields)} fields; a TUM line has "
                 f"{len(FIELDS)}: {' '.join(FIELDS)}"
             )
-        values = []
-        for name, field in zip(FIELDS, fields, strict=True):
-            try:
-                value = float(field)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise RecordingError(
-                    f"{path} line {number}: {name}: not a finite number: {field!r}"
-                )
-            values.append(value)
+        values = [
+            finite_number(path, number, name, field)
+            for name, field in zip(FIELDS, fields, strict=True)
+        ]
         t, x, y, _, qx, qy, qz, qw = values
         norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
         if abs(norm - 1.0) > QUATERNION_TOLERANCE:
