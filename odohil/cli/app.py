@@ -7,8 +7,10 @@ to ``COMMAND_MODULES`` to expose it.
 from __future__ import annotations
 
 import importlib
+from typing import Any
 
 import typer
+from typer.core import TyperGroup
 
 from odohil import __version__
 
@@ -29,10 +31,38 @@ COMMAND_MODULES: tuple[str, ...] = (
     "import_log",
 )
 
+
+def _no_flag_metavars(command: Any, ctx: Any) -> None:
+    """A flag takes no value: show no type beside it (typer shows ``<bool>``);
+    ``--help`` included."""
+    if command is None:
+        return
+    for param in command.get_params(ctx):
+        if getattr(param, "is_flag", False):
+            param.metavar = ""
+
+
+class OdohilGroup(TyperGroup):
+    """The ``odohil`` group: its commands' help shows no metavar on flags."""
+
+    def get_command(self, ctx: Any, cmd_name: str) -> Any:
+        """The command ``cmd_name``, its flags without metavar."""
+        command = super().get_command(ctx, cmd_name)
+        _no_flag_metavars(command, ctx)
+        return command
+
+    def format_help(self, ctx: Any, formatter: Any) -> None:
+        """The group's help, its own flags without metavar."""
+        _no_flag_metavars(self, ctx)
+        super().format_help(ctx, formatter)
+
+
 app = typer.Typer(
     name="odohil",
-    help="Calibrate the odometry error of a synchronous-drive mobile robot "
-    "(Martinelli's E_R, E_T, K_theta, K_rho) with the robot in the loop.",
+    cls=OdohilGroup,
+    help="Calibrate the odometry error of a mobile robot (Martinelli's E_R, E_T, "
+    "K_theta, K_rho) with the robot in the loop: a synchronous drive (the Nomad 150) "
+    "or a differential drive (the iRobot Create 2), or another through a robot backend.",
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -48,7 +78,12 @@ def _version(value: bool) -> None:
 @app.callback()
 def _root(
     version: bool = typer.Option(
-        False, "--version", callback=_version, is_eager=True, help="Show the version and exit."
+        False,
+        "--version",
+        "-V",
+        callback=_version,
+        is_eager=True,
+        help="Show the version and exit.",
     ),
 ) -> None:
     """Calibrate odometry: predict, simulate, talk to the robot, estimate."""

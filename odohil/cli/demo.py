@@ -75,7 +75,7 @@ def demo(
         typer.Option(
             "--robot",
             help="Which fake robot: nomad150 or create2, or a robot description file whose "
-            "[robot] protocol is one of them (docs/create2.md).",
+            "\\[robot] protocol is one of them (docs/create2.md).",
         ),
     ] = "nomad150",
 ) -> None:

@@ -1,7 +1,8 @@
-"""``odohil emulate``: serve a fake Nomad 150 on a pseudo-terminal.
+"""``odohil emulate``: serve a fake robot (the Nomad 150 or the Create 2) on a
+pseudo-terminal.
 
-The fake (fakes/nomad/) is imported only when the command runs, so that no
-other ``odohil`` command loads it.
+The fake (fakes/nomad/, fakes/create2/) is imported only when the command
+runs, so that no other ``odohil`` command loads it.
 """
 
 from __future__ import annotations
@@ -25,8 +26,8 @@ from odohil.cli.options import (
     bounded,
 )
 from odohil.cli.robot_option import robot_protocol
-from odohil.driver.nomad.link import DEFAULT_BAUD
 from odohil.errors import OdohilError
+from odohil.session.robots import find_backend
 
 _FAULT_HELP = (
     "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
@@ -38,8 +39,8 @@ def emulate(
     robot: str = typer.Option(
         "nomad150",
         "--robot",
-        help="Which fake: nomad150 or create2 (docs/create2.md; default line rate 115200), "
-        "or a robot description file whose [robot] protocol is one of them.",
+        help="Which fake: nomad150 or create2 (docs/create2.md), "
+        "or a robot description file whose \\[robot] protocol is one of them.",
     ),
     seed: int | None = typer.Option(
         None, "--seed", callback=bounded("seed"), help="Seed of the odometry noise."
@@ -54,11 +55,12 @@ def emulate(
         callback=bounded("time_scale"),
         help="Simulated seconds per wall second (motion, zr, timestamp).",
     ),
-    baud: int = typer.Option(
-        DEFAULT_BAUD,
+    baud: int | None = typer.Option(
+        None,
         "--baud",
         callback=bounded("baud"),
-        help="Line rate (pacing and the pty speed).",
+        help="Line rate (pacing and the pty speed); default: the robot's own "
+        "(its backend's default baud).",
     ),
     pacing: bool = typer.Option(
         True, "--pacing/--no-pacing", help="Carry bytes at the line rate in both directions."
@@ -69,7 +71,8 @@ def emulate(
     ),
     verbose: bool = typer.Option(False, "--verbose", help="Log protocol events to stderr."),
 ) -> None:
-    """Serve a fake Nomad 150 on a pseudo-terminal until Ctrl-C.
+    """Serve a fake robot on a pseudo-terminal until Ctrl-C: the Nomad 150, or
+    with --robot create2 the Create 2.
 
     Prints the device path (first line) and the truth socket path (second line).
     """
@@ -80,6 +83,8 @@ def emulate(
         _check_socket_path(truth_socket)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
     robot = robot_protocol(robot)
+    if baud is None:
+        baud = find_backend(robot).default_baud
     if robot == "create2":
         _emulate_create2(
             seed, (e_r, e_t, k_theta, k_rho), time_scale, baud, pacing, fault, truth_socket
@@ -112,10 +117,9 @@ def _emulate_create2(
     truth_socket: str | None,
 ) -> None:
     """``--robot create2``: the fake Create 2 (fakes/create2/), same two lines
-    and truth socket; the Nomad's default line rate means the Create 2's 115200."""
+    and truth socket."""
     from fakes.create2.config import build_config as build_create2
     from fakes.create2.run import run_emulator as run_create2
-    from odohil.protocol.create2.opcodes import DEFAULT_BAUD as CREATE2_BAUD
     from odohil.science.parameters import ErrorParameters
 
     try:
@@ -123,7 +127,7 @@ def _emulate_create2(
             seed=seed,
             params=ErrorParameters.from_paper_units(*paper),
             time_scale=time_scale,
-            baud=CREATE2_BAUD if baud == DEFAULT_BAUD else baud,
+            baud=baud,
             faults=fault or [],
         )
     except OdohilError as exc:

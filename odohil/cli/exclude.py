@@ -3,9 +3,10 @@ journal or file keeps every trial)."""
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-
 from odohil.errors import MeasurementError
+from odohil.session.outcome import check_exclude
+
+__all__ = ["EXCLUDE_HELP", "check_exclude", "parse_exclude"]
 
 EXCLUDE_HELP = (
     "Trial numbers to leave out of the estimate, comma-separated (e.g. 3,17); "
@@ -32,19 +33,3 @@ def parse_exclude(text: str | None) -> frozenset[int]:
             )
         numbers.add(int(item))
     return frozenset(numbers)
-
-
-def check_exclude(numbers: Iterable[int], available: Iterable[int]) -> None:
-    """Every excluded number must be a trial's.
-
-    Raises:
-        MeasurementError: naming ``--exclude`` and the trial numbers accepted.
-    """
-    have = sorted(set(available))
-    missing = sorted(set(numbers) - set(have))
-    if missing:
-        span = f"{have[0]}..{have[-1]}" if have else "none yet"
-        raise MeasurementError(
-            f"--exclude: no trial numbered {', '.join(str(t) for t in missing)} "
-            f"(the trials are numbered {span})"
-        )

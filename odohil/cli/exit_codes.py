@@ -5,9 +5,14 @@
 | 0 | done; an estimate, if one is printed, is trusted |
 | 1 | an error stopped the command (the message says which) |
 | 2 | bad input: an option, file or session that cannot be used; nothing moved |
-| 3 | an estimate is printed but its verdict is doubtful or failed |
+| 3 | not trusted or no estimate (nothing exported without --force) |
 | 4 | the robot's stop could not be confirmed: it may still be moving |
 | 128 + N | ended by signal N after the robot was stopped |
+
+Status 3: the verdict is doubtful or failed, or the trials give no estimate
+(too few, or every one left out); for report and export also a trusted
+estimate too imprecise to export (odohil/session/outcome.py). Every command
+that estimates maps its outcome through :func:`exit_for_outcome`.
 
 128 + N: 130 Ctrl-C (SIGINT), 143 SIGTERM, 129 SIGHUP, 131 SIGQUIT.
 """
@@ -15,6 +20,8 @@
 from __future__ import annotations
 
 import signal
+
+from odohil.session.outcome import EstimateOutcome
 
 EXIT_OK = 0
 EXIT_ERROR = 1
@@ -27,3 +34,10 @@ EXIT_INTERRUPTED = 128 + signal.SIGINT
 def exit_for_signal(signum: int) -> int:
     """The exit status after a signal ended the command (128 + the signal number)."""
     return 128 + int(signum)
+
+
+def exit_for_outcome(outcome: EstimateOutcome, export: bool = False) -> int:
+    """The exit status of a command that estimates: 0 when the estimate is
+    trusted (and, for a command that exports, precise enough to export), else 3."""
+    ok = outcome.exportable if export else outcome.trusted
+    return EXIT_OK if ok else EXIT_UNTRUSTED

@@ -9,14 +9,13 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil.cli.estimate import observation_of
-from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
+from odohil.cli.estimate import load_outcome
+from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
 from odohil.cli.options import bounded
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback, turns_exact_of
-from odohil.cli.verdict import verdict_line
+from odohil.cli.robot_option import ROBOT_HELP, robot_callback
+from odohil.cli.verdict import export_refusal_lines, outcome_line
 from odohil.errors import OdohilError
-from odohil.science.estimators import EstimateResult, estimate
 from odohil.science.exports import (
     DEFAULT_RATE_HZ,
     DEFAULT_UPDATE_MIN_A_RAD,
@@ -26,9 +25,6 @@ from odohil.science.exports import (
 from odohil.science.limits import RANGES
 from odohil.science.planner import DEFAULT_SPEED_M_PER_S
 from odohil.session.exports import export_text
-from odohil.session.robot_file import load_robot_description
-from odohil.session.state import load_session_trials
-from odohil.session.trial_files import read_trials
 
 SPEED_RANGE = RANGES["speed"]
 RATE_RANGE = RANGES["rate_hz"]
@@ -44,31 +40,6 @@ class FormatChoice(StrEnum):
     robot_localization = "robot-localization"
     amcl = "amcl"
     json = "json"
-
-
-def load_estimate(source: Path, robot: Path | None, exclude: frozenset[int]) -> EstimateResult:
-    """The default (robust) estimate of a session folder or a trial file, as
-    ``odohil estimate`` makes it (ambiguous trials left out and named).
-
-    Raises:
-        OdohilError: unreadable source, no trials, or a bad --exclude.
-    """
-    if source.is_dir():
-        trials = load_session_trials(source)
-    else:
-        description = load_robot_description(robot) if robot is not None else None
-        trials = read_trials(source, description)
-    if len(trials) == 0:
-        raise OdohilError(f"{source}: no trials")
-    rows = sorted((*trials.trials, *trials.ambiguous), key=lambda t: t.line)
-    position = {t.line: i for i, t in enumerate(rows)}
-    observations = [observation_of(t, position[t.line]) for t in trials.trials]
-    ambiguous = [
-        t.number if t.number is not None else position[t.line] + 1 for t in trials.ambiguous
-    ]
-    check_exclude(exclude, [o.trial for o in observations if o.trial is not None])
-    turns_exact = turns_exact_of(source, robot)
-    return estimate(observations, exclude=exclude, ambiguous=ambiguous, turns_exact=turns_exact)
 
 
 def export(
@@ -133,22 +104,33 @@ def export(
 ) -> None:
     """Write the estimate in the shape a fusion stack takes (docs/exports.md).
 
-    An estimate that is not trusted is refused (exit 3, nothing written)
-    unless --force; exit 2 on bad input.
+    An estimate that is not trusted, none at all, or one too imprecise to
+    export (a design below the planner's minimum trials, a correction whose
+    95 % interval is wider than itself) is refused (exit 3, nothing
+    written) unless --force (no estimate is refused even then); exit 2 on
+    bad input.
     """
     lin = Linearisation(speed, rate_hz, update_min_d, update_min_a)
     err = Console(stderr=True)
     try:
-        result = load_estimate(source, robot, parse_exclude(exclude))
+        outcome = load_outcome(source, robot, parse_exclude(exclude), err)
     except (OdohilError, OSError) as exc:
         err.print(f"[red]error:[/red] {exc}", highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None
-    if not result.verdict.trusted and not force:
-        err.print(verdict_line(result.verdict), highlight=False)
+    result = outcome.result
+    if result is None:
+        err.print(outcome_line(outcome), highlight=False)
+        err.print("[red]refused:[/red] no estimate to export; nothing written.", highlight=False)
+        raise typer.Exit(EXIT_UNTRUSTED)
+    err.print(outcome_line(outcome), highlight=False)
+    if not outcome.exportable and not force:
+        for line in export_refusal_lines(outcome):
+            err.print(line, highlight=False)
         err.print(
-            "[red]refused:[/red] the estimate is not trusted; nothing written. Fix the trials "
-            "(or leave them out with --exclude N,...), or pass --force to export it with the "
-            "verdict stated in the file.",
+            "[red]refused:[/red] the estimate is not "
+            + ("trusted" if not outcome.trusted else "precise enough to export")
+            + "; nothing written. Fix the trials (or leave them out with --exclude N,...), "
+            "add trials, or pass --force to export it with the verdict stated in the file.",
             highlight=False,
         )
         raise typer.Exit(EXIT_UNTRUSTED)
@@ -166,8 +148,8 @@ def export(
             err.print(f"[red]error:[/red] {exc}", highlight=False)
             raise typer.Exit(EXIT_BAD_INPUT) from None
         err.print(f"wrote {out} ({fmt.value})", highlight=False)
-    if not result.verdict.trusted:
-        err.print(verdict_line(result.verdict) + " (exported with --force)", highlight=False)
+    if not outcome.exportable:
+        err.print("exported with --force although refused without it", highlight=False)
 
 
 def register(app: typer.Typer) -> None:

@@ -12,12 +12,9 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-from odohil.errors import ParameterError
+from odohil.errors import InitError, ParameterError
 from odohil.science.robot_description import RobotDescription, RobotSettings
-from odohil.session.robots import find_backend
-
-FAKE_URL_SCHEMES = ("fakerobot:", "fakecreate2:")
-"""URL schemes served by the fakes (registered with pyserial only when used)."""
+from odohil.session.robots import fake_hooks, fake_url_schemes, find_backend
 
 
 @dataclass(frozen=True)
@@ -118,10 +115,42 @@ def resolve_line(
     )
 
 
+def carries_truth(line: Line) -> bool:
+    """Whether ``line``'s port is its backend's in-process fake, whose open
+    port carries the true pose (the backend declares the scheme:
+    odohil/session/robots.py ``fake_hooks``)."""
+    hooks = fake_hooks(line.protocol)
+    return hooks is not None and line.port.startswith(hooks.url_scheme)
+
+
+def truth_available(line: Line, truth_socket: str | None) -> bool:
+    """Whether ``--measure fake`` can read the fake's true pose: a truth
+    socket is given, or the port is the backend's in-process fake."""
+    return bool(truth_socket) or carries_truth(line)
+
+
+def open_truth_client(line: Line, truth_socket: str) -> Any:
+    """The open client of a fake process's truth socket, of the kind the
+    line's backend declares (``true_pose()``, ``snapshot()``, ``close()``).
+
+    Raises:
+        InitError: the backend declares no fake robot, or the socket cannot be opened.
+    """
+    hooks = fake_hooks(line.protocol)
+    if hooks is None:
+        raise InitError(
+            f"--truth-socket: the {line.protocol} backend declares no fake robot with a "
+            "truth side channel"
+        )
+    client = hooks.truth_client_class()(truth_socket)
+    client.open()
+    return client
+
+
 def register_fake_urls(port: str) -> None:
     """Register the fakes' pyserial URL handlers when ``port`` uses one (and
     only then: no fake is imported otherwise)."""
-    if port.startswith(FAKE_URL_SCHEMES):
+    if port.startswith(fake_url_schemes()):
         import fakes
 
         fakes.register_url_handlers()

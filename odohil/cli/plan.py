@@ -300,7 +300,7 @@ def plan(
         None,
         "--floor-m",
         help=f"Free floor along the line of travel, m, (0, {MAX_FLOOR_M:g}] (default: the "
-        f"robot description's [floor] length_m, else {DEFAULT_FLOOR_M:g}).",
+        f"robot description's \\[floor] length_m, else {DEFAULT_FLOOR_M:g}).",
     ),
     as_json: bool = typer.Option(False, "--json", help="Print the plan as JSON."),
     units_choice: UnitsOption = UNITS_DEFAULT,

@@ -30,16 +30,21 @@ from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
 from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
     EXIT_ERROR,
-    EXIT_OK,
     EXIT_STOP_UNCONFIRMED,
-    EXIT_UNTRUSTED,
+    exit_for_outcome,
     exit_for_signal,
 )
-from odohil.cli.line import FAKE_URL_SCHEMES, Line, register_fake_urls, resolve_line
+from odohil.cli.line import (
+    Line,
+    open_truth_client,
+    register_fake_urls,
+    resolve_line,
+    truth_available,
+)
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.verdict import verdict_line
+from odohil.cli.verdict import export_refusal_lines, outcome_line
 from odohil.errors import (
     InitError,
     JournalError,
@@ -50,7 +55,7 @@ from odohil.errors import (
     StopUnconfirmedError,
     TrialFileError,
 )
-from odohil.science.estimators import EstimateResult, estimate
+from odohil.science.estimators import EstimateResult
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
@@ -66,21 +71,21 @@ from odohil.session.engine import (
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
 from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
+from odohil.session.outcome import EstimateOutcome, estimate_state
 from odohil.session.plan import Plan
 from odohil.session.pose_source import PoseSource
-from odohil.session.preflight import check_new_session, check_trial_file, turn_designs
+from odohil.session.preflight import (
+    check_new_session,
+    check_trial_file,
+    check_trials_per_design,
+    turn_designs,
+)
 from odohil.session.robot import Robot
 from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import FakeTruthSource, TapeSource, TruthReader
 from odohil.session.start_pose import StartPose
-from odohil.session.state import (
-    SessionState,
-    ambiguous_trials,
-    description_of_header,
-    load_session,
-    session_observations,
-)
+from odohil.session.state import SessionState, load_session
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
@@ -108,8 +113,10 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     """The robot on ``line`` (through the backend its protocol names) and its
     truth side channel (None when there is none).
 
-    ``fakerobot://`` ports carry their own truth (on the backend's
-    ``transport``, the open port); a pty fake robot needs ``truth_socket``.
+    A backend's in-process fake port (``fakerobot://``, ``fakecreate2://``)
+    carries its own truth (on the backend's ``transport``, the open port); a
+    pty fake robot needs ``truth_socket``, read by the client its backend
+    declares (odohil/session/robots.py ``fake_hooks``).
     The robot is closed (stopped) on exit.
     """
     register_fake_urls(line.port)
@@ -118,11 +125,7 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     truth: Any = None
     try:
         if truth_socket:
-            from fakes.nomad.truth import TruthClient
-
-            client = TruthClient(truth_socket)
-            client.open()
-            truth = client
+            truth = open_truth_client(line, truth_socket)
         elif hasattr(transport, "truth"):
             truth = transport
         yield robot, truth
@@ -157,7 +160,8 @@ def make_source(
         if truth is None:
             raise InitError(
                 "--measure fake needs the fake robot's truth side channel: give "
-                "--truth-socket PATH (the path `odohil emulate` printed) or a fakerobot:// port"
+                "--truth-socket PATH (the path `odohil emulate` printed) or the fake's own URL "
+                "(fakerobot://, fakecreate2://)"
             )
         reader: TruthReader = SnapshotTruth(truth)
         return TapeSource(FakeTruthSource(reader, description, seed=seed), description)
@@ -329,14 +333,13 @@ def execute(
     )  # fmt: skip
     if isinstance(ran, Outcome):
         return ran
-    try:
-        fitted = final_estimate(ran, exclude)
-    except OdohilError as exc:
-        console.print(f"[red]no estimate[/]: {exc}")
-        return Outcome(EXIT_ERROR, None)
-    if not fitted.verdict.trusted:
-        console.print(verdict_line(fitted.verdict), highlight=False)
-    return Outcome(EXIT_OK if fitted.verdict.trusted else EXIT_UNTRUSTED, fitted)
+    fitted = final_estimate(ran, exclude)
+    console.print(outcome_line(fitted), highlight=False)
+    for line in export_refusal_lines(fitted):
+        console.print(line, highlight=False)
+    verdict = {"status": fitted.status, "reasons": [fitted.problem]}
+    details = {} if fitted.result else {"verdict": verdict}
+    return Outcome(exit_for_outcome(fitted), fitted.result, details=details)
 
 
 def run_engine(
@@ -433,34 +436,28 @@ def ended(
         "trials_done": len(state.completed),
         "session": str(engine.journal.folder),
     }
-    partial: EstimateResult | None = None
-    try:
-        partial = final_estimate(state, exclude)
-    except OdohilError as exc:
-        info["partial_estimate_note"] = str(exc)
+    fitted = final_estimate(state, exclude)
+    partial = fitted.result
+    if partial is None:
+        info["partial_estimate_note"] = fitted.problem
     info["partial_estimate"] = None if partial is None else partial.to_json_dict()
     return Outcome(code, None, status, info)
 
 
-def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateResult:
-    """A finished session's estimate: every solved trial but the ambiguous ones
-    and those in ``exclude``; the verdict lists the ambiguous ones left out.
-
-    Raises:
-        MeasurementError: too few trials for an estimate.
-    """
-    observations = session_observations(state)
-    done = {o.trial for o in observations}
-    return estimate(
-        observations,
-        exclude=[t for t in exclude if t in done],
-        ambiguous=[t.trial for t in ambiguous_trials(state)],
-        turns_exact=description_of_header(state).robot.turns_exact,
-    )
+def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateOutcome:
+    """A session's estimate and verdict by the one recipe
+    (odohil/session/outcome.py): every solved trial but the ambiguous ones and
+    those in ``exclude`` (numbers of trials not yet done are ignored)."""
+    done = {t.trial for t in state.completed}
+    return estimate_state(state, [t for t in exclude if t in done])
 
 
+ALLOW_FEW_HELP = (
+    "Run a plan with fewer trials a design than the planner's minimum (10); "
+    "its estimate is then not exported without --force."
+)
 ALLOW_TURNS_HELP = (
-    "Run `turn` designs on a robot whose turns carry error ([robot] turns_exact = false); "
+    "Run `turn` designs on a robot whose turns carry error (\\[robot] turns_exact = false); "
     "the estimate is then not trusted."
 )
 
@@ -639,7 +636,7 @@ def run(
         str | None,
         typer.Option(
             "--port",
-            help="Serial device, pty path or pyserial URL (default: robot.toml [serial] port).",
+            help="Serial device, pty path or pyserial URL (default: robot.toml \\[serial] port).",
         ),
     ] = None,
     *,
@@ -672,7 +669,7 @@ def run(
         typer.Option(
             "--baud",
             callback=bounded("baud"),
-            help="Line speed (default: robot.toml [serial] baud, else the robot's default).",
+            help="Line speed (default: robot.toml \\[serial] baud, else the robot's default).",
         ),
     ] = None,
     json_out: Annotated[
@@ -687,6 +684,7 @@ def run(
     exclude_text: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
     units_choice: UnitsOption = UNITS_DEFAULT,
     allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
+    allow_few: Annotated[bool, typer.Option("--allow-few-trials", help=ALLOW_FEW_HELP)] = False,
 ) -> None:
     """Run a calibration session unattended: n trials, no prompts, journaled.
 
@@ -698,6 +696,7 @@ def run(
     with session_exit_codes(console, json_out):
         checked = check_new_session(plan_text, robot_file, folder, allow_turns)  # nothing moved
         plan, description, toml = checked.plan, checked.description, checked.toml
+        check_trials_per_design(plan, allow_few)
         warn_turns(console, plan, description)
         exclude = checked_exclude(exclude_text, plan.n_trials, console)
         option = parse_measure(measure)
@@ -720,7 +719,7 @@ def run(
         }
         if option.mocap_url:
             settings["mocap_url"] = option.mocap_url
-        if kind == "fake" and not truth_socket and not line.port.startswith(FAKE_URL_SCHEMES):
+        if kind == "fake" and not truth_available(line, truth_socket):
             try:
                 make_source(kind, description, None, seed, trial_file)  # says what is missing
             except OdohilError as exc:

@@ -16,14 +16,15 @@ from rich.markup import escape
 from rich.table import Table
 
 from odohil import units
-from odohil.cli.exclude import EXCLUDE_HELP, check_exclude, parse_exclude
+from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
 from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
     EXIT_ERROR,
     EXIT_OK,
     EXIT_UNTRUSTED,
+    exit_for_outcome,
 )
-from odohil.cli.line import resolve_line
+from odohil.cli.line import resolve_line, truth_available
 from odohil.cli.options import bounded
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
@@ -36,7 +37,7 @@ from odohil.cli.run import (
     run_engine,
     session_exit_codes,
 )
-from odohil.cli.verdict import verdict_line
+from odohil.cli.verdict import outcome_line
 from odohil.errors import (
     JournalError,
     MeasurementError,
@@ -169,14 +170,17 @@ def validate(
         vpath = parse_validation_path(path_text)
         left_out = parse_exclude(exclude)
         calibration = load_calibration(session, left_out)
-        if left_out:
-            check_exclude(left_out, [t.trial for t in calibration.state.completed])
         description, toml, robot_path = _description(calibration, robot_file)
     except (OdohilError, OSError) as exc:
         raise _bad(console, str(exc)) from None
-    result = calibration.result
+    outcome = calibration.outcome
+    if outcome.result is None:
+        console.print(outcome_line(outcome), highlight=False)
+        console.print("[red]refused:[/red] the calibration gives no estimate; nothing tested.")
+        raise typer.Exit(exit_for_outcome(outcome))
+    result = outcome.result
     if not result.verdict.trusted and not force:
-        console.print(verdict_line(result.verdict), highlight=False)
+        console.print(outcome_line(outcome), highlight=False)
         console.print(
             "[red]refused:[/red] the calibration's estimate is not trusted; nothing tested. "
             "Fix its trials (or leave them out with --exclude), or pass --force."
@@ -290,7 +294,7 @@ def _drive_or_reload(
     line = resolve_line(description, port, baud, robot_path or "the session's robot description")
     if trial_file:
         check_trial_file(trial_file, description, plan)
-    if kind == "fake" and not truth_socket and not line.port.startswith("fakerobot:"):
+    if kind == "fake" and not truth_available(line, truth_socket):
         make_source(kind, description, None, seed, trial_file)  # says what is missing
     settings = {
         **line.to_json(),

@@ -6,6 +6,7 @@ from odohil import units
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
 from odohil.science.parameters import PARAMETER_NAMES
+from odohil.session.outcome import EstimateOutcome
 
 
 def verdict_line(verdict: Verdict) -> str:
@@ -14,6 +15,19 @@ def verdict_line(verdict: Verdict) -> str:
     if verdict.reasons:
         text += " (" + "; ".join(verdict.reasons) + ")"
     return text
+
+
+def outcome_line(outcome: EstimateOutcome) -> str:
+    """The verdict line of any command that estimates: :func:`verdict_line`,
+    or ``verdict: NO ESTIMATE (why)``."""
+    if outcome.result is None:
+        return f"verdict: NO ESTIMATE ({outcome.problem})"
+    return verdict_line(outcome.result.verdict)
+
+
+def export_refusal_lines(outcome: EstimateOutcome) -> list[str]:
+    """Why a trusted estimate is not exported without --force, one line each."""
+    return [f"not precise enough to export: {reason}" for reason in outcome.export_refusals]
 
 
 def gaussian_line(

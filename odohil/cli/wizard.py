@@ -38,6 +38,7 @@ from odohil.cli.exit_codes import (
     EXIT_OK,
     EXIT_STOP_UNCONFIRMED,
     EXIT_UNTRUSTED,
+    exit_for_outcome,
     exit_for_signal,
 )
 from odohil.cli.line import Line, register_fake_urls, resolve_line
@@ -53,7 +54,7 @@ from odohil.cli.run import (
     report_stop,
     warn_turns,
 )
-from odohil.cli.verdict import verdict_line
+from odohil.cli.verdict import export_refusal_lines, outcome_line
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
 from odohil.science.estimators import EstimateResult
@@ -717,7 +718,7 @@ def wizard(
         typer.Option(
             "--port",
             help="Serial port (or pyserial URL) of the robot "
-            "(default: the session's, else robot.toml [serial] port).",
+            "(default: the session's, else robot.toml \\[serial] port).",
         ),
     ] = None,
     robot_file: Annotated[
@@ -737,7 +738,7 @@ def wizard(
         typer.Option(
             "--baud",
             callback=bounded("baud"),
-            help="Line speed (default: the session's, else robot.toml [serial] baud, "
+            help="Line speed (default: the session's, else robot.toml \\[serial] baud, "
             "else the robot's default).",
         ),
     ] = None,
@@ -869,13 +870,17 @@ def _run(
         return EXIT_ERROR
     finally:
         progress.stop()
-    try:
-        result = final_estimate(engine.state)
-    except OdohilError as exc:
-        console.print(f"[yellow]no estimate[/]: {exc}", soft_wrap=True)
-        return EXIT_UNTRUSTED
-    console.print(verdict_line(result.verdict), soft_wrap=True)
-    return EXIT_OK if result.verdict.trusted else EXIT_UNTRUSTED
+    return final_screen(console, engine.state)
+
+
+def final_screen(console: Console, state: SessionState) -> int:
+    """The wizard's last words: the session's verdict by the one recipe
+    (odohil/session/outcome.py), why it may not be exported, and the exit status."""
+    outcome = final_estimate(state)
+    console.print(outcome_line(outcome), soft_wrap=True, markup=False)
+    for line in export_refusal_lines(outcome):
+        console.print(line, soft_wrap=True, markup=False)
+    return exit_for_outcome(outcome)
 
 
 def register(app: typer.Typer) -> None:

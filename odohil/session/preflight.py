@@ -13,6 +13,7 @@ from pathlib import Path
 
 from odohil import units
 from odohil.errors import ParameterError, RobotDescriptionError, TrialFileError
+from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.plan import Plan, check_session_plan, parse_plan
 from odohil.session.trial_files import read_trials
@@ -81,6 +82,29 @@ def check_turns(plan: Plan, description: RobotDescription, allow_turns: bool) ->
             "carry error ([robot] turns_exact = false): turn trials bias E_R and K_theta "
             "while looking consistent. Use variant=reverse (the default for this robot), "
             "or give --allow-turns to run them anyway (the estimate is then not trusted)"
+        )
+
+
+def check_trials_per_design(
+    plan: Plan,
+    allow_few: bool,
+    min_trials_per_design: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
+) -> None:
+    """Refuse a plan with a design of fewer trials than the planner's minimum
+    for honest intervals, unless ``allow_few`` (ParameterError naming
+    ``--plan`` and ``--allow-few-trials``): such a session's estimate cannot
+    be exported without ``--force`` (odohil/session/outcome.py)."""
+    few = [
+        f"{i.design.label()} (n={i.n_trials})"
+        for i in plan.items
+        if i.n_trials < min_trials_per_design
+    ]
+    if few and not allow_few:
+        raise ParameterError(
+            f"--plan has fewer than {min_trials_per_design} trials a design "
+            f"({', '.join(few)}), the planner's minimum for honest intervals: its estimate "
+            "could not be exported. Give n >= "
+            f"{min_trials_per_design} for every design, or --allow-few-trials to run it anyway"
         )
 
 

@@ -38,7 +38,7 @@ from odohil.errors import (
     ParameterError,
     TrialFileError,
 )
-from odohil.science.estimators import EstimateResult, estimate
+from odohil.science.estimators import EstimateResult
 from odohil.science.limits import RANGES
 from odohil.science.paths import Design, EncoderPath, FloatArray, Variant, square
 from odohil.science.robot_description import RobotDescription
@@ -51,14 +51,9 @@ from odohil.science.validation import (
     predict_path,
     validation_test,
 )
+from odohil.session.outcome import EstimateOutcome, estimate_state
 from odohil.session.plan import Plan
-from odohil.session.state import (
-    SessionState,
-    ambiguous_trials,
-    load_session,
-    session_observations,
-    session_trials,
-)
+from odohil.session.state import SessionState, load_session, session_trials
 from odohil.session.trial_files import MAX_ANGLE_RAD, MAX_POSE_M, MAX_ROWS, TrialSet, read_trials
 
 VALIDATION_FOLDER = "validation"
@@ -153,39 +148,44 @@ def default_folder(session: Path, path: ValidationPath) -> Path:
 
 @dataclass(frozen=True)
 class Calibration:
-    """A calibration session's estimate, as ``odohil estimate SESSION`` makes it.
+    """A calibration session's estimate, as ``odohil estimate SESSION`` makes it
+    (odohil/session/outcome.py).
 
     Attributes:
-        result: the estimate (robust maximum likelihood), with its verdict.
+        outcome: the recipe's outcome: the estimate (robust maximum
+            likelihood) and its verdict, or why there is none.
         state: the session as its journal tells it.
     """
 
-    result: EstimateResult
+    outcome: EstimateOutcome
     state: SessionState
+
+    @property
+    def result(self) -> EstimateResult:
+        """The estimate.
+
+        Raises:
+            MeasurementError: the trials give none (the outcome says why).
+        """
+        if self.outcome.result is None:
+            raise MeasurementError(self.outcome.problem)
+        return self.outcome.result
 
 
 def load_calibration(session: Path, exclude: Collection[int] = ()) -> Calibration:
-    """The session's estimate (every solved trial but the ambiguous ones and
+    """The session's outcome (every solved trial but the ambiguous ones and
     ``exclude``).
 
     Raises:
         JournalError: not a session folder, or a corrupt journal.
-        MeasurementError: too few trials for an estimate.
+        MeasurementError: an excluded number that is no completed trial's.
     """
     state = load_session(session).state
     if state.header.get("settings", {}).get("validation_of"):
         raise JournalError(
             f"{session} is a validation session; give the calibration session it validates"
         )
-    observations = session_observations(state)
-    done = {o.trial for o in observations}
-    result = estimate(
-        observations,
-        "robust",
-        exclude=[t for t in exclude if t in done],
-        ambiguous=[t.trial for t in ambiguous_trials(state)],
-    )
-    return Calibration(result, state)
+    return Calibration(estimate_state(state, exclude, source=str(session)), state)
 
 
 def check_not_fitted(plan: Plan | None, designs: Sequence[Design]) -> None:

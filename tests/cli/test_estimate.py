@@ -173,12 +173,14 @@ def test_bad_file_exits_2_with_line_numbers(tmp_path: Path) -> None:
     assert "line 3" in done.stderr
 
 
-def test_too_few_trials_exit_2(tmp_path: Path) -> None:
+def test_too_few_trials_is_no_estimate_exit_3(tmp_path: Path) -> None:
+    """No estimate is "not trusted or no estimate" (exit 3), as report and export say."""
     one = tmp_path / "one.csv"
     one.write_text("k,l_m,variant,dx_m,dy_m,dtheta_rad\n1,6,turn,0.01,0.1,-0.04\n")
     done = run("estimate", one)
-    assert done.returncode == 2
-    assert "at least 2 trials" in done.stderr
+    assert done.returncode == 3
+    assert "NO ESTIMATE" in done.stdout
+    assert "at least 2 trials" in " ".join(done.stdout.split())
 
 
 def test_missing_file_exits_2(tmp_path: Path) -> None:

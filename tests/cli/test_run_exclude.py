@@ -30,7 +30,7 @@ def _run(
     emulator: EmulatorProcess, tmp_path: Path, exclude: str
 ) -> subprocess.CompletedProcess[str]:
     command = [
-        ODOHIL, "run",
+        ODOHIL, "run", "--allow-few-trials",
         "--port", emulator.device,
         "--truth-socket", emulator.truth_socket,
         "--robot", str(write_robot(tmp_path)),

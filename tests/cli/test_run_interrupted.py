@@ -49,6 +49,7 @@ def test_an_interrupted_json_run_prints_its_status_and_partial_estimate(
         [
             ODOHIL,
             "run",
+            "--allow-few-trials",
             "--port",
             emulator.device,
             "--truth-socket",

@@ -77,7 +77,8 @@ def calibrate(folder: Path, seed: int) -> Path:
     session = folder / "calibration"
     port = f"fakerobot://?seed={seed}&time_scale=2000"
     done = odohil(
-        "run", "--port", port, "--robot", str(robot), "--plan", CALIBRATION_PLAN,
+        "run", "--allow-few-trials",
+        "--port", port, "--robot", str(robot), "--plan", CALIBRATION_PLAN,
         "--measure", "fake", "--seed", str(seed), "--session", str(session), "--json",
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
@@ -125,7 +126,7 @@ def test_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(tmp_path: Path, 
     assert calibration_log.count('"kind":"solved"') == 24
     assert good["validation_session"] == str(good_folder)
     # the report shows both validations against their predicted ellipses
-    report = in_process("report", str(session), "--out", str(tmp_path / "report"))
+    report = in_process("report", str(session), "--out", str(tmp_path / "report"), "--force")
     assert report.returncode == 0, report.stderr
     page = (tmp_path / "report" / "index.html").read_text(encoding="utf-8")
     section = page[page.index('id="validation"') :]

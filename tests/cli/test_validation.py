@@ -80,7 +80,8 @@ def test_run_refuses_a_plan_the_wire_cannot_carry(
     tmp_path: Path, robot: Path, plan: str, words: list[str]
 ) -> None:
     folder = tmp_path / "session"
-    result = invoke("run", "--port", NO_PORT, "--robot", str(robot), "--plan", plan,
+    result = invoke("run", "--allow-few-trials",
+                    "--port", NO_PORT, "--robot", str(robot), "--plan", plan,
                     "--measure", "fake", "--session", str(folder))  # fmt: skip
     assert result.exit_code == 2, result.output
     for word in words:
@@ -95,7 +96,8 @@ def test_run_refuses_a_trial_file_of_another_design_or_too_short(
     other = pose_file(tmp_path / "other.csv", ["1,2,turn,0,0,0"] * 3)
     short = pose_file(tmp_path / "short.csv", ["1,1,turn,0,0,0"] * 2)
     for trial_file, words in ((other, ["row 1", "k=1 l=1 m turn"]), (short, ["2 row(s)", "3"])):
-        result = invoke("run", "--port", NO_PORT, "--robot", str(robot), "--plan",
+        result = invoke("run", "--allow-few-trials",
+                        "--port", NO_PORT, "--robot", str(robot), "--plan",
                         "k=1,l=1,n=3", "--measure", str(trial_file),
                         "--session", str(folder))  # fmt: skip
         assert result.exit_code == 2, result.output
@@ -107,7 +109,8 @@ def test_run_refuses_a_trial_file_of_another_design_or_too_short(
 
 def test_run_with_valid_input_gets_as_far_as_the_port(tmp_path: Path, robot: Path) -> None:
     good = pose_file(tmp_path / "good.csv", ["1,1,turn,0,0,0"] * 3)
-    result = invoke("run", "--port", NO_PORT, "--robot", str(robot), "--plan", "k=1,l=1,n=3",
+    result = invoke("run", "--allow-few-trials",
+                    "--port", NO_PORT, "--robot", str(robot), "--plan", "k=1,l=1,n=3",
                     "--measure", str(good), "--session", str(tmp_path / "s"))  # fmt: skip
     no_traceback(result)
     assert result.exit_code == 1
@@ -117,7 +120,8 @@ def test_run_with_valid_input_gets_as_far_as_the_port(tmp_path: Path, robot: Pat
 def test_session_naming_a_file_is_a_clear_exit_2(tmp_path: Path, robot: Path) -> None:
     a_file = tmp_path / "notes.txt"
     a_file.write_text("not a session")
-    result = invoke("run", "--port", NO_PORT, "--robot", str(robot), "--plan", "k=1,l=1,n=3",
+    result = invoke("run", "--allow-few-trials",
+                    "--port", NO_PORT, "--robot", str(robot), "--plan", "k=1,l=1,n=3",
                     "--measure", "fake", "--session", str(a_file))  # fmt: skip
     assert result.exit_code == 2, result.output
     assert "is a file" in flat(result)

@@ -76,7 +76,7 @@ def test_the_nomad_backend_accepts_and_ignores_the_robot_settings() -> None:
         ["estimate", "nothing.csv"],
         ["export", "nothing.csv"],
         ["validate", "nowhere"],
-        ["run", "--plan", "k=1,l=1,n=2", "--measure", "fake"],
+        ["run", "--allow-few-trials", "--plan", "k=1,l=1,n=2", "--measure", "fake"],
         ["wizard"],
         ["demo"],
         ["emulate"],
@@ -105,7 +105,7 @@ def test_the_planner_recommends_turn_free_designs_for_the_create2() -> None:
 
 def test_run_refuses_a_turn_plan_on_the_create2_before_anything_moves(tmp_path: Path) -> None:
     done = odohil(
-        "run", "--robot", "create2", "--port", FAKE, "--measure", "fake",
+        "run", "--allow-few-trials", "--robot", "create2", "--port", FAKE, "--measure", "fake",
         "--plan", "k=1,l=0.5,n=4,variant=turn", "--session", tmp_path / "s",
     )  # fmt: skip
     assert done.returncode == 2, done.stderr
@@ -148,7 +148,8 @@ def test_turn_trials_of_a_robot_whose_turns_carry_error_are_not_trusted(turn_tri
 @pytest.mark.slow
 def test_run_with_allow_turns_defaults_to_reverse_and_is_not_trusted(tmp_path: Path) -> None:
     done = odohil(
-        "run", "--robot", "create2", "--port", FAKE, "--measure", "fake", "--allow-turns",
+        "run", "--allow-few-trials",
+        "--robot", "create2", "--port", FAKE, "--measure", "fake", "--allow-turns",
         "--plan", "k=1,l=0.5,n=6,variant=turn;k=0.5,l=0.5,n=6", "--session", tmp_path / "s",
         "--json", timeout=300,
     )  # fmt: skip

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 import yaml
 
-from odohil.cli.export import load_estimate
 from odohil.science.estimators import EstimateResult
 from odohil.science.exports import Linearisation
 from odohil.session.exports import FILE_NAMES, export_files, export_text, write_exports
+from odohil.session.outcome import estimate_path
 from tests.report.session_factory import build_session
 
 PLAN = "k=1,l=2,n=6;k=4,l=0.5,n=6"
@@ -38,7 +38,8 @@ def bumped(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def estimate_of_session(session: Path) -> EstimateResult:
-    result = load_estimate(session, None, frozenset())
+    result = estimate_path(session).result
+    assert result is not None
     assert result.verdict.trusted, result.verdict
     return result
 
@@ -127,15 +128,18 @@ def test_the_command_writes_what_the_report_writes(
     session: Path, estimate_of_session: EstimateResult, tmp_path: Path
 ) -> None:
     out = tmp_path / "rl.yaml"
-    run = _export(
-        str(session), "--format", "robot-localization", "--speed", "0.8", "--out", str(out)
-    )
+    args = ("--format", "robot-localization", "--speed", "0.8", "--out", str(out))
+    refused = _export(str(session), *args)  # 6 trials a design, below the planner's 10
+    assert refused.returncode == 3, refused.stderr
+    assert "fewer than 10 trials a design" in " ".join(refused.stderr.split())
+    assert not out.exists()
+    run = _export(str(session), *args, "--force")
     assert run.returncode == 0, run.stderr
     lin = Linearisation(speed_m_per_s=0.8)
     assert out.read_text() == export_text(
         "robot-localization", estimate_of_session, lin, source=session.name
     )
-    printed = _export(str(session), "--format", "json")
+    printed = _export(str(session), "--format", "json", "--force")
     assert printed.returncode == 0, printed.stderr
     assert json.loads(printed.stdout)["verdict"]["status"] == "trusted"
 

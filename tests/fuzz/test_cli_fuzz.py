@@ -235,7 +235,7 @@ def test_session_commands_refuse_bad_numbers_before_the_port(
         check(invoke(args), {2}, [*NAMES, "journal"])
         return
     plan = data.draw(st.one_of(st.just("k=1,l=1,n=3"), _plans()))
-    args = ["run", "--port", NO_PORT, "--robot", str(robot), "--plan", plan,
+    args = ["run", "--allow-few-trials", "--port", NO_PORT, "--robot", str(robot), "--plan", plan,
             "--measure", "fake", "--session", str(tmp_path / "s"), *extra]  # fmt: skip
     result = invoke(args)
     check(result, {1, 2}, NAMES)

@@ -24,7 +24,12 @@ def test_report_is_self_contained_and_matches_the_estimate(
     folder, state = session
     assert state.finished
     out = tmp_path / "out"
-    run = run_report(folder, out)
+    # 6 trials a design, below the planner's 10: refused without --force, saying why
+    refused = run_report(folder, tmp_path / "refused")
+    assert refused.returncode == 3, refused.stderr
+    assert "fewer than 10 trials a design" in " ".join(refused.stderr.split())
+    assert not (tmp_path / "refused").exists()
+    run = run_report(folder, out, "--force")
     assert run.returncode == 0, run.stderr
 
     # The report writes the same filter files as odohil export (FILE_NAMES).
@@ -45,7 +50,15 @@ def test_report_is_self_contained_and_matches_the_estimate(
     expected = estimate(session_observations(state)).to_json_dict()
     assert expected["verdict"]["status"] == "trusted"
     written = json.loads((out / "parameters.json").read_text())
-    assert written == json.loads(json.dumps(expected))
+    # as estimate --json prints it: the estimate, then what the session's trials add
+    assert written["flagged_trials"] == [
+        t.trial for t in state.completed if not t.clear_cut or t.slip
+    ]
+    assert written["ambiguous_trials"] == []
+    assert any("fewer than 10" in r for r in written["export_refusals"])
+    outcome_keys = ("flagged_trials", "ambiguous_trials", "export_refusals")
+    estimate_part = {k: v for k, v in written.items() if k not in outcome_keys}
+    assert estimate_part == json.loads(json.dumps(expected))
 
     model = json.loads((out / FILE_NAMES["json"]).read_text())
     params = written["parameters"]
@@ -79,7 +92,11 @@ def test_report_without_an_estimate_says_why(tmp_path: Path) -> None:
     folder = tmp_path / "short"
     build_session(folder, "k=1,l=1,n=1", seed=2)
     out = tmp_path / "out"
-    run = run_report(folder, out)
+    refused = run_report(folder, out)
+    assert refused.returncode == 3, refused.stderr  # no estimate: as estimate and export
+    assert "NO ESTIMATE" in refused.stderr
+    assert not out.exists()
+    run = run_report(folder, out, "--force")
     assert run.returncode == 0, run.stderr
     assert "No estimate" in (out / "index.html").read_text()
     assert "error" in json.loads((out / "parameters.json").read_text())
@@ -129,7 +146,7 @@ def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_pa
 
 def test_report_exclude_leaves_the_trial_out(bumped: Path, tmp_path: Path) -> None:
     out = tmp_path / "out"
-    run = run_report(bumped, out, "--exclude", "3")
+    run = run_report(bumped, out, "--exclude", "3", "--force")  # 6 trials a design
     assert run.returncode == 0, run.stderr
     written = json.loads((out / "parameters.json").read_text())
     assert written["verdict"]["status"] == "trusted"

@@ -39,7 +39,7 @@ def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
 
 def _run_args(emulator: EmulatorProcess, tmp_path: Path, plan: str) -> list[str]:
     return [
-        ODOHIL, "run",
+        ODOHIL, "run", "--allow-few-trials",
         "--port", emulator.device,
         "--truth-socket", emulator.truth_socket,
         "--robot", str(write_robot(tmp_path)),

@@ -36,7 +36,7 @@ def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
 
 def _run(emulator: EmulatorProcess, tmp_path: Path, plan: str, *extra: str) -> list[str]:
     return [
-        ODOHIL, "run",
+        ODOHIL, "run", "--allow-few-trials",
         "--port", emulator.device,
         "--truth-socket", emulator.truth_socket,
         "--robot", str(write_robot(tmp_path)),

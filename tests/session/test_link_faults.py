@@ -33,7 +33,7 @@ def _emulator(tmp_path: Path, *extra: str) -> EmulatorProcess:
 
 def _run(emulator: EmulatorProcess, tmp_path: Path) -> subprocess.CompletedProcess[str]:
     args = [
-        ODOHIL, "run",
+        ODOHIL, "run", "--allow-few-trials",
         "--port", emulator.device,
         "--truth-socket", emulator.truth_socket,
         "--robot", str(write_robot(tmp_path)),
@@ -148,7 +148,7 @@ def test_a_stale_reply_is_never_used(tmp_path: Path) -> None:
 def test_legs_below_the_wire_resolution_never_make_valid_trials(tmp_path: Path) -> None:
     with _emulator(tmp_path, "--no-pacing") as emulator:
         args = [
-            ODOHIL, "run",
+            ODOHIL, "run", "--allow-few-trials",
             "--port", emulator.device,
             "--truth-socket", emulator.truth_socket,
             "--robot", str(write_robot(tmp_path)),

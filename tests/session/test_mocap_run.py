@@ -94,7 +94,7 @@ def mocap(emulator: EmulatorProcess) -> Iterator[FrameServer]:
 def _run(emulator: EmulatorProcess, robot: Path, url: str, tmp_path: Path, plan: str):
     return subprocess.run(
         [
-            ODOHIL, "run", "--port", emulator.device, "--measure", url,
+            ODOHIL, "run", "--allow-few-trials", "--port", emulator.device, "--measure", url,
             "--robot", str(robot), "--plan", plan,
             "--session", str(tmp_path / "session"), "--json",
         ],
@@ -193,7 +193,8 @@ def test_a_sender_that_dies_stops_the_session_and_resume_goes_on_with_another(
 
         with sender(1) as first:
             command = [
-                ODOHIL, "run", "--port", emulator.device, "--measure", first.url,
+                ODOHIL, "run", "--allow-few-trials",
+                        "--port", emulator.device, "--measure", first.url,
                 "--robot", str(_robot(tmp_path)), "--plan", plan,
                 "--session", str(tmp_path / "session"), "--json",
             ]  # fmt: skip

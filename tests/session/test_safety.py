@@ -41,7 +41,7 @@ def _emulator(tmp_path: Path, name: str, *extra: str, time_scale: str = "1") -> 
 
 def _run_args(emulator: EmulatorProcess, tmp_path: Path, plan: str, folder: Path) -> list[str]:
     return [
-        ODOHIL, "run",
+        ODOHIL, "run", "--allow-few-trials",
         "--port", emulator.device,
         "--truth-socket", emulator.truth_socket,
         "--robot", str(write_robot(tmp_path)),

@@ -47,6 +47,7 @@ def test_run_connects_at_the_files_baud_without_port_or_baud(
         [
             ODOHIL,
             "run",
+            "--allow-few-trials",
             "--robot",
             str(robot),
             "--plan",
@@ -102,6 +103,7 @@ def test_no_port_anywhere_names_both_ways_to_give_one(tmp_path: Path) -> None:
         [
             ODOHIL,
             "run",
+            "--allow-few-trials",
             "--robot",
             str(_robot_file(tmp_path, "")),
             "--plan",
@@ -126,6 +128,7 @@ def test_an_unknown_robot_protocol_is_refused_before_anything_moves(tmp_path: Pa
         [
             ODOHIL,
             "run",
+            "--allow-few-trials",
             "--port",
             "/dev/null",
             "--robot",

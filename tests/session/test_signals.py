@@ -85,7 +85,8 @@ def _motion_case(
     case = f"{signal.Signals(signum).name} at {moment}"
     folder = tmp_path / case.replace(" ", "-")
     command = [
-        ODOHIL, "run", "--port", emulator.device, "--truth-socket", emulator.truth_socket,
+        ODOHIL, "run", "--allow-few-trials",
+                "--port", emulator.device, "--truth-socket", emulator.truth_socket,
         "--robot", str(robot), "--plan", RUN_PLAN, "--measure", "fake",
         "--session", str(folder), "--json",
     ]  # fmt: skip

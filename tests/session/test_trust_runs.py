@@ -44,7 +44,18 @@ def _run(
     robot = tmp_path / "robot.toml"
     robot.write_text(robot_toml or readme_robot(), encoding="utf-8")
     port = f"fakerobot://?seed={seed}&time_scale=2000"
-    args = ["run", "--port", port, "--robot", str(robot), "--plan", plan, "--measure", "fake"]
+    args = [
+        "run",
+        "--allow-few-trials",
+        "--port",
+        port,
+        "--robot",
+        str(robot),
+        "--plan",
+        plan,
+        "--measure",
+        "fake",
+    ]
     return subprocess.run(
         [sys.executable, "-m", "odohil", *args, "--session", str(tmp_path / "s"), "--json"],
         capture_output=True,

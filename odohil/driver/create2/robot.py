@@ -135,6 +135,8 @@ class Create2Robot:
     name = "create2"
     default_baud = DEFAULT_BAUD
     baud_rates = BAUD_RATES
+    fake_url_scheme = "fakecreate2:"
+    fake_truth_client = "fakes.create2.truth:Create2TruthClient"
 
     def __init__(
         self,

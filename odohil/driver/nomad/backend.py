@@ -67,6 +67,8 @@ class NomadBackend:
     name = "nomad150"
     default_baud = DEFAULT_BAUD
     baud_rates = BAUD_RATES
+    fake_url_scheme = "fakerobot:"
+    fake_truth_client = "fakes.nomad.truth:TruthClient"
 
     def __init__(
         self,

@@ -74,9 +74,9 @@ def choose_designs(summaries: Sequence[DesignSummary]) -> tuple[DesignSummary, D
     usable = [s for s in summaries if s.n >= 2 and abs(s.design.path().signed_distance_m) > 0.0]
     if not usable:
         raise MeasurementError(
-            "the paper's method needs at least 2 trials of one design whose signed "
+            "an estimate needs at least 2 trials of one design whose signed "
             "distance is not zero (the 'turn' variant, or an odd number of legs), "
-            "so that phi1 measures E_R"
+            "so that phi1 measures E_R (every method starts from the paper's)"
         )
     first = min(usable, key=lambda s: (s.design.k, -s.n * s.design.distance_m))
     second = max(summaries, key=lambda s: (s.design.k, s.n * s.design.distance_m))

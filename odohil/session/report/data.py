@@ -2,7 +2,7 @@
 
 :func:`load_report` replays a session folder's journal and recomputes (SI
 throughout): the final estimate (the default robust method, as ``odohil
-estimate`` makes it), the estimate after each trial (convergence), every
+estimate`` makes it: odohil/session/outcome.py), the estimate after each trial (convergence), every
 design's trials with what happened to each (used, flagged, excluded,
 ambiguous, down-weighted), its observables phi1..phi5 and the model's mean and
 covariance of its pose change at the estimate.
@@ -17,15 +17,14 @@ from pathlib import Path
 import numpy as np
 
 from odohil import units
-from odohil.errors import MeasurementError
-from odohil.science.estimators import EstimateResult, IncrementalEstimator, estimate
-from odohil.science.estimators.estimate import leave_out
+from odohil.science.estimators import EstimateResult, IncrementalEstimator
 from odohil.science.grouping import by_design
 from odohil.science.moments import pose_moments
 from odohil.science.observables import Observables, observables
 from odohil.science.paths import Design, FloatArray
 from odohil.session.journal import read_journal
-from odohil.session.state import CompletedTrial, SessionState, replay, session_observations
+from odohil.session.outcome import EstimateOutcome, estimate_state
+from odohil.session.state import CompletedTrial, SessionState, replay
 from odohil.session.validation import ValidationReport, load_validations
 
 DOWN_WEIGHT_BELOW = 0.5
@@ -133,6 +132,8 @@ class SessionReport:
         convergence: the incremental estimate after each trial that gave one.
         validations: the validation sessions under ``SESSION/validation/``,
             tested against the estimate (odohil/session/validation.py).
+        outcome: the recipe's outcome the estimate comes from
+            (odohil/session/outcome.py).
     """
 
     folder: Path
@@ -142,6 +143,7 @@ class SessionReport:
     designs: tuple[DesignReport, ...]
     convergence: tuple[ConvergencePoint, ...]
     validations: tuple[ValidationReport, ...] = ()
+    outcome: EstimateOutcome | None = None
 
     @property
     def trials(self) -> tuple[TrialPoint, ...]:
@@ -164,15 +166,9 @@ def load_report(folder: str | Path, exclude: Collection[int] = frozenset()) -> S
     """
     path = Path(folder)
     state = replay(read_journal(path).records)
-    observations = session_observations(state)
-    kept, _ = leave_out(observations, exclude)  # every excluded number must be a trial's
-    ambiguous = [t.trial for t in state.completed if t.ambiguous]
-    result: EstimateResult | None = None
-    problem = ""
-    try:
-        result = estimate(observations, exclude=exclude, ambiguous=ambiguous)
-    except MeasurementError as exc:
-        problem = str(exc)
+    outcome = estimate_state(state, exclude, source=str(path))
+    kept = [o for o in outcome.observations if o.trial not in set(outcome.excluded)]
+    result, problem = outcome.result, outcome.problem
     convergence: list[ConvergencePoint] = []
     incremental = IncrementalEstimator()
     for n, obs in enumerate(kept, start=1):
@@ -185,7 +181,9 @@ def load_report(folder: str | Path, exclude: Collection[int] = frozenset()) -> S
     fit_order = [o.trial for o in kept]
     designs = _designs(state.completed, set(exclude), fit_order, result)
     validations = load_validations(path, result) if result is not None else ()
-    return SessionReport(path, state, result, problem, designs, tuple(convergence), validations)
+    return SessionReport(
+        path, state, result, problem, designs, tuple(convergence), validations, outcome
+    )
 
 
 def _designs(

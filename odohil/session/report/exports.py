@@ -43,7 +43,15 @@ def standard_exports(report: SessionReport) -> tuple[ExportFile, ...]:
 
 
 def parameters_json(report: SessionReport) -> dict[str, Any]:
-    """The estimate's JSON object (SI), or ``{"error": ...}`` without an estimate."""
+    """The estimate's JSON object (SI), as ``odohil estimate --json`` prints it
+    (odohil/session/outcome.py); without an estimate its verdict is ``no
+    estimate``, with ``error`` saying why."""
+    if report.outcome is not None:
+        data = report.outcome.to_json_dict()
+    elif report.result is not None:
+        data = report.result.to_json_dict()
+    else:
+        data = {"n_trials": len(report.state.completed)}
     if report.result is None:
-        return {"error": report.problem, "n_trials": len(report.state.completed)}
-    return report.result.to_json_dict()
+        data["error"] = report.problem
+    return data

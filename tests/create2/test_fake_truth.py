@@ -1,0 +1,54 @@
+"""One place decides whether a fake robot carries a truth side channel and
+which client reads it: the robot backend declares it (odohil/session/robots.py
+``fake_hooks``), so run, resume and validate agree on both robots (issue 18).
+
+The fake Create 2 runs as a process on a pty where the pty is the point (the
+truth socket); the commands run in process through typer's runner.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from typer.testing import CliRunner, Result
+
+from fakes.create2.process import Create2Process
+from odohil.cli.app import app
+from odohil.session.robots import fake_hooks
+
+FAKE = "fakecreate2://?seed=3&time_scale=10"
+
+
+def invoke(*args: str | Path) -> Result:
+    return CliRunner().invoke(app, [str(a) for a in args])
+
+
+def test_each_backend_declares_its_fake_and_truth_client() -> None:
+    nomad, create2 = fake_hooks("nomad150"), fake_hooks("create2")
+    assert nomad is not None
+    assert create2 is not None
+    assert (nomad.url_scheme, create2.url_scheme) == ("fakerobot:", "fakecreate2:")
+    assert nomad.truth_client_class().__name__ == "TruthClient"
+    assert create2.truth_client_class().__name__ == "Create2TruthClient"
+
+
+def test_run_reads_the_create2_truth_socket_and_validate_accepts_its_fake_url(
+    tmp_path: Path,
+) -> None:
+    session = tmp_path / "s"
+    with Create2Process(["--seed", "3", "--time-scale", "10"]) as fake:
+        ran = invoke(
+            "run", "--robot", "create2", "--port", fake.device, "--measure", "fake",
+            "--truth-socket", fake.truth_socket, "--plan", "k=0.5,l=1,n=2;k=1,l=1,n=2",
+            "--allow-few-trials", "--session", session,
+        )  # fmt: skip
+    assert ran.exception is None or isinstance(ran.exception, SystemExit), repr(ran.exception)
+    assert ran.exit_code == 0, ran.output
+    assert "verdict: TRUSTED" in ran.output
+    checked = invoke(
+        "validate", session, "--path", "forth-back:2,0.5,reverse", "--trials", "2",
+        "--measure", "fake", "--port", FAKE,
+    )  # fmt: skip
+    assert "truth side channel" not in checked.output
+    assert checked.exit_code == 0, checked.output
+    assert "pass" in checked.output
