@@ -386,8 +386,13 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
     text = f"validation: {status} ({units.plural(tested.n_trials, 'trial')} of {data['path']}"
     text += f"; rejected by {', '.join(failed)})" if failed else ")"
     out.print(text, highlight=False)
-    table = Table(title=f"NEES chi-square tests, each at level {tested.alpha / 4:g}")
-    for column in ("test", "NEES", "dof", "p-value", "threshold", "result"):
+    for reason in tested.reasons():
+        out.print(f"  {reason}", highlight=False)
+    table = Table(
+        title="chi-square tests (NEES: the spread; bias: the mean residual), "
+        f"each at level {tested.level:g}"
+    )
+    for column in ("test", "statistic", "dof", "p-value", "threshold", "result"):
         table.add_column(column, justify="left" if column in ("test", "result") else "right")
     for t in tested.tests:
         table.add_row(

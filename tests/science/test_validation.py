@@ -1,8 +1,9 @@
-"""The validation NEES test (odohil/science/validation.py) against Monte Carlo
-runs of the discrete model (odohil/science/simulator.py).
+"""The validation NEES and bias tests (odohil/science/validation.py) against
+Monte Carlo runs of the discrete model (odohil/science/simulator.py).
 
-Under the true model each of the four tests (overall, x, y, theta) rejects at
-its nominal rate, and the verdict (any test at alpha/4) at most at alpha;
+Under the true model each of the eight tests (NEES and mean residual, each
+overall, x, y, theta) rejects at its nominal rate, and the verdict (any test
+at alpha/8) at most at alpha;
 with the estimate's uncertainty drawn into the prediction the delta method
 keeps the rates honest, and leaving it out does not; a robot whose E_R is
 three times and K_theta nine times the model's is rejected.
@@ -119,6 +120,36 @@ def test_a_robot_with_three_times_e_r_and_nine_times_k_theta_is_rejected() -> No
         for p in sets
     ]
     assert all(rejected)
+
+
+def test_a_shared_bias_the_nees_misses_is_rejected_by_the_bias_test() -> None:
+    """Issue 20's hole: the prediction's spread 3 times the robot's (a K_theta
+    inflated by a misfit elsewhere) and every trial's heading one predicted SD
+    off. Each NEES test passes (about n (1 + 1/9) on n dof); the mean
+    residual is 4 standard errors off and its test fails, naming theta."""
+    path = PATHS["forth-back k=2 l=2"]
+    prediction = predict_path(path, ROBOT)
+    sd = np.sqrt(np.diag(prediction.cov + MEASUREMENT_COV))
+    rng = np.random.default_rng(17)
+    n = 16
+    poses = prediction.mean + rng.normal(size=(n, 3)) * sd / 3.0
+    poses[:, 2] += sd[2]
+    result = validation_test(
+        poses, [prediction] * n, np.broadcast_to(MEASUREMENT_COV, (n, 3, 3)), None
+    )
+    assert all(t.passed for t in (result.overall, *result.axes))
+    assert not result.passed
+    assert "bias theta" in result.failed()
+    assert "heading mean residual +" in " ".join(result.reasons())
+    assert result.to_json_dict()["bias"]["axes"]["theta"]["passed"] is False
+
+
+def test_leaving_the_estimate_uncertainty_out_biases_the_bias_test() -> None:
+    """The mean residual of the trials shares the estimate's error: without
+    the delta-method term the bias test rejects clean sets far too often."""
+    p_values, _ = _p_values(PATHS["square 2 m"], ROBOT, 11, uncertain=True, with_cov=False)
+    se = math.sqrt(LEVEL * (1 - LEVEL) / N_SETS)
+    assert (p_values[:, 4] < LEVEL).mean() > LEVEL + 6 * se
 
 
 def test_jacobian_matches_the_closed_form_heading_drift() -> None:

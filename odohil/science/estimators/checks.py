@@ -28,6 +28,7 @@ from scipy import special
 from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.estimators.likelihood import design_path
+from odohil.science.estimators.misfit import MisfitCheck, TrialLabel, misfit_check
 from odohil.science.estimators.observations import DesignSummary, Observation
 from odohil.science.estimators.result import (
     ModelCheck,
@@ -42,6 +43,7 @@ from odohil.science.moments import pose_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, FloatArray
 from odohil.science.targets import TARGET_FLOORS, TARGET_FRACTIONS
+from odohil.science.validation import predict_path
 
 OUTLIER_LEVEL = 0.01
 """Family-wise level of the outlier test (Bonferroni over the trials)."""
@@ -180,6 +182,71 @@ def distance_check(
         p_value=p_value,
         outliers=outliers,
         mahalanobis2=tuple(float(v) for v in d2),
+    )
+
+
+_MIRROR = np.diag([-1.0, 1.0, -1.0])
+FORTH_BACK_TURN_HINT = (
+    "if the robot is a differential drive its spins carry error: set turns_exact = false "
+    "and calibrate with variant=reverse"
+)
+"""The advice on a bias of forth-and-back ``turn`` trials."""
+
+
+def design_misfit(
+    observations: Sequence[Observation],
+    params: ErrorParameters,
+    covariance: FloatArray | None,
+    backward: Sequence[bool] | None = None,
+    *,
+    turn_hint: str = FORTH_BACK_TURN_HINT,
+) -> MisfitCheck:
+    """The misfit checks (:mod:`odohil.science.estimators.misfit`) of
+    forth-and-back trials at the fitted ``params``.
+
+    ``observations`` are as the estimators model them (a backward trial as its
+    forward design's mirror image); ``backward`` says which were driven
+    backwards (default: from their designs). Their residuals are mirrored back,
+    so a bias is reported in the frame the trial was driven in. Groups: the
+    design (forward label) by direction (forward/backward); the trial-order
+    check compares the first trial of each design and direction with the rest.
+    ``covariance``: the estimate's 4 x 4 covariance (SI) for the parameter term,
+    or None.
+    """
+    n = len(observations)
+    flags = list(backward) if backward is not None else [o.design.backward for o in observations]
+    residuals = np.empty((n, 3))
+    covs = np.empty((n, 3, 3))
+    jacobians = np.empty((n, 3, 4))
+    labels: list[TrialLabel] = []
+    trials = by_design(range(n), lambda i: observations[i].design)
+    for design, index in trials.items():
+        prediction = predict_path(design_path(design), params)
+        for i in index:
+            r = observations[i].pose_change - prediction.mean
+            r[2] = units.wrap_angle(float(r[2]))
+            v = prediction.cov + observations[i].measurement_cov
+            j = prediction.jacobian
+            if flags[i] != design.backward:
+                r, v, j = _MIRROR @ r, _MIRROR @ v @ _MIRROR, _MIRROR @ j
+            residuals[i], covs[i], jacobians[i] = r, v, j
+    for i, o in enumerate(observations):
+        design = o.design.forward
+        labels.append(
+            TrialLabel(
+                design.label(),
+                "backward" if flags[i] else "forward",
+                turns=design.variant == "turn",
+            )
+        )
+    return misfit_check(
+        residuals,
+        covs,
+        labels,
+        jacobians,
+        covariance,
+        fitted=True,
+        turn_hint=turn_hint,
     )
 
 

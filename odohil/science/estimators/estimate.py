@@ -12,7 +12,7 @@ from scipy import special, stats
 
 from odohil import units
 from odohil.errors import MeasurementError
-from odohil.science.estimators.checks import Criteria, model_check, sufficiency
+from odohil.science.estimators.checks import Criteria, design_misfit, model_check, sufficiency
 from odohil.science.estimators.intervals import profile_interval, satterthwaite_dofs, t_interval
 from odohil.science.estimators.joint import JointFit, joint_estimate, start_phi
 from odohil.science.estimators.likelihood import GroupStats
@@ -167,13 +167,18 @@ def build_result(
     ambiguous: Sequence[int] = (),
     intervals: tuple[ParameterEstimate, ...] = (),
     turns_exact: bool = True,
+    check_covariance: FloatArray | None = None,
+    backward: Sequence[bool] | None = None,
 ) -> EstimateResult:
-    """Assemble the result, run both checks and give the verdict.
+    """Assemble the result, run the checks and give the verdict.
 
     ``check_params``: where the model check is evaluated (the maximum-likelihood
-    fit; ``params`` when None). ``named_outliers``: input positions the robust
-    fit named outliers. ``intervals``: the parameters with their intervals
-    (else the Wald rule of :func:`_estimates`).
+    fit; ``params`` when None), ``check_covariance`` its covariance (else
+    ``covariance``). ``named_outliers``: input positions the robust
+    fit named outliers (left out of the misfit checks too). ``intervals``: the
+    parameters with their intervals (else the Wald rule of :func:`_estimates`).
+    ``backward``: which trials were driven backwards (``observations`` are in
+    the forward view), for the misfit checks' groups.
     """
     cov = np.array(covariance, dtype=np.float64)
     estimates, stderr = _estimates(params, cov, len(observations))
@@ -184,6 +189,14 @@ def build_result(
     corr[~np.isfinite(corr)] = math.nan
     np.fill_diagonal(corr, 1.0)
     check = model_check(observations, check_params or params, named_outliers)
+    kept = [i for i in range(len(observations)) if i not in set(named_outliers)]
+    flags = list(backward) if backward is not None else None
+    misfit = design_misfit(
+        [observations[i] for i in kept],
+        check_params or params,
+        cov if check_covariance is None else np.asarray(check_covariance, dtype=np.float64),
+        [flags[i] for i in kept] if flags is not None else None,
+    )
     verdict = judge(
         observations,
         converged,
@@ -197,6 +210,7 @@ def build_result(
         check.verdict,
         ambiguous,
         turns_exact,
+        misfit,
     )
     if ambiguous:
         notes = (
@@ -219,6 +233,7 @@ def build_result(
         gaussian=gaussian,
         trials=trials,
         excluded=excluded,
+        misfit=misfit,
     )
 
 
@@ -293,6 +308,7 @@ def estimate(
     if method not in METHODS:
         raise MeasurementError(f"method must be one of {METHODS}, got {method!r}")
     observations, excluded = leave_out(_numbered(observations), exclude)
+    backward = [o.design.backward for o in observations]
     observations = [forward_view(o) for o in observations]
     if not observations:
         raise MeasurementError("no trials to estimate from")
@@ -305,6 +321,7 @@ def estimate(
         "ambiguous": ambiguous,
         "check_params": ml.params,
         "turns_exact": turns_exact,
+        "backward": backward,
     }
     if method == "paper":
         return build_result(
@@ -315,6 +332,7 @@ def estimate(
             paper.covariance,
             (*paper_notes(paper), "model check at the joint maximum-likelihood fit"),
             criteria,
+            check_covariance=ml.covariance,
             **common,  # type: ignore[arg-type]
         )
     state = f"converged in {ml.iterations} steps" if ml.converged else "DID NOT CONVERGE"
@@ -377,4 +395,5 @@ def estimate(
             sandwich_ratio(rob.scores, rob.information),
         ),
         turns_exact=turns_exact,
+        backward=backward,
     )

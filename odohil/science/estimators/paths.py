@@ -64,6 +64,7 @@ from odohil.science.estimators.likelihood import (
     ModelPoint,
     evaluate,
 )
+from odohil.science.estimators.misfit import MisfitCheck, labels_of, misfit_check
 from odohil.science.estimators.observations import align_heading
 from odohil.science.estimators.result import (
     EstimateResult,
@@ -562,6 +563,7 @@ def _result(
     check = distance_check(
         d2, [(None, t.trial, _label(t)) for t in trials], named, n_params=layout.size
     )
+    misfit = _misfit(trials, model, fit, named, turns_exact=not model.turns.classes)
     verdict = judge(
         [],
         converged,
@@ -570,6 +572,7 @@ def _result(
         check.fits,
         [o.label() for o in check.outliers],
         check.verdict,
+        misfit=misfit,
     )
     gaussian: tuple[ParameterEstimate, ...] = ()
     diagnostics: tuple[TrialDiagnostic, ...] = ()
@@ -606,4 +609,57 @@ def _result(
         gaussian=gaussian,
         trials=diagnostics,
         excluded=tuple(excluded),
+        misfit=misfit,
+    )
+
+
+TURN_HINT = "calibrate with turns_exact = false"
+"""The misfit checks' advice on a bias of trials that turn, for a fit whose
+turns were declared exact."""
+
+
+def _misfit(
+    trials: Sequence[PathTrial],
+    model: PathModel,
+    fit: JointFit,
+    named: Sequence[int],
+    *,
+    turns_exact: bool,
+) -> MisfitCheck:
+    """The misfit checks (odohil/science/estimators/misfit.py) of the trials
+    the fit kept (the robust fit's named outliers left out), at the fitted
+    parameters, with the mean's derivatives in every fitted parameter (SI) and
+    the fit's covariance; a parameter whose variance is not finite (a rate on
+    its floor) is left out of the fitted projection (which only makes the
+    check more cautious)."""
+    keep = [i for i in range(len(trials)) if i not in set(named)]
+    point = model.point(fit.point.phi, keep, derivatives=True)
+    if point.d_means is None:
+        raise AssertionError("the model point was asked for its derivatives")
+    to_si = np.diag(model.layout.jacobian(fit.point.phi))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(to_si > 0, 1.0 / to_si, 0.0)
+    residuals = np.empty((len(keep), 3))
+    covs = np.empty((len(keep), 3, 3))
+    jacobians = np.empty((len(keep), 3, model.layout.size))
+    for row, i in enumerate(keep):
+        trial = trials[i]
+        mean = align_heading(point.means[i], float(trial.pose_change[2]))
+        residuals[row] = trial.pose_change - mean
+        covs[row] = point.covs[i] + trial.measurement_cov
+        jacobians[row] = (point.d_means[i] * scale[:, None]).T
+    cov = np.array(fit.covariance, dtype=np.float64)
+    bad = ~np.isfinite(np.diag(cov))
+    cov[bad, :] = 0.0
+    cov[:, bad] = 0.0
+    cov[~np.isfinite(cov)] = 0.0
+    jacobians[~np.isfinite(jacobians)] = 0.0
+    return misfit_check(
+        residuals,
+        covs,
+        labels_of([trials[i] for i in keep]),
+        jacobians,
+        cov,
+        fitted=True,
+        turn_hint=TURN_HINT if turns_exact else "",
     )

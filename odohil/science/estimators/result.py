@@ -8,6 +8,7 @@ from typing import Any
 
 from scipy import special
 
+from odohil.science.estimators.misfit import MisfitCheck
 from odohil.science.estimators.verdict import TRUSTED, Verdict
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters, si_unit
 
@@ -303,6 +304,8 @@ class EstimateResult:
             beside the robust one (empty for the other methods).
         trials: per trial, its weight and influence (robust method).
         excluded: trial numbers left out on request.
+        misfit: the group-bias, spread and trial-order checks
+            (odohil/science/estimators/misfit.py), or None when not run.
     """
 
     method: str
@@ -319,6 +322,7 @@ class EstimateResult:
     gaussian: tuple[ParameterEstimate, ...] = ()
     trials: tuple[TrialDiagnostic, ...] = ()
     excluded: tuple[int, ...] = ()
+    misfit: MisfitCheck | None = None
 
     def parameter(self, name: str) -> ParameterEstimate:
         """The estimate of one parameter by name (KeyError when it was not
@@ -335,8 +339,9 @@ class EstimateResult:
 
     def to_json_dict(self) -> dict[str, Any]:
         """{"verdict", "method", "n_trials", "parameters", "correlation",
-        "model_check", "sufficiency", "notes", "excluded", and for the robust
-        method "gaussian_ml" and "trials"}, SI; non-finite numbers as null."""
+        "model_check", "sufficiency", "notes", "excluded", "misfit" (when run),
+        and for the robust method "gaussian_ml" and "trials"}, SI; non-finite
+        numbers as null."""
         out: dict[str, Any] = {
             "verdict": self.verdict.to_json_dict(),
             "method": self.method,
@@ -348,6 +353,8 @@ class EstimateResult:
             "notes": list(self.notes),
             "excluded": list(self.excluded),
         }
+        if self.misfit is not None:
+            out["misfit"] = self.misfit.to_json_dict()
         if self.gaussian:
             out["gaussian_ml"] = {p.name: p.to_json_dict() for p in self.gaussian}
         if self.trials:

@@ -3,7 +3,10 @@
 - failed: the fit did not converge, the data are degenerate (every trial of
   a design has the same exact pose), or a parameter has no information
   (infinite standard error);
-- doubtful: the model check fails, some trial is an outlier, more than
+- doubtful: the model check fails, some trial is an outlier, the misfit
+  checks (odohil/science/estimators/misfit.py: a group of trials biased on
+  some axis, groups that differ more than their spread allows, first trials
+  unlike the rest) fail, more than
   :data:`AMBIGUOUS_TOLERATED` of the trials were left out by the session as
   ambiguous, or ``turn`` trials come from a robot whose turns carry error (a
   differential drive);
@@ -28,6 +31,7 @@ from typing import Any, Literal
 import numpy as np
 
 from odohil import units
+from odohil.science.estimators.misfit import MisfitCheck
 from odohil.science.estimators.observations import Observation
 from odohil.science.grouping import by_design
 
@@ -97,6 +101,7 @@ def judge(
     check_verdict: str,
     ambiguous: Sequence[int] = (),
     turns_exact: bool = True,
+    misfit: MisfitCheck | None = None,
 ) -> Verdict:
     """The verdict from the fit's state and its checks (see the module docstring).
 
@@ -112,6 +117,8 @@ def judge(
         turns_exact: whether the robot's in-place turns carry no error (the
             paper's model); when False, ``turn`` trials make the verdict
             doubtful: their spin errors fold into E_R and K_theta unseen.
+        misfit: the group-bias and trial-order checks; each failing one is a
+            reason (naming the group, the axis and the bias).
     """
     failed: list[str] = []
     doubtful: list[str] = []
@@ -134,6 +141,8 @@ def judge(
         )
     elif not fits:
         doubtful.append(f"model check failed: {check_verdict}")
+    if misfit is not None and not misfit.passed:
+        doubtful += [f"model check failed: {reason}" for reason in misfit.reasons()]
     if ambiguous and not ambiguous_tolerated(len(observations), len(ambiguous)):
         doubtful.append(
             "ambiguous trials left out (the floor marks fit two poses): "

@@ -145,10 +145,11 @@ def _validations(report: SessionReport, by_key: Mapping[str, Plot]) -> str:
         status = "PASS" if r.passed else "FAIL"
         parts.append(
             f'<p class="{"good" if r.passed else "bad"}">{e(v.path)} ({where}): {status}, '
-            f"{units.plural(r.n_trials, 'trial')}, each test at level {r.alpha / 4:g}.</p>"
+            f"{units.plural(r.n_trials, 'trial')}, each test at level {r.level:g}"
+            f"{': ' + e('; '.join(r.reasons())) if r.reasons() else ''}.</p>"
         )
         parts.append(
-            "<table><tr><th>test</th><th>NEES</th><th>dof</th><th>p-value</th>"
+            "<table><tr><th>test</th><th>statistic</th><th>dof</th><th>p-value</th>"
             "<th>threshold</th><th>result</th></tr>"
         )
         for t in r.tests:
