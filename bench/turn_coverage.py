@@ -164,19 +164,28 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--method", default="robust")
     parser.add_argument("--seed", type=int, default=20261125)
+    parser.add_argument("--report-every", type=int, default=100)
     args = parser.parse_args()
     print(f"load average before: {os.getloadavg()[0]:.2f}; {args.workers} workers", flush=True)
     jobs = [(args.seed + i, args.method) for i in range(args.replications)]
     started = time.time()
+    outcomes: list[Outcome] = []
     with multiprocessing.Pool(args.workers) as pool:
-        outcomes = pool.map(_run, jobs, chunksize=5)
-    wall = time.time() - started
+        for outcome in pool.imap(_run, jobs, chunksize=2):
+            outcomes.append(outcome)
+            if len(outcomes) % args.report_every == 0 and len(outcomes) < len(jobs):
+                report(outcomes, args.method, time.time() - started)
+    report(outcomes, args.method, time.time() - started)
+
+
+def report(outcomes: list[Outcome], method: str, wall: float) -> None:
+    """Print the coverage table of the replications so far."""
     done = [o for o in outcomes if not o.failure]
     failures = [o.failure for o in outcomes if o.failure]
     print(
-        f"{len(done)} of {len(outcomes)} data sets fitted ({args.method}), wall {wall:.0f} s, "
+        f"{len(done)} of {len(outcomes)} data sets fitted ({method}), wall {wall:.0f} s, "
         f"median CPU per fit {np.median([o.seconds for o in done]):.2f} s; "
-        f"load average after: {os.getloadavg()[0]:.2f}"
+        f"load average now: {os.getloadavg()[0]:.2f}"
     )
     verdicts: dict[str, int] = {}
     for o in done:
@@ -184,19 +193,18 @@ def main() -> None:
     print(f"verdicts: {verdicts}; e_turn split by direction in {sum(o.split for o in done)}")
     print("| parameter | truth | mean estimate | 95 % coverage | MC SE | outside 4-sigma |")
     print("|---|---|---|---|---|---|")
-    names = ("E_R", "E_T", "K_theta", "K_rho", "e_turn_spin", "e_turn_arc", "K_spin")
-    for name in names:
+    for name in ("E_R", "E_T", "K_theta", "K_rho", "e_turn_spin", "e_turn_arc", "K_spin"):
         hits = [o.covered[name] for o in done if name in o.covered]
         if not hits:
             continue
         rate = float(np.mean(hits))
         se = math.sqrt(rate * (1 - rate) / len(hits))
         mean = float(np.mean([o.values[name] for o in done if name in o.values]))
-        truth = truth_of("e_turn_spin" if name == "e_turn_spin" else name)
         misses = sum(o.outside[name] for o in done if name in o.outside)
-        print(f"| {name} | {truth:.4g} | {mean:.4g} | {rate:.3f} | {se:.3f} | {misses} |")
+        print(f"| {name} | {truth_of(name):.4g} | {mean:.4g} | {rate:.3f} | {se:.3f} | {misses} |")
     for failure in failures[:10]:
         print("failure:", failure)
+    print(flush=True)
 
 
 if __name__ == "__main__":

@@ -473,12 +473,20 @@ def warn_turns(console: Console, plan: Plan, description: RobotDescription) -> N
         )
 
 
-def report_stop(console: Console, outcome: StopOutcome | None, folder: Path) -> None:
-    """Say what was checked on the way out: the robot's stop, then the journal.
+def report_stop(
+    console: Console,
+    outcome: StopOutcome | None,
+    folder: Path,
+    continue_with: str | None = None,
+) -> None:
+    """Say what was checked on the way out: the robot's stop, then the journal,
+    and the command that continues the session (``continue_with``; default
+    ``odohil resume FOLDER``).
 
     "robot stopped" only when the robot reported it; "journaled" only when the
     closing record is on disk.
     """
+    again = continue_with or f"odohil resume {folder}"
     if outcome is None:
         return
     if outcome.robot_stopped:
@@ -487,14 +495,14 @@ def report_stop(console: Console, outcome: StopOutcome | None, folder: Path) -> 
         console.print(f"[bold red]{MAY_STILL_MOVE}[/]: {escape(outcome.detail)}", soft_wrap=True)
     if outcome.journaled:
         console.print(
-            f"session journaled in {folder}; continue with `odohil resume {folder}`",
+            f"session journaled in {folder}; continue with `{again}`",
             soft_wrap=True,
         )
     else:
         console.print(
             f"[bold red]the journal could not be written[/]: {escape(outcome.journal_error)}; "
             f"the records before this failure are kept in {folder}; free the disk, then "
-            f"`odohil resume {folder}`",
+            f"`{again}`",
             soft_wrap=True,
         )
 

@@ -85,7 +85,7 @@ from odohil.session.robots import open_robot
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext, check_distance
 from odohil.session.start_pose import StartPose, pose_text, sample_pose
-from odohil.session.state import SessionState
+from odohil.session.state import SessionState, load_session
 
 SECOND_CTRL_C_STOP_S = 0.5
 """How long a second Ctrl-C waits for the robot to confirm its one ``st``, s."""
@@ -593,7 +593,15 @@ class Opened:
     state: SessionState
 
 
-def _resume(console: Console, folder: Path, max_leg_m: float, port: str | None) -> Opened:
+def _resume(
+    console: Console,
+    folder: Path,
+    max_leg_m: float,
+    port: str | None,
+    plan_text: str | None = None,
+) -> Opened:
+    if plan_text is not None:
+        _same_plan(console, folder, plan_text)
     try:
         resumed = resume_session(folder, {"by": "wizard", "port": port})
     except OdohilError as exc:
@@ -613,6 +621,28 @@ def _resume(console: Console, folder: Path, max_leg_m: float, port: str | None) 
     detail = f"resuming {folder}: {done} of {units.plural(state.plan.n_trials, 'trial')} done"
     console.print(check_line(Check("session", True, detail)))
     return Opened(resumed.journal, state)
+
+
+def _same_plan(console: Console, folder: Path, plan_text: str) -> None:
+    """A resumed session keeps its plan: a --plan that differs is refused
+    (before anything is written), not silently replaced by the session's."""
+    try:
+        state = load_session(folder).state
+        assert state.plan is not None
+        given = parse_plan(plan_text, default_variant(description_of(state)))
+    except OdohilError as exc:
+        _fail(console, Check("session", False, str(exc)))
+    if given.to_text() != state.plan.to_text():
+        _fail(
+            console,
+            Check(
+                "session",
+                False,
+                f"--plan {plan_text} differs from the session's plan ({state.plan.to_text()}) "
+                f"in {folder}: give no --plan (or that one) to resume it, or another "
+                "--session for a new session",
+            ),
+        )
 
 
 def _prepare(
@@ -797,9 +827,10 @@ def _guided(
     allow_turns: bool = False,
 ) -> int:
     """Lock the session (resume or start it), then connect, then run."""
+    robot: Robot | None = None
     try:
         if journal_path(folder).exists():
-            opened = _resume(console, folder, max_leg_m, port)
+            opened = _resume(console, folder, max_leg_m, port, plan_text)
             header = opened.state.header
             try:
                 line = _line(
@@ -818,9 +849,15 @@ def _guided(
             assert robot_file is not None
             description = load_robot_description(robot_file)
             line = _line(console, description, port, baud, str(robot_file))
-            opened = _start(console, folder, text, plan, robot_file, line)
+            robot = _connect(console, line)  # pre-flight ends here: nothing written before
+            try:
+                opened = _start(console, folder, text, plan, robot_file, line)
+            except BaseException:
+                robot.close()
+                raise
         with opened.journal:
-            robot = _connect(console, line)
+            if robot is None:
+                robot = _connect(console, line)
             interrupts.robot = robot
             with robot:
                 return _run(console, opened, robot, interrupts, line, system)
@@ -856,21 +893,26 @@ def _run(
     except StopUnconfirmedError:
         progress.stop()
         console.print(f"\n[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
-        report_stop(console, engine.stop_outcome, opened.journal.folder)
+        report_stop(console, engine.stop_outcome, opened.journal.folder, _again(opened))
         return EXIT_STOP_UNCONFIRMED
     except KeyboardInterrupt as exc:
         progress.stop()
         console.print(f"\n[yellow]Interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
-        report_stop(console, engine.stop_outcome, opened.journal.folder)
+        report_stop(console, engine.stop_outcome, opened.journal.folder, _again(opened))
         return exit_for_signal(signal_of(exc))
     except OdohilError as exc:
         progress.stop()
         console.print(f"[red]error:[/] {exc}", soft_wrap=True)
-        report_stop(console, engine.stop_outcome, opened.journal.folder)
+        report_stop(console, engine.stop_outcome, opened.journal.folder, _again(opened))
         return EXIT_ERROR
     finally:
         progress.stop()
     return final_screen(console, engine.state)
+
+
+def _again(opened: Opened) -> str:
+    """The command that continues a wizard session (``odohil resume`` refuses them)."""
+    return f"odohil wizard --session {opened.journal.folder}"
 
 
 def final_screen(console: Console, state: SessionState) -> int:

@@ -8,6 +8,7 @@ the option or file and what is accepted; nothing has moved yet.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -109,7 +110,13 @@ def check_trials_per_design(
 
 
 def check_session_folder(session: Path | None) -> None:
-    """A ``--session`` that exists must be a folder (ParameterError otherwise)."""
+    """A ``--session`` that exists must be a folder, and a symbolic link must
+    lead somewhere (ParameterError otherwise)."""
+    if session is not None and session.is_symlink() and not session.exists():
+        raise ParameterError(
+            f"--session {session} is a symbolic link to {os.readlink(session)}, which does "
+            "not exist: create that folder, or give another --session"
+        )
     if session is not None and session.exists() and not session.is_dir():
         raise ParameterError(
             f"--session {session} is a file, not a session folder: give a new or "

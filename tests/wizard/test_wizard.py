@@ -116,7 +116,8 @@ def test_three_trial_session_with_bad_inputs_interrupt_and_resume(tmp_path: Path
         plan = "k=1,l=1,n=3"
         child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", plan,
                         "--session", str(folder)])  # fmt: skip
-        for check in ("robot description", "plan feasible", "session", "robot answers"):
+        # the robot answers before the session is written (nothing written before pre-flight)
+        for check in ("robot description", "plan feasible", "robot answers", "session"):
             child.expect(r"\[ok\]\s+(\x1b\[[0-9;]*m)*" + re.escape(check))
 
         # Trial 1: every kind of bad input, then the true distances (one in mm).
@@ -164,6 +165,9 @@ def test_three_trial_session_with_bad_inputs_interrupt_and_resume(tmp_path: Path
         child.expect("robot stopped")  # the robot reported it
         child.expect("session journaled")
         child.expect(pexpect.EOF)
+        advice = " ".join(str(child.before).split())
+        assert "odohil wizard --session" in advice, advice  # only what works:
+        assert "odohil resume" not in advice, advice  # resume refuses wizard sessions
         child.close()
         assert child.exitstatus == 130
         assert not truth.snapshot().moving

@@ -227,8 +227,16 @@ class _Profile:
         return value.nll, phi
 
     def root(self, psi: float) -> float:
-        """Signed root of the deviance at psi."""
+        """Signed root of the deviance at psi. The re-fit starts from the last
+        point; when that gives a deviance above 1 it is re-fitted from the
+        estimate too and the lower one kept (a warm start far from psi's own
+        optimum can stop, after its few steps, well above it: the deviance
+        then jumps about and the bound lands almost on the estimate)."""
         nll, phi = self.refit(psi, self.last)
+        if not (math.isfinite(nll) and 2.0 * (nll - self.reference) <= 1.0):
+            again, other = self.refit(psi, self.anchor.phi)
+            if again < nll or not math.isfinite(nll):
+                nll, phi = again, other
         if not math.isfinite(nll):
             return math.copysign(math.inf, psi - self.psi_hat)
         self.last = phi
