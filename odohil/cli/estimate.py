@@ -100,7 +100,7 @@ def register(app: typer.Typer) -> None:
             typer.Option(
                 "--robot",
                 callback=robot_callback,
-                help=ROBOT_HELP + " Needed for raw marks and recordings; its [robot] "
+                help=ROBOT_HELP + " Needed for raw marks and recordings; its \\[robot] "
                 "turns_exact = false fits the turn errors e_turn (and K_spin) on general paths.",
             ),
         ] = None,
