@@ -465,6 +465,11 @@ def estimate_source(
     files = [Path(p) for p in paths]
     if not files:
         raise ParameterError("no session, trial file or recording given")
+    for file in files:
+        if not file.exists():
+            raise ParameterError(
+                f"{file}: no such session folder (journal.jsonl), trial file or recording"
+            )
     kind = source_kind(files, recording)
     selection = selection or Selection()
     if kind in ("session", "trials"):

@@ -207,3 +207,32 @@ def test_a_recording_without_robot_or_with_an_empty_selection_is_refused() -> No
     )
     assert paper.exit_code == 2, paper.output
     assert "--method paper" in " ".join(paper.output.split())
+
+
+def test_report_of_the_straight_runs_and_refusal_of_the_exact_turn_circles(
+    tmp_path: Path,
+) -> None:
+    out = tmp_path / "straight"
+    result = invoke(
+        "report",
+        OPTIODOM / "ivanjko",
+        "--family",
+        "straight",
+        "--robot",
+        OPTIODOM_ROBOT,
+        "--out",
+        out,
+    )
+    assert result.exit_code == 0, result.output
+    data = json.loads((out / "parameters.json").read_text(encoding="utf-8"))
+    assert data["verdict"]["status"] == "trusted"
+    assert data["general_paths"][0]["family"] == "straight"
+    page = (out / "index.html").read_text(encoding="utf-8")
+    assert "Mean residuals by path family and direction" in page
+    assert "ros2_diff_drive.yaml" in page
+    refused = tmp_path / "circles"
+    result = invoke(
+        "report", OPTIODOM / "circular", "--robot", _exact_robot(tmp_path), "--out", refused
+    )
+    assert result.exit_code == 3, result.output
+    assert not refused.exists()
