@@ -122,6 +122,7 @@ class Outcome:
     split: bool
     seconds: float
     failure: str = ""
+    reasons: tuple[str, ...] = ()
 
 
 def kind(name: str) -> str:
@@ -151,7 +152,8 @@ def replicate(seed: int, method: str) -> Outcome:
         outside[key] = outside.get(key, False) or not p.contains(truth)
         values[key] = p.value
     split = any("split by direction" in note for note in result.notes)
-    return Outcome(covered, outside, values, result.verdict.status, split, seconds)
+    reasons = tuple(f"seed {seed}: {r}" for r in result.verdict.reasons)
+    return Outcome(covered, outside, values, result.verdict.status, split, seconds, "", reasons)
 
 
 def _run(job: tuple[int, str]) -> Outcome:
@@ -204,6 +206,8 @@ def report(outcomes: list[Outcome], method: str, wall: float) -> None:
         print(f"| {name} | {truth_of(name):.4g} | {mean:.4g} | {rate:.3f} | {se:.3f} | {misses} |")
     for failure in failures[:10]:
         print("failure:", failure)
+    for reason in [r for o in done for r in o.reasons][:10]:
+        print("not trusted:", reason)
     print(flush=True)
 
 

@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from odohil import units
 from odohil.errors import MeasurementError
 from odohil.science.diff_drive import simulate_turn_errors
 from odohil.science.estimators import Observation, estimate
@@ -212,3 +213,17 @@ def test_bad_input_is_refused() -> None:
         estimate_paths(trials, turns_exact=True, method="paper")
     with pytest.raises(MeasurementError, match="no trial numbered 7"):
         estimate_paths(trials, turns_exact=True, exclude=[7])
+
+
+def test_turn_error_units_at_the_edges() -> None:
+    # K_spin: rad^2 per rad spun, deg^2 per degree for people; e_turn a plain number
+    k_spin = 1e-4  # 1 rad spun: variance 1e-4 rad^2 = 0.328 deg^2 over 57.3 deg
+    assert units.parameter_to_paper("K_spin", k_spin) == pytest.approx(
+        math.degrees(math.sqrt(k_spin)) ** 2 / math.degrees(1.0), rel=1e-12
+    )
+    assert units.parameter_from_paper("K_spin", units.parameter_to_paper("K_spin", k_spin)) == (
+        pytest.approx(k_spin, rel=1e-15)
+    )
+    assert units.parameter_to_paper("e_turn_arc_cw", -0.012) == -0.012
+    assert units.parameter_unit("K_spin", "paper") == "deg^2/deg"
+    assert units.parameter_unit("e_turn_spin", "si") == ""

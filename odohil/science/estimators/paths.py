@@ -138,17 +138,18 @@ class TurnModel:
         k_spin = math.exp(float(phi[-1])) if self.k_spin else 0.0
         return TurnErrors.of(scales, k_spin)
 
-    @property
-    def split(self) -> bool:
-        """Whether e_turn is split by direction."""
-        return any(len(members) == 1 for _, members in self.classes)
+
+def _turned(paths: Sequence[EncoderPath]) -> FloatArray:
+    """(4,) per turn class, the |angle| turned over all the paths, rad."""
+    turned = np.zeros(4)
+    for path in paths:
+        turned += path.turns.total_abs_rad
+    return turned
 
 
 def turn_model(paths: Sequence[EncoderPath], *, split_directions: bool) -> TurnModel:
     """The turn errors the paths can identify (module docstring)."""
-    turned = np.zeros(4)
-    for path in paths:
-        turned += path.turns.total_abs_rad
+    turned = _turned(paths)
     present = turned > 0
     kinds = [k for k, rows in (("spin", (0, 1)), ("arc", (2, 3))) if present[list(rows)].any()]
     classes: list[tuple[str, tuple[int, ...]]] = []
@@ -166,9 +167,7 @@ def turn_model(paths: Sequence[EncoderPath], *, split_directions: bool) -> TurnM
 
 
 def _directions_present(paths: Sequence[EncoderPath]) -> bool:
-    turned = np.zeros(4)
-    for path in paths:
-        turned += path.turns.total_abs_rad
+    turned = _turned(paths)
     return bool((turned[0] > 0 and turned[1] > 0) or (turned[2] > 0 and turned[3] > 0))
 
 
