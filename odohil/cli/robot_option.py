@@ -14,7 +14,6 @@ import typer
 
 from odohil.errors import OdohilError
 from odohil.session.robot_file import load_robot_description
-from odohil.session.state import description_of_header, load_session
 
 BUILTIN_PACKAGE = "odohil.robots"
 ROBOT_HELP = "Robot description (TOML file), or a built-in one: nomad150, create2."
@@ -80,14 +79,3 @@ def robot_protocol(value: str, option: str = "--robot") -> str:
         return load_robot_description(path).robot.protocol
     except OdohilError as exc:
         raise typer.BadParameter(str(exc), param_hint=option) from None
-
-
-def turns_exact_of(source: Path, robot: Path | None) -> bool:
-    """Whether the robot behind ``source`` turns in place without error: from
-    ``--robot`` when given, else from a session folder's journaled description;
-    a trial file without ``--robot`` is taken as the paper's robot (True)."""
-    if robot is not None:
-        return load_robot_description(robot).robot.turns_exact
-    if source.is_dir():
-        return description_of_header(load_session(source).state).robot.turns_exact
-    return True

@@ -65,7 +65,6 @@ from odohil.session.engine import (
     SessionEngine,
     StartCheck,
     StopOutcome,
-    description_of,
     start_session,
 )
 from odohil.session.floor_space import check_floor
@@ -770,11 +769,6 @@ def finish(
         print_summary(outcome.estimate, Console(width=max(110, Console().width)), truth, system)
     if outcome.exit_code:
         raise typer.Exit(outcome.exit_code)
-
-
-def resumable_description(state: SessionState) -> RobotDescription:
-    """The robot description journaled in a session."""
-    return description_of(state)
 
 
 def register(app: typer.Typer) -> None:

@@ -58,8 +58,6 @@ ROBOT_LOCALIZATION_STATES: tuple[str, ...] = (
     "x", "y", "z", "roll", "pitch", "yaw", "vx", "vy", "vz",
     "vroll", "vpitch", "vyaw", "ax", "ay", "az",
 )  # fmt: skip
-POSE_AXES: tuple[str, ...] = ("x", "y", "z", "roll", "pitch", "yaw")
-TWIST_AXES: tuple[str, ...] = ("vx", "vy", "vz", "wx", "wy", "wz")
 
 
 @dataclass(frozen=True)

@@ -261,8 +261,8 @@ def export_refusals(
     ]
     if few:
         reasons.append(
-            f"fewer than {min_trials_per_design} trials a design, the planner's minimum "
-            f"for honest intervals: {', '.join(few)}"
+            f"fewer than {units.plural(min_trials_per_design, 'trial')} a design, the "
+            f"planner's minimum for honest intervals: {', '.join(few)}"
         )
     reasons.extend(_correction_refusals(result))
     return tuple(reasons)

@@ -102,7 +102,7 @@ def check_trials_per_design(
     ]
     if few and not allow_few:
         raise ParameterError(
-            f"--plan has fewer than {min_trials_per_design} trials a design "
+            f"--plan has fewer than {units.plural(min_trials_per_design, 'trial')} a design "
             f"({', '.join(few)}), the planner's minimum for honest intervals: its estimate "
             "could not be exported. Give n >= "
             f"{min_trials_per_design} for every design, or --allow-few-trials to run it anyway"

@@ -93,11 +93,6 @@ class ValidationPath:
     path: EncoderPath | None = None
     file: Path | None = None
 
-    @property
-    def drivable(self) -> bool:
-        """Whether the engine can drive it (a forth-and-back design)."""
-        return self.design is not None
-
     def slug(self) -> str:
         """A folder name for it, e.g. ``forth-back-k2-l1.5-turn``, ``square-2``."""
         if self.design is not None:

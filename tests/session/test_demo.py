@@ -26,6 +26,7 @@ def test_demo_estimates_contain_the_true_values(tmp_path: Path) -> None:
         timeout=300,
     )
     assert done.returncode == 0, done.stderr
+    assert "verdict: TRUSTED" in done.stderr  # every command that estimates says it (issue 18)
     result = json.loads(done.stdout)
     n_trials = parse_plan(DEMO_PLAN).n_trials
     assert result["n_trials"] == n_trials

@@ -204,11 +204,6 @@ class Create2Link:
         self.send(commands.stream(SAMPLE_IDS))
         self.streaming = True
 
-    def stop_stream(self) -> None:
-        """Stop the stream (``148 0``)."""
-        self.send(commands.stream([]))
-        self.streaming = False
-
     def reading(self, timeout_s: float = REPLY_TIMEOUT_S) -> Reading:
         """The freshest reading: polled, or the newest complete stream frame."""
         self.readings += 1

@@ -26,7 +26,6 @@ from odohil.protocol.numbers import (
     encode_unsigned,
 )
 
-S16_MIN = -0x8000
 COUNTS_MODULUS = 0x10000
 """Encoder counts roll over at this many counts."""
 

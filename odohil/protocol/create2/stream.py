@@ -18,8 +18,6 @@ STREAM_HEADER = 19
 """First byte of every stream frame."""
 STREAM_PERIOD_S = 0.015
 """The OI sends a frame every 15 ms."""
-MAX_BODY = 255
-"""Largest N a frame can announce."""
 
 
 def checksum(frame_without_checksum: bytes) -> int:

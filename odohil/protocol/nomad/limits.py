@@ -5,8 +5,10 @@ in whole wire units of 2.54 mm and cannot exceed 32767 of them (83.2 m). A leg
 of fewer than :data:`MIN_LEG_WIRE` units is refused: it would be sent as
 ``pr(0)`` or nearly (the robot does not move, yet the trial looks valid), its
 rounding error would be a large part of it, and the driver's end-of-step
-check (2 wire units) could not tell it from no motion at all. Plan validation
-calls :func:`check_leg_length_m` for every leg before anything moves.
+check (2 wire units) could not tell it from no motion at all. The driver
+calls :func:`check_leg_length_m` for every leg before it sends anything
+(odohil/driver/nomad/motion.py); plan validation checks the stricter
+pre-flight range earlier (odohil/science/limits.py ``check_wire_leg``).
 """
 
 from __future__ import annotations

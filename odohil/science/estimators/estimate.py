@@ -8,7 +8,7 @@ from dataclasses import replace
 from typing import Literal
 
 import numpy as np
-from scipy import special, stats
+from scipy import special
 
 from odohil import units
 from odohil.errors import MeasurementError
@@ -66,13 +66,6 @@ def joint_start(paper: PaperEstimate) -> FloatArray:
         float(se[3]) if math.isfinite(se[3]) else 0.0,
     )
     return start_phi(paper.params, floor)
-
-
-def interval_quantile(n_trials: int) -> float:
-    """The 97.5 % Student-t quantile with 3 n - 4 degrees of freedom (at
-    least 1): the Wald intervals' multiplier in place of 1.96 at small n
-    (K_theta and K_rho may get a larger one, see :func:`_quantile`)."""
-    return float(stats.t.ppf(0.975, interval_dof(n_trials)))
 
 
 def interval_dof(n_trials: int) -> int:

@@ -107,21 +107,6 @@ def t_interval(value: float, stderr: float, dof: float, rule: str) -> Interval:
     )
 
 
-def log_t_interval(value: float, stderr: float, dof: float, rule: str) -> Interval:
-    """A variance rate's interval symmetric in log K, t quantile with ``dof``
-    ([0, value + q stderr] when the estimate is 0)."""
-    nu = max(dof, 1.0)
-    out = []
-    for level in (LEVEL_95, LEVEL_4SIGMA):
-        q = float(stats.t.ppf(0.5 + level / 2, nu))
-        if value > 0 and math.isfinite(stderr):
-            spread = math.exp(min(q * stderr / value, 700.0))
-            out.append((value / spread, value * spread))
-        else:
-            out.append((0.0, value + q * stderr))
-    return Interval(out[0], out[1], f"{rule} (nu = {nu:.1f})", nu)
-
-
 def satterthwaite_dof(
     groups: Sequence[GroupStats], fit: JointFit, index: int, cox_reid: bool = True
 ) -> float:

@@ -80,11 +80,6 @@ class ParameterEstimate:
         low, high = self.ci95 if level == "95" else self.ci_4sigma
         return low <= truth <= high
 
-    @property
-    def relative_stderr(self) -> float:
-        """stderr / |value| (inf for a zero value)."""
-        return self.stderr / abs(self.value) if self.value != 0 else math.inf
-
     def to_json_dict(self) -> dict[str, Any]:
         """{"value", "stderr", "ci95", "unit", "ci_4sigma", "interval", "dof"}
         (SI; inf written as null)."""
