@@ -161,14 +161,16 @@ def _observations(
     rng: np.random.Generator, turn_scale: float, first_offset: float = 0.0
 ) -> list[Observation]:
     """12 trials of each design; ``first_offset``: heading added to each
-    design's first trial, in its predicted heading standard deviations."""
+    design's first trial (in the sense of travel), in its predicted heading
+    standard deviations."""
     errors = DiffDriveErrors.from_parameters(TRUTH, turn_scale=turn_scale)
     out = []
     for design in DESIGNS:
         poses = simulate_diff_drive(design.path(), errors, N_PER_DESIGN, seed=rng).pose_change
         poses = poses + rng.multivariate_normal(np.zeros(3), MEASUREMENT_COV, size=N_PER_DESIGN)
         sd = math.sqrt(pose_moments(design.path(), TRUTH).cov[2, 2] + MEASUREMENT_COV[2, 2])
-        poses[0, 2] += first_offset * sd
+        # in the sense of travel: a backward trial's heading is the mirror image
+        poses[0, 2] += first_offset * sd * (-1.0 if design.backward else 1.0)
         out += [Observation(design, p, MEASUREMENT_COV) for p in poses]
     return out
 
