@@ -127,11 +127,13 @@ def normality(trials: Sequence[PathTrial], result: EstimateResult) -> None:
 
 def first_runs(trials: Sequence[PathTrial], result: EstimateResult) -> None:
     """The heading residual of each session and direction's first run against
-    its other runs."""
+    its other runs (clockwise runs mirrored onto the counter-clockwise frame:
+    a first run that turns short does so both ways)."""
     groups: dict[tuple[str, str], list[tuple[str, float]]] = {}
     for trial, p in zip(trials, predict(trials, result), strict=True):
         key = (str(Path(trial.source).parent), trial.direction)
-        groups.setdefault(key, []).append((Path(trial.source).name, float(p.residual[2])))
+        sign = -1.0 if trial.direction in ("cw", "backward") else 1.0  # mirrored
+        groups.setdefault(key, []).append((Path(trial.source).name, sign * float(p.residual[2])))
     diffs = []
     for members in groups.values():
         members.sort()
@@ -142,7 +144,8 @@ def first_runs(trials: Sequence[PathTrial], result: EstimateResult) -> None:
     d = np.array(diffs)
     larger = int(np.sum(d > 0))
     print(
-        f"first run minus the others' mean heading residual, {len(d)} session-direction "
+        f"first run minus the others' mean heading residual (cw mirrored), {len(d)} "
+        "session-direction "
         f"groups: mean {d.mean():+.2f} deg (SE {d.std(ddof=1) / math.sqrt(len(d)):.2f}), "
         f"positive in {larger} of {len(d)}"
     )
@@ -192,7 +195,11 @@ def main() -> None:
         f"K_rho {k_rho:.2g} m: over a 2 m run K_rho x L = {k_rho * 2:.2g} m^2, "
         f"{k_rho * 2 / 1e-6:.2f} x the variance of one 1 mm tape reading"
     )
+    print("circles (one e_turn):", end=" ")
     first_runs(circles, c1)
+    sq = estimate_paths(squares, turns_exact=False)
+    print("squares (e_turn as the data ask):", end=" ")
+    first_runs(squares, sq)
     print()
     load = subprocess.run(["uptime"], capture_output=True, text=True, check=False).stdout.strip()
     print(f"uptime: {load}")
