@@ -236,3 +236,14 @@ def test_report_of_the_straight_runs_and_refusal_of_the_exact_turn_circles(
     )
     assert result.exit_code == 3, result.output
     assert not refused.exists()
+
+
+def test_direction_selection_keeps_one_direction() -> None:
+    result = invoke(
+        "estimate", OPTIODOM / "circular", "--direction", "cw", "--robot", OPTIODOM_ROBOT, "--json"
+    )
+    assert result.exit_code == 0, result.output  # cw circles alone: trusted
+    data = json.loads(result.output)
+    assert [(g["family"], g["direction"], g["trials"]) for g in data["general_paths"]] == [
+        ("arc", "cw", 16)
+    ]
