@@ -4,6 +4,7 @@ session folder, with checks."""
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
@@ -15,12 +16,31 @@ from odohil import units
 from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, exit_for_outcome
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, unit_system
+from odohil.cli.recording_options import (
+    MAX_TIME_DIFF_DEFAULT,
+    MAX_TRUTH_GAP_DEFAULT,
+    MIN_EDGE_REST_DEFAULT,
+    MIN_REST_DEFAULT,
+    ODOM_TOPIC_DEFAULT,
+    TRUTH_TOPIC_DEFAULT,
+    DirectionOption,
+    FamilyOption,
+    LogFormatOption,
+    MaxTimeDiffOption,
+    MaxTruthGapOption,
+    MinEdgeRestOption,
+    MinRestOption,
+    OdomTopicOption,
+    TimeOffsetOption,
+    TruthTopicOption,
+    import_options,
+)
 from odohil.cli.render import parameters_table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.verdict import export_refusal_lines, gaussian_line, outcome_line, verdict_line
 from odohil.errors import OdohilError
-from odohil.science.estimators.estimate import Method
-from odohil.session.outcome import EstimateOutcome, estimate_path
+from odohil.session.logs import ImportOptions
+from odohil.session.outcome import EstimateOutcome, Selection, estimate_source
 from odohil.session.robot_file import load_robot_description
 
 
@@ -33,27 +53,40 @@ class MethodChoice(StrEnum):
 
 
 def load_outcome(
-    source: Path,
+    sources: Path | Sequence[Path],
     robot: Path | None,
     exclude: frozenset[int],
     err: Console,
-    method: Method = "robust",
+    method: str = "robust",
+    recording: ImportOptions | None = None,
+    selection: Selection | None = None,
 ) -> EstimateOutcome:
-    """The recipe's outcome for a session folder or a trial file (a torn last
-    journal record is reported on stderr and not used).
+    """The recipe's outcome for a session folder, a trial file (forth-and-back
+    or general-path) or a recording (odohil/session/outcome.py
+    :func:`~odohil.session.outcome.estimate_source`); a torn last journal
+    record is reported on stderr and not used.
 
     Raises:
-        OdohilError: unreadable source or a bad --exclude.
+        OdohilError: unreadable source, a recording without --robot, a bad
+            --exclude, --method or selection.
     """
+    paths = [sources] if isinstance(sources, Path) else list(sources)
     description = load_robot_description(robot) if robot is not None else None
-    outcome = estimate_path(source, description, exclude, method)
+    outcome = estimate_source(paths, description, exclude, method, recording, selection)
     if outcome.torn is not None:
         err.print(
-            f"[yellow]warning:[/yellow] {source}: the last journal record (line "
+            f"[yellow]warning:[/yellow] {outcome.source}: the last journal record (line "
             f"{outcome.torn.line_number}) is torn and was not used: {outcome.torn.reason}",
             highlight=False,
         )
     return outcome
+
+
+SOURCES_HELP = (
+    "A session folder; a trial file (pose rows or raw floor marks; a general-path trial "
+    "file of `odohil import`); or a recording `odohil import` reads (odohil log CSVs, TUM "
+    "files in pairs, ROS 2 bags, optiodom run files or folders; needs --robot)."
+)
 
 
 def register(app: typer.Typer) -> None:
@@ -61,16 +94,14 @@ def register(app: typer.Typer) -> None:
 
     @app.command("estimate")
     def estimate_command(
-        file: Annotated[
-            Path,
-            typer.Argument(help="Trial file (pose rows or raw floor marks), or a session folder."),
-        ],
+        sources: Annotated[list[Path], typer.Argument(help=SOURCES_HELP)],
         robot: Annotated[
             Path | None,
             typer.Option(
                 "--robot",
                 callback=robot_callback,
-                help=ROBOT_HELP + " Needed for raw marks.",
+                help=ROBOT_HELP + " Needed for raw marks and recordings; its \\[robot] "
+                "turns_exact = false fits the turn errors e_turn (and K_spin) on general paths.",
             ),
         ] = None,
         method: Annotated[
@@ -86,8 +117,19 @@ def register(app: typer.Typer) -> None:
             bool, typer.Option("--json", help="Print the result as JSON (SI).")
         ] = False,
         units_choice: UnitsOption = UNITS_DEFAULT,
+        family: FamilyOption = None,
+        direction: DirectionOption = None,
+        log_format: LogFormatOption = None,
+        odom_topic: OdomTopicOption = ODOM_TOPIC_DEFAULT,
+        truth_topic: TruthTopicOption = TRUTH_TOPIC_DEFAULT,
+        max_time_diff: MaxTimeDiffOption = MAX_TIME_DIFF_DEFAULT,
+        time_offset: TimeOffsetOption = 0.0,
+        min_rest: MinRestOption = MIN_REST_DEFAULT,
+        min_edge_rest: MinEdgeRestOption = MIN_EDGE_REST_DEFAULT,
+        max_truth_gap: MaxTruthGapOption = MAX_TRUTH_GAP_DEFAULT,
     ) -> None:
-        """Estimate E_R, E_T, K_theta, K_rho from a trial file or a session folder.
+        """Estimate E_R, E_T, K_theta, K_rho (and a differential drive's e_turn,
+        K_spin) from a session folder, a trial file or a recording.
 
         Exit status 0 when the verdict is trusted, 3 when the estimate is
         printed but doubtful or failed or the trials give none (too few, or
@@ -96,7 +138,25 @@ def register(app: typer.Typer) -> None:
         """
         err = Console(stderr=True)
         try:
-            outcome = load_outcome(file, robot, parse_exclude(exclude), err, method.value)
+            recording = import_options(
+                log_format,
+                odom_topic,
+                truth_topic,
+                max_time_diff,
+                time_offset,
+                min_rest,
+                min_edge_rest,
+                max_truth_gap,
+            )
+            outcome = load_outcome(
+                sources,
+                robot,
+                parse_exclude(exclude),
+                err,
+                method.value,
+                recording,
+                Selection(family, direction),
+            )
         except OdohilError as exc:
             err.print(f"[red]error:[/red] {exc}", highlight=False)
             raise typer.Exit(EXIT_BAD_INPUT) from exc

@@ -9,10 +9,29 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil.cli.estimate import load_outcome
+from odohil.cli.estimate import SOURCES_HELP, load_outcome
 from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
 from odohil.cli.options import bounded
+from odohil.cli.recording_options import (
+    MAX_TIME_DIFF_DEFAULT,
+    MAX_TRUTH_GAP_DEFAULT,
+    MIN_EDGE_REST_DEFAULT,
+    MIN_REST_DEFAULT,
+    ODOM_TOPIC_DEFAULT,
+    TRUTH_TOPIC_DEFAULT,
+    DirectionOption,
+    FamilyOption,
+    LogFormatOnlyOption,
+    MaxTimeDiffOption,
+    MaxTruthGapOption,
+    MinEdgeRestOption,
+    MinRestOption,
+    OdomTopicOption,
+    TimeOffsetOption,
+    TruthTopicOption,
+    import_options,
+)
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.verdict import export_refusal_lines, outcome_line
 from odohil.errors import OdohilError
@@ -25,6 +44,7 @@ from odohil.science.exports import (
 from odohil.science.limits import RANGES
 from odohil.science.planner import DEFAULT_SPEED_M_PER_S
 from odohil.session.exports import export_text
+from odohil.session.outcome import Selection
 
 SPEED_RANGE = RANGES["speed"]
 RATE_RANGE = RANGES["rate_hz"]
@@ -43,9 +63,7 @@ class FormatChoice(StrEnum):
 
 
 def export(
-    source: Annotated[
-        Path, typer.Argument(help="A session folder, or a trial file (raw marks need --robot).")
-    ],
+    sources: Annotated[list[Path], typer.Argument(help=SOURCES_HELP)],
     fmt: Annotated[
         FormatChoice,
         typer.Option(
@@ -97,10 +115,22 @@ def export(
     robot: Annotated[
         Path | None,
         typer.Option(
-            "--robot", callback=robot_callback, help=ROBOT_HELP + " Needed for raw marks."
+            "--robot",
+            callback=robot_callback,
+            help=ROBOT_HELP + " Needed for raw marks and recordings.",
         ),
     ] = None,
     exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
+    family: FamilyOption = None,
+    direction: DirectionOption = None,
+    log_format: LogFormatOnlyOption = None,
+    odom_topic: OdomTopicOption = ODOM_TOPIC_DEFAULT,
+    truth_topic: TruthTopicOption = TRUTH_TOPIC_DEFAULT,
+    max_time_diff: MaxTimeDiffOption = MAX_TIME_DIFF_DEFAULT,
+    time_offset: TimeOffsetOption = 0.0,
+    min_rest: MinRestOption = MIN_REST_DEFAULT,
+    min_edge_rest: MinEdgeRestOption = MIN_EDGE_REST_DEFAULT,
+    max_truth_gap: MaxTruthGapOption = MAX_TRUTH_GAP_DEFAULT,
 ) -> None:
     """Write the estimate in the shape a fusion stack takes (docs/exports.md).
 
@@ -113,7 +143,24 @@ def export(
     lin = Linearisation(speed, rate_hz, update_min_d, update_min_a)
     err = Console(stderr=True)
     try:
-        outcome = load_outcome(source, robot, parse_exclude(exclude), err)
+        recording = import_options(
+            log_format,
+            odom_topic,
+            truth_topic,
+            max_time_diff,
+            time_offset,
+            min_rest,
+            min_edge_rest,
+            max_truth_gap,
+        )
+        outcome = load_outcome(
+            sources,
+            robot,
+            parse_exclude(exclude),
+            err,
+            recording=recording,
+            selection=Selection(family, direction),
+        )
     except (OdohilError, OSError) as exc:
         err.print(f"[red]error:[/red] {exc}", highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None
@@ -135,7 +182,7 @@ def export(
         )
         raise typer.Exit(EXIT_UNTRUSTED)
     try:
-        text = export_text(fmt.value, result, lin, source=source.name)
+        text = export_text(fmt.value, result, lin, source=sources[0].name)
     except OdohilError as exc:
         err.print(f"[red]error:[/red] {exc}", highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None

@@ -1,7 +1,9 @@
-"""Options of commands that read a recorded log (``odohil import`` now; the
-commands that will take a recording in place of a trial file later): the
-format, the bag topics, the time association and the rest thresholds, as
-Annotated types to declare, and :func:`import_options` to gather them."""
+"""Options of commands that read a recorded log (``odohil import``, and
+``estimate``, ``export``, ``validate``, which take a recording in place of a
+trial file): the format, the bag topics, the time association and the rest
+thresholds, as Annotated types to declare, and :func:`import_options` to
+gather them; ``--family``/``--direction`` select general-path trials
+(:class:`odohil.session.outcome.Selection`)."""
 
 from __future__ import annotations
 
@@ -26,8 +28,18 @@ class FormatChoice(StrEnum):
 
 LogFormatOption = Annotated[
     FormatChoice | None,
-    typer.Option("--format", help="The log format (default: guessed from the paths)."),
+    typer.Option(
+        "--format", "--log-format", help="The log format (default: guessed from the paths)."
+    ),
 ]
+LogFormatOnlyOption = Annotated[
+    FormatChoice | None,
+    typer.Option(
+        "--log-format",
+        help="The log format of a recording (default: guessed from the paths).",
+    ),
+]
+"""``odohil export``, whose ``--format`` is the export's."""
 OdomTopicOption = Annotated[
     str, typer.Option("--odom-topic", help="Bags: the odometry topic (nav_msgs/msg/Odometry).")
 ]
@@ -61,6 +73,24 @@ MinEdgeRestOption = Annotated[
 ]
 MaxTruthGapOption = Annotated[
     float, typer.Option("--max-truth-gap", help="Longest time without ground truth in a trial, s.")
+]
+
+FamilyOption = Annotated[
+    str | None,
+    typer.Option(
+        "--family",
+        help="Use only the general-path trials of this path family (straight, spin, arc, "
+        "square, ...: what `odohil import` lists), e.g. the straight runs of a recording "
+        "that also holds spins.",
+    ),
+]
+DirectionOption = Annotated[
+    str | None,
+    typer.Option(
+        "--direction",
+        help="Use only the general-path trials of this direction (forward, backward, cw, "
+        "ccw, mixed).",
+    ),
 ]
 
 ODOM_TOPIC_DEFAULT = ImportOptions().odom_topic

@@ -26,6 +26,23 @@ from odohil.cli.exit_codes import (
 )
 from odohil.cli.line import resolve_line, truth_available
 from odohil.cli.options import bounded
+from odohil.cli.recording_options import (
+    MAX_TIME_DIFF_DEFAULT,
+    MAX_TRUTH_GAP_DEFAULT,
+    MIN_EDGE_REST_DEFAULT,
+    MIN_REST_DEFAULT,
+    ODOM_TOPIC_DEFAULT,
+    TRUTH_TOPIC_DEFAULT,
+    LogFormatOption,
+    MaxTimeDiffOption,
+    MaxTruthGapOption,
+    MinEdgeRestOption,
+    MinRestOption,
+    OdomTopicOption,
+    TimeOffsetOption,
+    TruthTopicOption,
+    import_options,
+)
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
     Outcome,
@@ -46,12 +63,12 @@ from odohil.errors import (
     RobotDescriptionError,
 )
 from odohil.science.robot_description import RobotDescription, parse_robot_description
-from odohil.science.validation import DEFAULT_ALPHA, ValidationResult, predict_path
+from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.engine import start_session
 from odohil.session.floor_space import check_floor
 from odohil.session.plan import Plan, check_session_plan
 from odohil.session.preflight import check_trial_file
-from odohil.session.robot_file import read_robot_toml
+from odohil.session.robot_file import load_robot_description, read_robot_toml
 from odohil.session.state import description_of_header, load_session
 from odohil.session.validation import (
     PATH_SYNTAX,
@@ -61,17 +78,23 @@ from odohil.session.validation import (
     check_not_fitted,
     check_trials,
     default_folder,
+    held_out_trials,
     load_calibration,
     parameter_covariance,
     parse_validation_path,
+    predictions_of,
     read_path_poses,
-    trials_of_file,
     trials_of_session,
 )
 
 _HELP = (
     f"Test the calibrated model of SESSION on a path it was not fitted on. --path is "
     f"{PATH_SYNTAX}.\n\n"
+    "SESSION is the calibration: a session folder, a trial file (forth-and-back, or a "
+    "general-path trial file of `odohil import`) or a recording `odohil import` reads (with "
+    "--robot and import's recording options); file:HELDOUT is likewise a trial file or a "
+    "recording. A general-path calibration (turns_exact = false) predicts with its turn "
+    "errors.\n\n"
     "A forth-back path is driven (--trials N, --measure fake|FILE, the port from --port or "
     "robot.toml \\[serial]) and journaled as its own validation session, by default "
     "SESSION/validation/<path>/, never mixed into the calibration; when that folder already "
@@ -97,6 +120,11 @@ def _description(calibration: Calibration, robot: Path | None) -> tuple[RobotDes
     """The robot description (from --robot, else the session's) and its TOML text."""
     if robot is None:
         state = calibration.state
+        if state is None:
+            raise ParameterError(
+                f"--robot is needed: the calibration {calibration.outcome.source} is a file or "
+                "a recording, not a session (whose robot description is journaled)"
+            )
         return (
             description_of_header(state),
             str(state.header["robot_toml"]),
@@ -107,7 +135,12 @@ def _description(calibration: Calibration, robot: Path | None) -> tuple[RobotDes
 
 
 def validate(
-    session: Annotated[Path, typer.Argument(help="The calibration session folder.")],
+    session: Annotated[
+        Path,
+        typer.Argument(
+            help="The calibration: a session folder, a trial file or a recording (with --robot)."
+        ),
+    ],
     *,
     path_text: Annotated[str, typer.Option("--path", help=PATH_SYNTAX)],
     trials: Annotated[
@@ -160,6 +193,14 @@ def validate(
     ] = False,
     exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
+    log_format: LogFormatOption = None,
+    odom_topic: OdomTopicOption = ODOM_TOPIC_DEFAULT,
+    truth_topic: TruthTopicOption = TRUTH_TOPIC_DEFAULT,
+    max_time_diff: MaxTimeDiffOption = MAX_TIME_DIFF_DEFAULT,
+    time_offset: TimeOffsetOption = 0.0,
+    min_rest: MinRestOption = MIN_REST_DEFAULT,
+    min_edge_rest: MinEdgeRestOption = MIN_EDGE_REST_DEFAULT,
+    max_truth_gap: MaxTruthGapOption = MAX_TRUTH_GAP_DEFAULT,
 ) -> None:
     console = Console(stderr=True)
     if not (math.isfinite(alpha) and 0.0 < alpha <= 0.5):
@@ -167,7 +208,18 @@ def validate(
     try:
         vpath = parse_validation_path(path_text)
         left_out = parse_exclude(exclude)
-        calibration = load_calibration(session, left_out)
+        recording = import_options(
+            log_format,
+            odom_topic,
+            truth_topic,
+            max_time_diff,
+            time_offset,
+            min_rest,
+            min_edge_rest,
+            max_truth_gap,
+        )
+        given = None if robot_file is None else load_robot_description(robot_file)
+        calibration = load_calibration(session, left_out, given, recording)
         description, toml, robot_path = _description(calibration, robot_file)
     except (OdohilError, OSError) as exc:
         raise _bad(console, str(exc)) from None
@@ -189,8 +241,9 @@ def validate(
         if vpath.kind == "file":
             assert vpath.file is not None
             _no_robot(vpath, port, measure)
-            measured = trials_of_file(vpath.file, description)
-            check_not_fitted(calibration.state.plan, [d.forward for d in measured.designs])
+            measured = held_out_trials(vpath.file, description, recording)
+            plan = None if calibration.state is None else calibration.state.plan
+            check_not_fitted(plan, [d.forward for d in measured.designs])
         elif vpath.kind == "square":
             assert vpath.path is not None
             if port is not None or measure in (None, "fake"):
@@ -202,6 +255,12 @@ def validate(
             measured = read_path_poses(Path(str(measure)), vpath.path, vpath.text)
         else:
             assert vpath.design is not None
+            if calibration.state is None:
+                raise ParameterError(
+                    f"--path {path_text} drives the robot and journals a validation session "
+                    f"beside the calibration's: {session} is no session; give the held-out "
+                    "trials with --path file:HELDOUT"
+                )
             check_not_fitted(calibration.state.plan, [vpath.design])
             folder = out or default_folder(session, vpath)
             measured = _drive_or_reload(
@@ -337,9 +396,8 @@ def _json(
         else "left out: the estimate's covariance is not finite"
     )
     predictions = {}
-    for label, path in zip(measured.labels, measured.paths, strict=True):
+    for label, p in zip(measured.labels, predictions_of(measured, result), strict=True):
         if label not in predictions:
-            p = predict_path(path, result.params)
             predictions[label] = {"mean": p.mean.tolist(), "cov": p.cov.tolist()}
     return {
         "verdict": verdict,

@@ -296,8 +296,25 @@ def corrections(result: EstimateResult) -> Corrections:
 
 
 def parameter_covariance(result: EstimateResult) -> tuple[tuple[float, ...], ...]:
-    """The 4x4 covariance of (E_R, E_T, K_theta, K_rho), SI, as the estimate gives it."""
+    """The covariance of the estimate's parameters, SI, in the order of
+    ``result.parameters`` (E_R, E_T, K_theta, K_rho, then the turn errors
+    e_turn... and K_spin of a general-path fit with turns_exact = false)."""
     matrix = np.asarray(result.covariance, dtype=np.float64)
-    if matrix.shape != (len(PARAMETER_NAMES),) * 2:
-        raise ParameterError(f"the estimate's covariance has shape {matrix.shape}, not (4, 4)")
+    n = len(result.parameters)
+    if matrix.shape != (n, n) or n < len(PARAMETER_NAMES):
+        raise ParameterError(
+            f"the estimate's covariance has shape {matrix.shape}, not ({n}, {n}) for its "
+            f"{n} parameters"
+        )
     return tuple(tuple(float(v) for v in row) for row in matrix)
+
+
+def turn_errors(result: EstimateResult) -> tuple[tuple[str, float, float], ...]:
+    """(name, value, stderr) of the turn errors a general-path fit carries
+    (e_turn... as a fraction of the angle turned, K_spin rad^2/rad); empty for
+    a four-parameter fit."""
+    return tuple(
+        (p.name, p.value, p.stderr)
+        for p in result.parameters
+        if p.name.startswith("e_turn") or p.name == "K_spin"
+    )

@@ -51,6 +51,7 @@ and a path costs O(legs).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -535,3 +536,26 @@ def batch_moments(paths: PathSet, values: FloatArray) -> tuple[FloatArray, Float
         )
         means[row, path_index], covs[row, path_index] = moments.mean, moments.cov
     return means, covs
+
+
+def turn_errors_from(names: Sequence[str], values: Sequence[float]) -> TurnErrors:
+    """The turn errors named among ``names`` at SI ``values``: ``K_spin``
+    (rad^2/rad) and ``e_turn`` with the parts of the turn classes it covers
+    (``e_turn``, ``e_turn_spin``, ``e_turn_cw``, ``e_turn_arc_ccw``, ...: the
+    names odohil/science/estimators/paths.py fits); zero where none is named."""
+    scales = np.zeros(4)
+    k_spin = 0.0
+    for name, value in zip(names, values, strict=True):
+        if name == "K_spin":
+            k_spin = float(value)
+            continue
+        if not name.startswith("e_turn"):
+            continue
+        parts = name.split("_")[2:]
+        rows = [
+            r
+            for r, label in enumerate(TURN_CLASSES)
+            if all(part in label.split() for part in parts)
+        ]
+        scales[rows] = float(value)
+    return TurnErrors.of(scales, k_spin)

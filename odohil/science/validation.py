@@ -58,7 +58,7 @@ import numpy as np
 from scipy import stats
 
 from odohil.errors import ParameterError
-from odohil.science.moments import pose_moments
+from odohil.science.moments import pose_moments, turn_errors_from
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import EncoderPath, FloatArray
 from odohil.units import wrap_angles
@@ -109,6 +109,35 @@ def predict_path(path: EncoderPath, params: ErrorParameters) -> PathPrediction:
         down = pose_moments(path, ErrorParameters(*low)).mean
         jacobian[:, j] = (up - down) / width
     return PathPrediction(mean=moments.mean, cov=moments.cov, jacobian=jacobian)
+
+
+def predict_fitted(
+    path: EncoderPath, names: Sequence[str], values: Sequence[float]
+) -> PathPrediction:
+    """:func:`predict_path` at a general-path fit's parameters (``names`` and
+    SI ``values`` in the order of its ``parameters``: the four, then e_turn...
+    and K_spin, odohil/science/estimators/paths.py): the turn errors enter the
+    mean and covariance, and the Jacobian is (3, q), one column per parameter."""
+    v = np.array(values, dtype=np.float64)
+    rates = [j for j, name in enumerate(names) if name in ("K_theta", "K_rho", "K_spin")]
+
+    def moments(at: FloatArray) -> tuple[FloatArray, FloatArray]:
+        turns = turn_errors_from(names, [float(x) for x in at])
+        m = pose_moments(path, ErrorParameters(*at[:4]), None if turns.exact else turns)
+        return m.mean, m.cov
+
+    mean, cov = moments(v)
+    jacobian = np.zeros((3, len(v)))
+    for j in range(len(v)):
+        floor = _ABSOLUTE_STEPS[j] if j < 4 else 1e-7
+        step = max(floor, _RELATIVE_STEP * abs(v[j]))
+        low, high = v.copy(), v.copy()
+        high[j] += step
+        low[j] -= step
+        if j in rates and low[j] < 0:  # variance rates stay >= 0: one-sided difference
+            low[j] = v[j]
+        jacobian[:, j] = (moments(high)[0] - moments(low)[0]) / (high[j] - low[j])
+    return PathPrediction(mean=mean, cov=cov, jacobian=jacobian)
 
 
 @dataclass(frozen=True)
@@ -356,8 +385,10 @@ def validation_test(
         poses: (n, 3) measured (x m, y m, Delta rad), n >= 1.
         predictions: one per trial (trials of one path may share one).
         measurement_covs: (n, 3, 3) measurement covariances, or None (exact poses).
-        parameter_cov: (4, 4) covariance of the estimate (SI), or None to leave
-            the parameter uncertainty out.
+        parameter_cov: (q, q) covariance of the estimate (SI) in the parameters
+            the predictions' (3, q) Jacobians are taken in (q = 4 for the four
+            parameters, more with turn errors), or None to leave the parameter
+            uncertainty out.
         alpha: the verdict's false-rejection level, in (0, 0.5].
 
     Raises:
@@ -387,14 +418,16 @@ def validation_test(
         blocks = blocks + 0.5 * (measurement_covs + measurement_covs.transpose(0, 2, 1))
     if parameter_cov is not None:
         parameter_cov = np.asarray(parameter_cov, dtype=np.float64)
-        if parameter_cov.shape != (4, 4) or not np.all(np.isfinite(parameter_cov)):
+        q = jacobians.shape[2]
+        if parameter_cov.shape != (q, q) or not np.all(np.isfinite(parameter_cov)):
             raise ParameterError(
-                "the estimate's covariance must be a finite 4 x 4 matrix (a parameter "
-                "the data do not determine has no finite covariance)"
+                f"the estimate's covariance must be a finite {q} x {q} matrix, one row per "
+                "parameter the predictions' Jacobians are taken in (a parameter the data do "
+                "not determine has no finite covariance)"
             )
         loadings = jacobians @ _sqrt_psd(parameter_cov)
     else:
-        loadings = np.zeros((n, 3, 4))
+        loadings = np.zeros((n, 3, jacobians.shape[2]))
     residuals = poses - means
     residuals[:, 2] = wrap_angles(residuals[:, 2])
     level = alpha / N_TESTS

@@ -43,8 +43,8 @@ from odohil.science.exports import (
     parameter_covariance,
     process_noise,
     step_covariance,
+    turn_errors,
 )
-from odohil.science.parameters import PARAMETER_NAMES
 from odohil.session.report.exports import ExportFile
 
 FORMATS: tuple[str, ...] = ("ros2-diff-drive", "odometry-msg", "robot-localization", "amcl", "json")
@@ -125,7 +125,29 @@ def _corrections_comment(result: EstimateResult) -> list[str]:
         f"(stderr {c.distance_scale_stderr:.2g}): multiply encoder distances by it;",
         f"#   heading drift E_R = {c.heading_drift_rad_per_m:.6g} rad per signed metre "
         f"(stderr {c.heading_drift_stderr:.2g}): add it to the encoder heading.",
+        *_turn_comment(result),
     ]
+
+
+def _turn_comment(result: EstimateResult) -> list[str]:
+    """The turn errors of a general-path fit: no key of any consumer takes
+    them, so the file says so (docs/exports.md)."""
+    found = turn_errors(result)
+    if not found:
+        return []
+    lines = ["# Turn errors (turns_exact = false; no key here takes them, apply in the odometry):"]
+    for name, value, stderr in found:
+        if name == "K_spin":
+            lines.append(
+                f"#   K_spin = {value:.6g} rad^2/rad (stderr {stderr:.2g}): heading variance "
+                "per radian turned in place, not in the covariances above;"
+            )
+        else:
+            lines.append(
+                f"#   {name} = {value:.6g} (stderr {stderr:.2g}): multiply the encoder's "
+                "turned angle by 1 + it;"
+            )
+    return lines
 
 
 def _floor_comment(floored: Sequence[str]) -> list[str]:
@@ -310,7 +332,7 @@ def json_document(result: EstimateResult, lin: Linearisation, source: str = "") 
         "excluded": list(result.excluded),
         "parameters": {p.name: p.to_json_dict() for p in result.parameters},
         "parameter_covariance": {
-            "order": list(PARAMETER_NAMES),
+            "order": [p.name for p in result.parameters],
             "matrix": [[_finite(v) for v in row] for row in parameter_covariance(result)],
         },
         "corrections": {
@@ -324,6 +346,16 @@ def json_document(result: EstimateResult, lin: Linearisation, source: str = "") 
                 "stderr": _finite(c.heading_drift_stderr),
                 "apply": "add it to the encoder heading per signed metre driven (E_R)",
             },
+        },
+        "turn_errors": {
+            name: {
+                "value": value,
+                "stderr": _finite(stderr),
+                "apply": "heading variance per radian turned in place, rad^2/rad"
+                if name == "K_spin"
+                else "multiply the encoder's turned angle by 1 + it",
+            }
+            for name, value, stderr in turn_errors(result)
         },
         "variance_rates": {
             "heading_rad2_per_m": result.params.k_theta,

@@ -1,12 +1,25 @@
 """The one recipe from a session or a trial file to an estimate and its verdict.
 
 Every command that estimates (run, resume, the wizard, estimate, report,
-export, validate, demo) calls :func:`estimate_state` or :func:`estimate_path`
-and renders the :class:`EstimateOutcome` it returns, so one session gets one
-verdict whichever command reads it: the same trials (every solved trial but
-the ambiguous ones and those left out on request), the same method, and the
-robot's ``[robot] turns_exact`` from its description (journaled in a session,
-``--robot`` for a trial file).
+export, validate, demo) calls :func:`estimate_state`, :func:`estimate_path`
+or :func:`estimate_source` and renders the :class:`EstimateOutcome` it
+returns, so one session gets one verdict whichever command reads it: the same
+trials (every solved trial but the ambiguous ones and those left out on
+request), the same method, and the robot's ``[robot] turns_exact`` from its
+description (journaled in a session, ``--robot`` for a file or a recording).
+
+One loader, :func:`load_source`, tells the sources apart (:func:`source_kind`):
+a session folder, a forth-and-back trial file (pose rows or raw marks), a
+general-path trial file (what ``odohil import`` writes) or a recording
+(any log ``odohil import`` reads: odohil log CSVs, TUM pairs, ROS 2 bags, the
+optiodom data set's runs). The first two give forth-and-back observations and
+the design estimator; the last two give
+:class:`~odohil.science.path_trials.PathTrial` values and the general-path
+estimator (:func:`~odohil.science.estimators.paths.estimate_paths`, with the
+turn errors e_turn and K_spin unless the robot's turns are exact). A
+:class:`Selection` keeps only the general-path trials of one family or
+direction (for example the straight runs of a recording that holds straight
+runs and spins).
 
 Besides the verdict (can the estimate be trusted within its uncertainty?) an
 outcome says whether the estimate is precise enough to be exported
@@ -25,14 +38,19 @@ from typing import Any, Literal
 import numpy as np
 
 from odohil import units
-from odohil.errors import MeasurementError
+from odohil.errors import MeasurementError, ParameterError
 from odohil.science.estimators import EstimateResult, Observation, estimate
 from odohil.science.estimators.estimate import Method
+from odohil.science.estimators.paths import PATH_METHODS, estimate_paths
 from odohil.science.estimators.verdict import Verdict
 from odohil.science.grouping import by_design
+from odohil.science.path_trials import PathTrial
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
 from odohil.session.journal import TornRecord
+from odohil.session.logs import ImportOptions, guess_format, read_recording
+from odohil.session.logs.csv_log import TIME_COLUMN
+from odohil.session.path_trial_file import is_path_trial_file, read_path_trials, summary_rows
 from odohil.session.state import (
     SessionState,
     description_of_header,
@@ -42,6 +60,9 @@ from odohil.session.state import (
 from odohil.session.trial_files import Trial, TrialSet, read_trials
 
 Status = Literal["trusted", "doubtful", "failed", "no estimate"]
+SourceKind = Literal["session", "trials", "path-trials", "recording"]
+"""A session folder, a forth-and-back trial file, a general-path trial file,
+a recording (module docstring)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -62,6 +83,9 @@ class EstimateOutcome:
             not told from none); empty when it may be.
         torn: the session journal's torn last record, not used (None when
             there is none or the source is a file).
+        path_trials: the general-path trials estimated from (a general-path
+            trial file or a recording, after the selection); empty for a
+            session or a forth-and-back trial file.
     """
 
     source: str
@@ -73,6 +97,7 @@ class EstimateOutcome:
     problem: str = ""
     export_refusals: tuple[str, ...] = ()
     torn: TornRecord | None = None
+    path_trials: tuple[PathTrial, ...] = ()
 
     @property
     def verdict(self) -> Verdict | None:
@@ -101,7 +126,7 @@ class EstimateOutcome:
         if self.result is None:
             data: dict[str, Any] = {
                 "verdict": {"status": self.status, "reasons": [self.problem]},
-                "n_trials": len(self.observations),
+                "n_trials": len(self.observations) or len(self.path_trials),
                 "excluded": list(self.excluded),
             }
         else:
@@ -109,6 +134,11 @@ class EstimateOutcome:
         data["flagged_trials"] = [trial for trial, _ in self.flagged]
         data["ambiguous_trials"] = list(self.ambiguous)
         data["export_refusals"] = list(self.export_refusals)
+        if self.path_trials:
+            data["general_paths"] = [
+                {"family": family, "direction": direction, "trials": n, "distance_m": dist}
+                for family, direction, n, dist in summary_rows(self.path_trials)
+            ]
         return data
 
     @property
@@ -234,6 +264,14 @@ def export_refusals(
             f"fewer than {units.plural(min_trials_per_design, 'trial')} a design, the "
             f"planner's minimum for honest intervals: {', '.join(few)}"
         )
+    reasons.extend(_correction_refusals(result))
+    return tuple(reasons)
+
+
+def _correction_refusals(result: EstimateResult) -> list[str]:
+    """A correction (distance scale 1 + E_T, heading drift E_R) whose 95 %
+    interval is wider than the correction, one sentence each."""
+    reasons = []
     for name, what in (("E_T", "distance scale 1 + E_T"), ("E_R", "heading drift E_R")):
         p = result.parameter(name)
         low, high = p.ci95
@@ -242,7 +280,7 @@ def export_refusals(
                 f"the {what} correction is not told from none: {name}'s 95 % interval "
                 f"[{low:.4g}, {high:.4g}] is wider than its value {p.value:.4g}"
             )
-    return tuple(reasons)
+    return reasons
 
 
 def _observation(trial: Trial, position: int) -> Observation:
@@ -265,3 +303,210 @@ def check_exclude(numbers: Iterable[int], available: Iterable[int]) -> None:
             f"--exclude: no trial numbered {', '.join(str(t) for t in missing)} "
             f"(the trials are numbered {span})"
         )
+
+
+@dataclass(frozen=True)
+class Selection:
+    """Which general-path trials of a source to use (None: all).
+
+    Attributes:
+        family: keep the trials of this path family only (``straight``,
+            ``spin``, ``arc``, ``square``, ...: what ``odohil import`` lists).
+        direction: keep the trials of this direction only (``forward``,
+            ``backward``, ``cw``, ``ccw``, ``mixed``).
+    """
+
+    family: str | None = None
+    direction: str | None = None
+
+    @property
+    def chosen(self) -> bool:
+        """Whether anything is selected."""
+        return self.family is not None or self.direction is not None
+
+    def apply(self, trials: Sequence[PathTrial], source: str) -> list[PathTrial]:
+        """The trials selected.
+
+        Raises:
+            ParameterError: none is left (naming ``--family``/``--direction``
+                and the groups the source holds).
+        """
+        kept = [
+            t
+            for t in trials
+            if (self.family is None or t.family == self.family)
+            and (self.direction is None or t.direction == self.direction)
+        ]
+        if not kept:
+            held = ", ".join(f"{f} {d} ({n})" for f, d, n, _ in summary_rows(trials))
+            asked = " ".join(
+                f"{option} {value}"
+                for option, value in (("--family", self.family), ("--direction", self.direction))
+                if value is not None
+            )
+            raise ParameterError(
+                f"{asked}: no trial of {source} is selected; it holds (family direction, "
+                f"trials): {held}"
+            )
+        return kept
+
+
+def _is_log_csv(path: Path) -> bool:
+    """Whether a CSV file's first line names the log column ``t_s`` (a
+    recording; a forth-and-back trial file has no time column)."""
+    try:
+        with open(path, encoding="utf-8", errors="replace") as stream:
+            for line in stream:
+                if line.strip() and not line.lstrip().startswith("#"):
+                    return TIME_COLUMN in [f.strip() for f in line.split(",")]
+    except OSError:
+        return False
+    return False
+
+
+def source_kind(paths: Sequence[Path], recording: ImportOptions | None = None) -> SourceKind:
+    """What the paths are (module docstring): a session folder (it holds a
+    journal), a general-path trial file (its header line), a forth-and-back
+    trial file (a CSV without a ``t_s`` column), else a recording; a log
+    ``--format`` given makes them a recording."""
+    if len(paths) == 1 and (recording is None or recording.format is None):
+        path = paths[0]
+        if path.is_dir() and (path / "journal.jsonl").is_file():
+            return "session"
+        if is_path_trial_file(path):
+            return "path-trials"
+        if path.is_file() and guess_format([path]) == "csv" and not _is_log_csv(path):
+            return "trials"
+    return "recording"
+
+
+def load_path_trials(
+    paths: Sequence[Path],
+    description: RobotDescription | None,
+    recording: ImportOptions | None = None,
+    selection: Selection | None = None,
+) -> list[PathTrial]:
+    """The general-path trials of a general-path trial file or a recording,
+    selected.
+
+    Raises:
+        ParameterError: a recording without a robot description (``--robot``),
+            a selection that keeps nothing.
+        TrialFileError, RecordingError: the files cannot be used.
+    """
+    kind = source_kind(paths, recording)
+    name = ", ".join(map(str, paths))
+    if kind == "path-trials":
+        trials = read_path_trials(paths[0])
+    elif kind == "recording":
+        if description is None:
+            raise ParameterError(
+                f"--robot is needed to read the recording {name}: its [robot] geometry and "
+                "turns_exact come from the robot description"
+            )
+        trials = read_recording(paths, description, recording or ImportOptions())
+    else:
+        raise ParameterError(f"{name} is a {kind}, not a recording or a general-path trial file")
+    return (selection or Selection()).apply(trials, name)
+
+
+def estimate_path_trials(
+    trials: Sequence[PathTrial],
+    turns_exact: bool,
+    exclude: Collection[int] = (),
+    method: str = "robust",
+    source: str = "",
+) -> EstimateOutcome:
+    """The recipe for general paths: :func:`estimate_paths` of ``trials``
+    (turn errors fitted unless ``turns_exact``) and its verdict.
+
+    Raises:
+        ParameterError: a method the general-path estimator does not have.
+        MeasurementError: an excluded number that is no trial's.
+    """
+    if method not in PATH_METHODS:
+        raise ParameterError(
+            f"--method {method}: general-path trials are fitted by {' or '.join(PATH_METHODS)}"
+        )
+    check_exclude(exclude, [t.trial for t in trials if t.trial is not None])
+    left_out = tuple(sorted(exclude))
+    empty = TrialSet((), "pose", source)
+    kept = tuple(trials)
+    try:
+        result = estimate_paths(kept, turns_exact=turns_exact, method=method, exclude=left_out)
+    except MeasurementError as exc:
+        return EstimateOutcome(source, empty, (), (), left_out, None, str(exc), path_trials=kept)
+    used = [t for t in kept if t.trial not in set(left_out)]
+    refusals = path_export_refusals(result, used)
+    return EstimateOutcome(source, empty, (), (), left_out, result, "", refusals, None, kept)
+
+
+def estimate_source(
+    paths: Sequence[Path],
+    description: RobotDescription | None = None,
+    exclude: Collection[int] = (),
+    method: str = "robust",
+    recording: ImportOptions | None = None,
+    selection: Selection | None = None,
+) -> EstimateOutcome:
+    """The one loader and recipe (module docstring): the outcome of a session
+    folder, a forth-and-back trial file, a general-path trial file or a
+    recording. ``description`` (``--robot``) gives ``turns_exact`` for files
+    and recordings (a file without one: turns exact) and is required for a
+    recording.
+
+    Raises:
+        ParameterError: several paths that are no recording, a selection on a
+            forth-and-back source, a recording without ``description``, a
+            method the general-path estimator does not have.
+        JournalError, TrialFileError, RecordingError: the source cannot be used.
+        MeasurementError: an excluded number that is no trial's.
+    """
+    files = [Path(p) for p in paths]
+    if not files:
+        raise ParameterError("no session, trial file or recording given")
+    for file in files:
+        if not file.exists():
+            raise ParameterError(
+                f"{file}: no such session folder (journal.jsonl), trial file or recording"
+            )
+    kind = source_kind(files, recording)
+    selection = selection or Selection()
+    if kind in ("session", "trials"):
+        if selection.chosen:
+            raise ParameterError(
+                f"--family/--direction select general-path trials (recordings, files of "
+                f"`odohil import`); {files[0]} is a "
+                + ("session" if kind == "session" else "trial file")
+            )
+        if method not in ("robust", "joint", "paper"):
+            raise ParameterError(f"--method {method}: one of robust, joint, paper")
+        return estimate_path(files[0], description, exclude, method)  # type: ignore[arg-type]
+    trials = load_path_trials(files, description, recording, selection)
+    turns_exact = description.robot.turns_exact if description is not None else True
+    return estimate_path_trials(
+        trials, turns_exact, exclude, method, ", ".join(str(p) for p in files)
+    )
+
+
+def path_export_refusals(
+    result: EstimateResult,
+    used: Sequence[PathTrial],
+    min_trials_per_group: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
+) -> tuple[str, ...]:
+    """:func:`export_refusals` for general paths: a path family and direction
+    with fewer than ``min_trials_per_group`` trials, or a correction not told
+    from none."""
+    reasons = []
+    few = [
+        f"{family} {direction} ({n})"
+        for family, direction, n, _ in summary_rows(used)
+        if n < min_trials_per_group
+    ]
+    if few:
+        reasons.append(
+            f"fewer than {min_trials_per_group} trials a path family and direction, the "
+            f"planner's minimum for honest intervals: {', '.join(few)}"
+        )
+    reasons.extend(_correction_refusals(result))
+    return tuple(reasons)

@@ -40,6 +40,8 @@ from odohil.errors import (
 )
 from odohil.science.estimators import EstimateResult
 from odohil.science.limits import RANGES
+from odohil.science.parameters import PARAMETER_NAMES
+from odohil.science.path_trials import PathTrial
 from odohil.science.paths import Design, EncoderPath, FloatArray, Variant, square
 from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import (
@@ -48,10 +50,18 @@ from odohil.science.validation import (
     PathPrediction,
     ValidationResult,
     ellipse_data,
+    predict_fitted,
     predict_path,
     validation_test,
 )
-from odohil.session.outcome import EstimateOutcome, estimate_state
+from odohil.session.logs import ImportOptions
+from odohil.session.outcome import (
+    EstimateOutcome,
+    estimate_source,
+    estimate_state,
+    load_path_trials,
+    source_kind,
+)
 from odohil.session.plan import Plan
 from odohil.session.state import SessionState, load_session, session_trials
 from odohil.session.trial_files import (
@@ -156,11 +166,12 @@ class Calibration:
     Attributes:
         outcome: the recipe's outcome: the estimate (robust maximum
             likelihood) and its verdict, or why there is none.
-        state: the session as its journal tells it.
+        state: the session as its journal tells it (None for a trial file or
+            a recording).
     """
 
     outcome: EstimateOutcome
-    state: SessionState
+    state: SessionState | None = None
 
     @property
     def result(self) -> EstimateResult:
@@ -174,20 +185,32 @@ class Calibration:
         return self.outcome.result
 
 
-def load_calibration(session: Path, exclude: Collection[int] = ()) -> Calibration:
-    """The session's outcome (every solved trial but the ambiguous ones and
-    ``exclude``).
+def load_calibration(
+    source: Path,
+    exclude: Collection[int] = (),
+    description: RobotDescription | None = None,
+    recording: ImportOptions | None = None,
+) -> Calibration:
+    """The calibration's outcome (every solved trial but the ambiguous ones and
+    ``exclude``), through the one loader (odohil/session/outcome.py): a session
+    folder, a trial file (forth-and-back or general-path) or a recording
+    (``description`` required; it gives ``turns_exact`` to files too).
 
     Raises:
-        JournalError: not a session folder, or a corrupt journal.
-        MeasurementError: an excluded number that is no completed trial's.
+        JournalError: a validation session, or a corrupt journal.
+        ParameterError: a recording without ``description``.
+        TrialFileError, RecordingError: the file cannot be used.
+        MeasurementError: an excluded number that is no trial's.
     """
-    state = load_session(session).state
+    if source_kind([source], recording) != "session":
+        outcome = estimate_source([source], description, exclude, recording=recording)
+        return Calibration(outcome, None)
+    state = load_session(source).state
     if state.header.get("settings", {}).get("validation_of"):
         raise JournalError(
-            f"{session} is a validation session; give the calibration session it validates"
+            f"{source} is a validation session; give the calibration session it validates"
         )
-    return Calibration(estimate_state(state, exclude, source=str(session)), state)
+    return Calibration(estimate_state(state, exclude, source=str(source)), state)
 
 
 def check_not_fitted(plan: Plan | None, designs: Sequence[Design]) -> None:
@@ -289,6 +312,46 @@ def trials_of_file(path: Path, description: RobotDescription | None) -> Validati
     return _from_trial_set(read_trials(path, description))
 
 
+def trials_of_paths(trials: Sequence[PathTrial], source: str) -> ValidationTrials:
+    """General-path trials (a general-path trial file, a recording) as
+    validation trials: their own paths, measured pose changes and covariances,
+    labelled by family and direction."""
+    if not trials:
+        raise MeasurementError(f"{source}: no usable trials")
+    return ValidationTrials(
+        poses=np.array([t.pose_change for t in trials], dtype=np.float64),
+        covs=np.array([t.measurement_cov for t in trials], dtype=np.float64),
+        paths=tuple(t.path for t in trials),
+        labels=tuple(f"{t.family} {t.direction}" for t in trials),
+        numbers=tuple(t.trial if t.trial is not None else i + 1 for i, t in enumerate(trials)),
+        backward=(False,) * len(trials),
+        source=source,
+    )
+
+
+def held_out_trials(
+    path: Path,
+    description: RobotDescription | None,
+    recording: ImportOptions | None = None,
+) -> ValidationTrials:
+    """The held-out trials of ``--path file:PATH``: a forth-and-back trial file
+    (poses, or raw distances with ``description``), a general-path trial file
+    or a recording (``description`` required), through the one loader.
+
+    Raises:
+        ParameterError: a session folder, or a recording without ``description``.
+        TrialFileError, RecordingError: the file cannot be used.
+    """
+    kind = source_kind([path], recording)
+    if kind == "session":
+        raise ParameterError(
+            f"--path file:{path}: a session folder; give a trial file or a recording"
+        )
+    if kind == "trials":
+        return trials_of_file(path, description)
+    return trials_of_paths(load_path_trials([path], description, recording), str(path))
+
+
 def read_path_poses(file: Path, path: EncoderPath, label: str) -> ValidationTrials:
     """Pose changes of trials of ``path`` from a CSV with the columns
     ``dx_m,dy_m,dtheta_rad`` and optionally ``sigma_x_m,sigma_y_m,sigma_theta_rad``
@@ -368,21 +431,43 @@ def read_path_poses(file: Path, path: EncoderPath, label: str) -> ValidationTria
     )
 
 
-def _predictions(trials: ValidationTrials, calibration: EstimateResult) -> list[PathPrediction]:
+def predictions_of(trials: ValidationTrials, calibration: EstimateResult) -> list[PathPrediction]:
+    """Each trial's prediction at the calibration's parameters (with its turn
+    errors when it fitted any), one per trial (trials of one path share one)."""
+    names = [p.name for p in calibration.parameters]
+    values = [p.value for p in calibration.parameters]
+    general = len(names) > len(PARAMETER_NAMES)
     cache: dict[EncoderPath, PathPrediction] = {}
     out = []
     for path in trials.paths:
         if path not in cache:
-            cache[path] = predict_path(path, calibration.params)
+            cache[path] = (
+                predict_fitted(path, names, values)
+                if general
+                else predict_path(path, calibration.params)
+            )
         out.append(cache[path])
     return out
 
 
 def parameter_covariance(calibration: EstimateResult) -> FloatArray | None:
-    """The estimate's 4 x 4 covariance (SI), or None when it is not finite
-    (a parameter the calibration did not determine)."""
+    """The estimate's covariance (SI; 4 x 4, or one row more per turn error of
+    a general-path fit), or None when it is not finite (a parameter the
+    calibration did not determine)."""
     cov = np.array(calibration.covariance, dtype=np.float64)
-    if cov.shape != (4, 4) or not np.all(np.isfinite(cov)):
+    names = [p.name for p in calibration.parameters]
+    q = len(names)
+    if cov.shape != (q, q):
+        return None
+    if q > len(PARAMETER_NAMES):
+        # a general-path fit: a variance rate on its floor has no finite
+        # variance; it barely moves the predicted mean, so it is left out of
+        # the propagation (the mean parameters' must be finite)
+        rates = [j for j, name in enumerate(names) if name in ("K_theta", "K_rho", "K_spin")]
+        bad = [j for j in rates if not np.all(np.isfinite(cov[j])) or not np.isfinite(cov[j, j])]
+        cov[bad, :] = 0.0
+        cov[:, bad] = 0.0
+    if not np.all(np.isfinite(cov)):
         return None
     return cov
 
@@ -398,7 +483,7 @@ def check_trials(
     """
     return validation_test(
         trials.poses,
-        _predictions(trials, calibration),
+        predictions_of(trials, calibration),
         trials.covs,
         parameter_covariance(calibration),
         alpha=alpha,

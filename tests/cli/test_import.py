@@ -65,7 +65,9 @@ def test_the_optiodom_folders_as_given(tmp_path: Path) -> None:
         "optiodom",
     )
     assert result.exit_code == 0, result.output
-    assert "straight forward 14 20.942" in flat(result)
+    # 20.965 m: each run's path spans its rests' still parts (the creep inside a
+    # rest is driven; odohil/session/logs/recording.py)
+    assert "straight forward 14 20.965" in flat(result)
     assert len(read_path_trials(out)) == 42
 
 

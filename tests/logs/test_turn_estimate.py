@@ -33,7 +33,9 @@ def _paper(name: str, values: tuple[float, float]) -> tuple[float, float]:
 def test_circles_with_turn_errors_report_e_turn_excluding_zero() -> None:
     circles = _kind("circular")
     assert {t.family for t in circles} == {"arc"}
-    result = estimate_paths(circles, turns_exact=False)
+    # one turn scale for both directions, as the issue's outside fit (the data
+    # ask for a split by direction: test_circles_split_e_turn_by_direction)
+    result = estimate_paths(circles, turns_exact=False, split_directions=False)
     assert result.converged
     e_turn = result.parameter("e_turn")
     assert e_turn.ci95[1] < 0  # the interval excludes 0: the circles turn short
@@ -59,3 +61,12 @@ def test_straight_runs_are_trusted_with_the_four_parameter_model() -> None:
     e_r = units.parameter_to_paper("E_R", result.parameter("E_R").value)
     assert -0.85 < e_r < -0.41
     assert result.parameter("E_T").ci95[1] < 0
+
+
+def test_circles_split_e_turn_by_direction() -> None:
+    # the issue: the turn-scale error differs clockwise and counter-clockwise;
+    # the likelihood-ratio test splits it, and the clockwise one excludes 0
+    result = estimate_paths(_kind("circular"), turns_exact=False)
+    assert {"e_turn_cw", "e_turn_ccw"} <= set(result.names)
+    assert any("split by direction" in note for note in result.notes)
+    assert result.parameter("e_turn_cw").ci95[1] < 0

@@ -81,7 +81,13 @@ from odohil.science.estimators.robust import (
 )
 from odohil.science.estimators.scores import point_scores, sandwich_ratio
 from odohil.science.estimators.verdict import judge
-from odohil.science.moments import PathSet, TurnErrors, batch_moments, pose_moments
+from odohil.science.moments import (
+    PathSet,
+    TurnErrors,
+    batch_moments,
+    pose_moments,
+    turn_errors_from,
+)
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import TURN_CLASSES, EncoderPath, FloatArray
@@ -403,23 +409,9 @@ class TrialPrediction:
 def turn_errors_of(result: EstimateResult) -> TurnErrors:
     """The turn errors of a fit (zero where it fitted none, e.g. a
     four-parameter fit), from its parameters' names (module docstring)."""
-    scales = np.zeros(4)
-    k_spin = 0.0
-    for estimate in result.parameters:
-        name = estimate.name
-        if name == "K_spin":
-            k_spin = estimate.value
-            continue
-        if not name.startswith("e_turn"):
-            continue
-        parts = name.split("_")[2:]
-        rows = [
-            r
-            for r, label in enumerate(TURN_CLASSES)
-            if all(part in label.split() for part in parts)
-        ]
-        scales[rows] = estimate.value
-    return TurnErrors.of(scales, k_spin)
+    return turn_errors_from(
+        [e.name for e in result.parameters], [e.value for e in result.parameters]
+    )
 
 
 def predict(trials: Sequence[PathTrial], result: EstimateResult) -> list[TrialPrediction]:

@@ -200,6 +200,12 @@ def _trial(
     number: int,
 ) -> PathTrial:
     _check_gaps(rec, start[0], end[1], options.max_truth_gap_s)
+    # The truth poses and the path cover the same time: a rest's odometry may
+    # creep within the edge tolerances (a gear's backlash as the wheels start;
+    # 1-2 mm on the optiodom robot), so only its part where the odometry holds
+    # the edge value exactly is averaged, and the path runs from there.
+    start = (start[0], _held_until(rec.odometry, start[0], start[1]))
+    end = (_held_from(rec.odometry, end[0], end[1]), end[1])
     first, last = start[1], end[0]
     try:
         path = compress_odometry(
@@ -228,6 +234,37 @@ def _trial(
         family=family,
         direction=direction,
     )
+
+
+_HELD_M = 1e-9
+_HELD_RAD = 1e-9
+"""How close two odometry poses are to count as the same (m, rad)."""
+
+
+def _held(odometry: FloatArray, reference: int, index: int) -> bool:
+    d = odometry[index] - odometry[reference]
+    return bool(
+        math.hypot(float(d[0]), float(d[1])) <= _HELD_M
+        and abs(math.remainder(float(d[2]), math.tau)) <= _HELD_RAD
+    )
+
+
+def _held_until(odometry: FloatArray, first: int, last: int) -> int:
+    """The last index of ``first..last`` up to which the odometry holds its
+    value at ``first`` (a rest's part before the odometry creeps)."""
+    index = first
+    while index < last and _held(odometry, first, index + 1):
+        index += 1
+    return index
+
+
+def _held_from(odometry: FloatArray, first: int, last: int) -> int:
+    """The first index of ``first..last`` from which the odometry holds its
+    value at ``last``."""
+    index = last
+    while index > first and _held(odometry, last, index - 1):
+        index -= 1
+    return index
 
 
 def _given_cuts(rec: Recording) -> list[tuple[str, int, int]]:
