@@ -505,7 +505,8 @@ def path_export_refusals(
     ]
     if few:
         reasons.append(
-            f"fewer than {min_trials_per_group} trials a path family and direction, the "
+            f"fewer than {units.plural(min_trials_per_group, 'trial')} a path family and "
+            "direction, the "
             f"planner's minimum for honest intervals: {', '.join(few)}"
         )
     reasons.extend(_correction_refusals(result))

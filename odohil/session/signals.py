@@ -20,7 +20,7 @@ entered by the engine around each drive) they raise :class:`SignalReceived`
 too and end the session like SIGTERM (exit 128 + N, 148 for SIGTSTP; the
 session resumes as after any signal). Outside a motion the robot stands still
 and they keep their default: Ctrl-Z at a prompt suspends odohil as usual.
-SIGSTOP cannot be caught: only the robot's own watchdog (the Nomad's) covers it.
+SIGSTOP cannot be caught: only a robot's own watchdog covers it (docs/sessions.md).
 
 The list is computed from the platform (:func:`signal.valid_signals`) less
 the signals whose default action does not end a process (ignore, stop,

@@ -41,6 +41,7 @@ from odohil.science.rest_cutting import (
     still_mask,
 )
 from odohil.science.robot_description import RobotDescription
+from odohil.units import wrap_angle
 
 IntArray = npt.NDArray[np.int64]
 
@@ -245,7 +246,7 @@ def _held(odometry: FloatArray, reference: int, index: int) -> bool:
     d = odometry[index] - odometry[reference]
     return bool(
         math.hypot(float(d[0]), float(d[1])) <= _HELD_M
-        and abs(math.remainder(float(d[2]), math.tau)) <= _HELD_RAD
+        and abs(wrap_angle(float(d[2]))) <= _HELD_RAD
     )
 
 
