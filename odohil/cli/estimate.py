@@ -11,6 +11,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from odohil import units
 from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
@@ -158,7 +159,7 @@ def register(app: typer.Typer) -> None:
                 Selection(family, direction),
             )
         except OdohilError as exc:
-            err.print(f"[red]error:[/red] {exc}", highlight=False)
+            err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
             raise typer.Exit(EXIT_BAD_INPUT) from exc
         status = exit_for_outcome(outcome)
         result = outcome.result

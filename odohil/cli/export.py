@@ -8,6 +8,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from odohil.cli.estimate import SOURCES_HELP, load_outcome
 from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
@@ -162,7 +163,7 @@ def export(
             selection=Selection(family, direction),
         )
     except (OdohilError, OSError) as exc:
-        err.print(f"[red]error:[/red] {exc}", highlight=False)
+        err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     result = outcome.result
     if result is None:
@@ -184,7 +185,7 @@ def export(
     try:
         text = export_text(fmt.value, result, lin, source=sources[0].name)
     except OdohilError as exc:
-        err.print(f"[red]error:[/red] {exc}", highlight=False)
+        err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     if out is None:
         typer.echo(text, nl=False)
@@ -192,7 +193,7 @@ def export(
         try:
             out.write_text(text, encoding="utf-8")
         except OSError as exc:
-            err.print(f"[red]error:[/red] {exc}", highlight=False)
+            err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
             raise typer.Exit(EXIT_BAD_INPUT) from None
         err.print(f"wrote {out} ({fmt.value})", highlight=False)
     if not outcome.exportable:

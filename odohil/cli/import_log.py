@@ -9,6 +9,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from odohil import units
@@ -88,7 +89,7 @@ def import_log(
         trials = read_recording(logs, description, options)
         written = write_path_trials(out, trials, robot=robot.stem)
     except (OdohilError, OSError) as exc:
-        err.print(f"[red]error:[/red] {exc}", highlight=False)
+        err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
         raise typer.Exit(EXIT_BAD_INPUT) from None
     read_as = options.format or guess_format(logs)
     table = Table(

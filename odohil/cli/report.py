@@ -8,6 +8,7 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from odohil.cli.estimate import SOURCES_HELP, load_outcome
 from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
@@ -104,7 +105,7 @@ def report(
                 sources, robot, parse_exclude(exclude), console, "robust", recording, selection
             )
     except (OdohilError, OSError) as exc:
-        console.print(f"[red]error:[/red] {exc}")
+        console.print(f"[red]error:[/red] {escape(str(exc))}")
         raise typer.Exit(EXIT_BAD_INPUT) from None
     console.print(outcome_line(outcome), highlight=False)
     if not outcome.exportable and not force:
@@ -130,7 +131,7 @@ def report(
             else write_path_report(outcome, out, extra)
         )
     except OSError as exc:
-        console.print(f"[red]error:[/red] {exc}")
+        console.print(f"[red]error:[/red] {escape(str(exc))}")
         raise typer.Exit(EXIT_BAD_INPUT) from None
     if not outcome.exportable:
         console.print("written with --force although refused without it")

@@ -29,6 +29,7 @@ from typing import Annotated, Any, NoReturn, TextIO
 import numpy as np
 import typer
 from rich.console import Console
+from rich.markup import escape
 
 from odohil import units
 from odohil.cli.exit_codes import (
@@ -922,7 +923,7 @@ def _run(
         return exit_for_signal(signal_of(exc))
     except OdohilError as exc:
         progress.stop()
-        console.print(f"[red]error:[/] {exc}", soft_wrap=True)
+        console.print(f"[red]error:[/] {escape(str(exc))}", soft_wrap=True)
         report_stop(console, engine.stop_outcome, opened.journal.folder, _again(opened))
         return EXIT_ERROR
     finally:

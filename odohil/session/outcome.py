@@ -38,7 +38,7 @@ from typing import Any, Literal
 import numpy as np
 
 from odohil import units
-from odohil.errors import MeasurementError, ParameterError
+from odohil.errors import MeasurementError, ParameterError, TrialFileError
 from odohil.science.estimators import EstimateResult, Observation, estimate
 from odohil.science.estimators.estimate import Method
 from odohil.science.estimators.paths import PATH_METHODS, estimate_paths
@@ -47,6 +47,7 @@ from odohil.science.grouping import by_design
 from odohil.science.path_trials import PathTrial
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
+from odohil.session.bounded_io import check_regular_file
 from odohil.session.journal import TornRecord
 from odohil.session.logs import ImportOptions, guess_format, read_recording
 from odohil.session.logs.csv_log import TIME_COLUMN
@@ -368,10 +369,18 @@ def source_kind(paths: Sequence[Path], recording: ImportOptions | None = None) -
     """What the paths are (module docstring): a session folder (it holds a
     journal), a general-path trial file (its header line), a forth-and-back
     trial file (a CSV without a ``t_s`` column), else a recording; a log
-    ``--format`` given makes them a recording."""
+    ``--format`` given makes them a recording.
+
+    Raises:
+        TrialFileError: a path that is neither a folder nor a regular file
+            (a FIFO, a device), before anything reads it.
+    """
+    for path in paths:
+        if path.exists() and not path.is_dir():
+            check_regular_file(path, "trial file", TrialFileError)  # never a FIFO or a device
     if len(paths) == 1 and (recording is None or recording.format is None):
         path = paths[0]
-        if path.is_dir() and (path / "journal.jsonl").is_file():
+        if path.is_dir() and (path / "journal.jsonl").exists():
             return "session"
         if is_path_trial_file(path):
             return "path-trials"
