@@ -12,6 +12,8 @@ from collections.abc import Callable
 
 import pytest
 
+from fakes.create2.config import CREATE2_TRUTH
+
 from .conftest import Robot
 from .host import (
     FULL,
@@ -84,8 +86,11 @@ def test_drive_direct_counts_forward_and_passive_ignores_it(robot: Callable[...,
     assert moved == [truth.left_counts, truth.right_counts]
     assert moved[0] == moved[1]
     assert 0.4 * 200 * COUNTS_PER_MM < moved[0] < 0.7 * 200 * COUNTS_PER_MM
-    # the body really went forward about as far (the fake's errors are ~ 1 %)
-    assert truth.true_x_m == pytest.approx(moved[0] / COUNTS_PER_MM / 1000, rel=0.05)
+    # the body really went forward about as far: (1 + E_T) times the encoders'
+    # distance, within 4 SD of the fake's travel noise (K_rho x distance)
+    counted_m = moved[0] / COUNTS_PER_MM / 1000
+    spread_m = 4.0 * math.sqrt(CREATE2_TRUTH.k_rho * counted_m)
+    assert truth.true_x_m == pytest.approx((1 + CREATE2_TRUTH.e_t) * counted_m, abs=spread_m)
 
 
 def test_backwards_through_zero_the_counts_wrap(robot: Callable[..., Robot]) -> None:
