@@ -176,7 +176,9 @@ def test_ctrl_c_during_an_append_waits_for_the_record(
     real_fsync = os.fsync
 
     def fsync_with_ctrl_c(fd: int) -> None:
-        os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while the record goes to disk
+        # Ctrl-C while the record goes to disk; raise_signal delivers it to this thread
+        # at once (os.kill may hand it to another thread of the worker, later)
+        signal.raise_signal(signal.SIGINT)
         real_fsync(fd)
 
     with Journal.create(tmp_path) as journal:
