@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from rich.console import Console, Group, RenderableType
@@ -19,16 +18,8 @@ from odohil.science.estimators.verdict import Verdict
 from odohil.science.grouping import by_design
 from odohil.science.observables import observables
 from odohil.science.paths import Design, Leg, Turn
+from odohil.session.preflight import Check
 from odohil.session.state import CompletedTrial
-
-
-@dataclass(frozen=True)
-class Check:
-    """One pre-flight check: its name, whether it passed, and what was found."""
-
-    name: str
-    ok: bool
-    detail: str
 
 
 def check_line(check: Check) -> Text:
