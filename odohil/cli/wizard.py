@@ -16,14 +16,11 @@ from __future__ import annotations
 
 import math
 import os
-import select
-import signal
 import sys
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from types import FrameType
-from typing import Annotated, Any, NoReturn, TextIO
+from typing import Annotated, Any, NoReturn
 
 import typer
 from rich.console import Console
@@ -74,6 +71,7 @@ from odohil.session.engine import (
     resume_session,
     start_session,
 )
+from odohil.session.interrupts import Interrupts, wait_readable
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
 from odohil.session.preflight import (
@@ -92,134 +90,55 @@ from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext
 from odohil.session.start_pose import StartPose, pose_text, sample_pose
 from odohil.session.state import SessionState, load_session
-from odohil.session.tape_entry import (
-    BACK_WORDS,
-    TapeEntry,
-    attempt_ranges,
-    kept_after,
-    parse_optional_metres,
-)
+from odohil.session.tape_entry import INSTRUCTIONS, TapeEntries, parse_optional_metres
 
-SECOND_CTRL_C_STOP_S = 0.5
-"""How long a second Ctrl-C waits for the robot to confirm its one ``st``, s."""
 DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
-_STYLE = {"refused": "[red]refused:[/] ", "check": "[yellow]check:[/] "}
-_STYLE["no_back"] = "[yellow]nothing to go back to:[/] "
+_STYLE = {"refused": "[red]refused:[/] ", "check": "[yellow]check:[/] ", "no_back": "[yellow]"}
 
 
-class Interrupts:
-    """SIGINT policy: during a motion the first Ctrl-C is raised at the next
-    encoder sample (the driver then stops the robot); elsewhere at once; a
-    second Ctrl-C sends one ``st`` to :attr:`robot` (waiting at most
-    :data:`SECOND_CTRL_C_STOP_S` for the confirmation) and exits the process
-    at once: 130 if the robot confirmed, 4 if not."""
-
-    def __init__(self) -> None:
-        self.count = 0
-        self.in_motion = False
-        self.pending = False
-        self.robot: Robot | None = None
-
-    def install(self) -> None:
-        """Take over SIGINT."""
-        signal.signal(signal.SIGINT, self._handler)
-
-    def _handler(self, signum: int, frame: FrameType | None) -> None:
-        self.count += 1
-        if self.count >= 2:
-            os.write(2, b"\nsecond Ctrl-C: one st, then exiting at once\n")
-            try:
-                if self.robot is None:
-                    raise StopUnconfirmedError("no robot to stop")
-                self.robot.stop_and_confirm(SECOND_CTRL_C_STOP_S)
-            except BaseException:
-                os.write(2, f"WARNING: {MAY_STILL_MOVE}\n".encode())
-                os._exit(EXIT_STOP_UNCONFIRMED)
-            os.write(2, b"robot stopped (it reported standing still)\n")
-            os._exit(EXIT_INTERRUPTED)
-        if self.in_motion:
-            self.pending = True
-            os.write(2, b"\nCtrl-C: stopping the robot...\n")
-            return
-        raise KeyboardInterrupt("Ctrl-C")
-
-    def check(self) -> None:
-        """Raise the Ctrl-C deferred during a motion."""
-        if self.pending:
-            self.pending = False
-            raise KeyboardInterrupt("Ctrl-C")
-
-
-def _wait_readable(stream: TextIO, slice_s: float = 0.1) -> None:
-    """Wait until ``stream`` has a line, waking every ``slice_s`` seconds so that
-    a signal the kernel handed to another thread (numpy's) is acted on at once:
-    a read blocked in the main thread would not see it until the next key.
-    Only on a terminal, which hands over one line per read (a pipe's lines may
-    already sit in the stream's buffer)."""
-    try:
-        if not stream.isatty():
-            return
-        fd = stream.fileno()
-    except (AttributeError, OSError, ValueError):
-        return
-    while not select.select([fd], [], [], slice_s)[0]:
-        pass
-
-
+@dataclass
 class WizardPrompts:
-    """The :class:`~odohil.session.sources.OperatorPrompts` of the wizard: reads
+    """The :class:`~odohil.session.sources.OperatorPrompts` of the wizard: it reads
     lines and renders; what they mean is odohil/session/tape_entry.py's."""
 
-    def __init__(
-        self,
-        console: Console,
-        description: RobotDescription,
-        interrupts: Interrupts,
-        progress: MotionProgress,
-    ) -> None:
-        self.console = console
-        self.description = description
-        self.interrupts = interrupts
-        self.progress = progress
-        self._shown: set[tuple[int, int]] = set()
-        self._entries: dict[tuple[int, int, int], TapeEntry] = {}  # (trial, attempt, rejections)
-        self._kept: dict[tuple[int, int, int], dict[int, float]] = {}
+    console: Console
+    description: RobotDescription
+    interrupts: Interrupts
+    progress: MotionProgress
+
+    def __post_init__(self) -> None:
+        self.entries = TapeEntries(self.description)
 
     def _input(self, prompt: str) -> str:
         try:
             self.console.print(prompt, end="")
-            _wait_readable(sys.stdin)
+            wait_readable(sys.stdin)
             return input()
         except EOFError:
             raise MeasurementError("the input ended (no operator at the terminal)") from None
 
     def _context(self, ctx: TrialContext, resumed: bool = True) -> None:
-        """The trial's context, once per attempt: number, design, driving; on a
-        resumed attempt also where it stands and what was already entered."""
-        if (ctx.trial, ctx.attempt) in self._shown:
+        """The trial's header once per attempt; on a resumed one also what was entered."""
+        if not self.entries.first_sight(ctx):
             return
-        self._shown.add((ctx.trial, ctx.attempt))
         note = " [bold](resumed: the motion is done, its marks are on the floor)[/]"
         self.console.print(
             f"\n[bold]Trial {ctx.trial}/{ctx.n_trials}[/] (attempt {ctx.attempt}): "
             f"{ctx.design.label()}, {ctx.design.distance_m:g} m of driving"
-            + (note if resumed else "")
-            + "."
+            f"{note if resumed else ''}."
         )
         if resumed and ctx.measurements:
-            entered = ", ".join(
-                f"{label} = {value:.4f} m"
-                for label, value in zip(ctx.labels, ctx.measurements, strict=False)
-            )
+            values = zip(ctx.labels, ctx.measurements, strict=False)
+            entered = ", ".join(f"{label} = {value:.4f} m" for label, value in values)
             left = units.plural(len(ctx.labels) - len(ctx.measurements), "distance")
             self.console.print(f"Already entered and saved: {entered}; {left} to go.")
 
     def confirm_start_marks(self, ctx: TrialContext) -> None:
         """Ask for the start marks."""
         self._context(ctx, resumed=False)
+        names = ", ".join(self.description.screw_names)
         self._input(
-            f"Mark the floor at the {len(self.description.screws)} screws "
-            f"({', '.join(self.description.screw_names)}), "
+            f"Mark the floor at the {len(self.description.screws)} screws ({names}), "
             "keep clear of the robot, then press Enter to start the motion: "
         )
 
@@ -237,31 +156,22 @@ class WizardPrompts:
         self._input("Mark the floor at the screws again (end marks), then press Enter: ")
 
     def ask_distance(self, ctx: TrialContext, index: int) -> float:
-        """Distance ``index`` in metres, as the attempt's :class:`TapeEntry`
-        hands it over (a kept one without asking)."""
+        """Distance ``index``, metres, as the attempt's :class:`TapeEntry` hands it over."""
         self._context(ctx)
-        key = (ctx.trial, ctx.attempt, ctx.rejections)
-        if key not in self._entries:
-            self.console.print(
-                "Type each distance in metres, or with a unit (12 mm, 1.2 cm); "
-                f"type {' or '.join(BACK_WORDS)} to correct the value typed just before."
-            )
-            ranges = attempt_ranges(ctx, self.description)
-            self._entries[key] = TapeEntry(ctx.labels, ranges, self._kept.get(key))
-        entry = self._entries[key]
+        entry, new = self.entries.entry(ctx)
+        if new:
+            self.console.print(INSTRUCTIONS)
         while (value := entry.take(index)) is None:
-            ask = entry.question()
-            back = f"; back: correct {ask.back_to}" if ask.back_to else ""
-            where = f"Trial {ctx.trial}/{ctx.n_trials}, {ask.label}"
-            reply = entry.feed(self._input(f"{where}, metres ({ask.expected.hint()}{back}): "))
+            reply = entry.feed(self._input(entry.question().prompt))
             if reply.message:
                 self.console.print(_STYLE.get(reply.kind, "") + reply.message)
         if index in entry.kept:
-            label = ctx.labels[index]
-            self.console.print(f"{label}: {value:.4f} m kept (the rejection did not name it)")
+            self.console.print(f"{ctx.labels[index]}: {value:.4f} m kept")
         return value
 
-    def _optional(self, prompt: str, label: str) -> float | None:
+    def _optional(self, ctx: TrialContext, doubt: str, prompt: str, label: str) -> float | None:
+        self._context(ctx)
+        self.console.print(doubt)
         while True:
             try:
                 return parse_optional_metres(self._input(prompt), label)
@@ -270,29 +180,20 @@ class WizardPrompts:
 
     def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
         """The slip check doubts the trial: ask for the suspect distance again."""
-        self._context(ctx)
-        label = ctx.labels[index]
-        previous = ctx.measurements[index] if index < len(ctx.measurements) else float("nan")
-        self.console.print(f"[yellow]check the marks:[/] {reason}")
-        return self._optional(
-            f"Re-measure {label}, metres (you typed {previous:.4f}; press Enter to keep it): ",
-            label,
-        )
+        label, typed = ctx.labels[index], ctx.measurements[index]
+        keep = f"you typed {typed:.4f}; press Enter to keep it"
+        prompt = f"Re-measure {label}, metres ({keep}): "
+        return self._optional(ctx, f"[yellow]check the marks:[/] {reason}", prompt, label)
 
     def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
         """The trial is ambiguous: ask for one more cross distance, named by its screws."""
-        self._context(ctx)
-        self.console.print(f"[yellow]two poses fit these marks:[/] {reason}")
-        return self._optional(
-            f"Measure one more distance, {label}, metres (press Enter if you cannot; "
-            "the trial is then left out): ",
-            label,
-        )
+        skip = "press Enter if you cannot; the trial is then left out"
+        prompt = f"Measure one more distance, {label}, metres ({skip}): "
+        return self._optional(ctx, f"[yellow]two poses fit these marks:[/] {reason}", prompt, label)
 
     def start_check(self, robot: Robot) -> StartCheck:
-        """Before the session goes on: show where the robot stands; if it is not
-        at the next trial's start, ask the operator to put it back there, then
-        set the encoders to that start pose."""
+        """Show where the robot stands; off the next trial's start, ask the
+        operator to put it back there (or type 'here'), then zero the encoders there."""
 
         def check(start: StartPose) -> None:
             self.console.print(f"Robot: {start.describe()}")
@@ -312,10 +213,8 @@ class WizardPrompts:
         return check
 
     def show_rejection(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
-        """The set of distances fits no rigid motion: say why; only the
-        distances the rejection names are asked for again, the others are kept."""
-        kept = kept_after(rejection, ctx.labels, ctx.measurements)
-        self._kept[(ctx.trial, ctx.attempt, ctx.rejections + 1)] = kept
+        """Say why; only the distances the rejection names are asked for again."""
+        kept = self.entries.rejected(ctx, rejection)
         again = ", ".join(label for i, label in enumerate(ctx.labels) if i not in kept)
         what = f"only {again} (the other distances are kept)" if kept else "all its distances"
         self.console.print(
@@ -323,54 +222,30 @@ class WizardPrompts:
         )
 
 
+@dataclass
 class WizardObserver:
-    """Sees the session unfold: trial headers, motion bar, solved pose, and the
-    live estimate by the one recipe (odohil/session/outcome.py)."""
+    """Sees the session unfold: motion bar, solved pose, and the live estimate
+    by the one recipe (odohil/session/outcome.py)."""
 
-    def __init__(
-        self,
-        console: Console,
-        interrupts: Interrupts,
-        progress: MotionProgress,
-        system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
-    ) -> None:
-        self.console = console
-        self.system = system
-        self.interrupts = interrupts
-        self.progress = progress
-        self._step = 0
-        self._step_start: OdometrySample | None = None
+    console: Console
+    interrupts: Interrupts
+    progress: MotionProgress
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
 
     def on_sample(self, sample: OdometrySample) -> None:
-        """Every odometry sample of a motion: the first is taken before the
-        first step; a step ends at the first sample that shows the robot at rest."""
-        if self._step_start is None:
-            self._step_start = sample
-        else:
-            self.progress.update(self._step, self._step_start, sample)
-            if not sample.moving:
-                self._step += 1
-                self._step_start = sample
+        """An encoder sample of the motion: show it, act on a deferred Ctrl-C."""
+        self.progress.sample(sample)
         self.interrupts.check()
 
     def record(self, record: Record, state: SessionState) -> None:
         """React to one journaled record."""
         kind, data = record.kind, record.data
         if kind == ev.MOTION_START:
-            assert state.open_trial is not None
             assert state.plan is not None
-            self._step, self._step_start = 0, None
             self.interrupts.in_motion = True
-            self.progress.start(state.plan.design_of(state.open_trial.trial))
+            self.progress.start(state.plan.design_of(data["trial"]))
         elif kind == ev.SOLVED:
-            trial = state.completed[-1]
-            x, y, theta = trial.pose_change
-            self.console.print(
-                f"[green]Trial {trial.trial} solved:[/] dx={1e3 * x:+.1f} mm "
-                f"dy={1e3 * y:+.1f} mm dtheta={math.degrees(theta):+.3f} deg"
-                + ("" if trial.clear_cut else f" [yellow](not clear-cut: {trial.note})")
-            )
-            self._live(state)
+            self._solved(state)
         elif kind == ev.VOID:
             self.progress.stop()
             self.console.print(f"[yellow]Trial {data['trial']} attempt voided:[/] {data['reason']}")
@@ -379,15 +254,22 @@ class WizardObserver:
                 f"[bold green]Session complete:[/] {units.plural(data['n_trials'], 'trial')}."
             )
 
-    def _live(self, state: SessionState) -> None:
-        """The live estimate: the session's estimate and verdict by the one recipe."""
+    def _solved(self, state: SessionState) -> None:
+        """The solved pose, then the session's estimate and verdict by the one recipe."""
+        trial = state.completed[-1]
+        x, y, theta = trial.pose_change
+        self.console.print(
+            f"[green]Trial {trial.trial} solved:[/] dx={1e3 * x:+.1f} mm "
+            f"dy={1e3 * y:+.1f} mm dtheta={math.degrees(theta):+.3f} deg"
+            + ("" if trial.clear_cut else f" [yellow](not clear-cut: {trial.note})")
+        )
         assert state.plan is not None
         outcome = final_estimate(state)
         if outcome.result is None:
             self.console.print(f"No estimate yet: {escape(outcome.problem)}", soft_wrap=True)
             return
-        remaining = state.plan.n_trials - len(state.completed)
-        self.console.print(estimate_panel(state.completed, outcome.result, remaining, self.system))
+        left = state.plan.n_trials - len(state.completed)
+        self.console.print(estimate_panel(state.completed, outcome.result, left, self.system))
 
     def estimated(self, result: EstimateResult, state: SessionState) -> None:
         """The engine's incremental estimate: not shown (the recipe's is, at ``solved``)."""
@@ -603,7 +485,12 @@ def wizard(
 ) -> None:
     """Guide a calibration session beside the robot, one trial at a time."""
     console = Console(highlight=False)
-    interrupts = Interrupts()
+    interrupts = Interrupts(
+        lambda text: os.write(2, text.encode()),
+        EXIT_INTERRUPTED,
+        EXIT_STOP_UNCONFIRMED,
+        MAY_STILL_MOVE,
+    )
     interrupts.install()
     folder = session or default_session_folder()
     console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")

@@ -9,7 +9,7 @@ estimate, else the robot description's ``[priors]``: one place,
 machine of one attempt's distances (which distance is asked next, ``back``
 to correct the value typed just before, the range checks, the values a
 rejection did not name kept); :func:`kept_after` is the re-measure
-bookkeeping of a typed rejection.
+bookkeeping of a typed rejection, :class:`TapeEntries` that of a whole session.
 """
 
 from __future__ import annotations
@@ -30,6 +30,11 @@ from odohil.session.sources import TrialContext, check_distance, prediction
 
 BACK_WORDS = ("back", "-")
 """What the operator types at a distance prompt to correct the value typed just before."""
+INSTRUCTIONS = (
+    "Type each distance in metres, or with a unit (12 mm, 1.2 cm); "
+    f"type {' or '.join(BACK_WORDS)} to correct the value typed just before."
+)
+"""What the operator is told before the first distance of a round."""
 SPREAD_SIGMAS = 4.0
 """Half-width of an expected range, in standard deviations of the predicted distance."""
 SAMPLES = 400
@@ -128,12 +133,21 @@ class Question:
         index, label: which distance.
         expected: what the model expects of it.
         back_to: the label of the value ``back`` would correct (None: nothing).
+        trial: the trial it belongs to (``Trial 3/60``; may be empty).
     """
 
     index: int
     label: str
     expected: ExpectedRange
     back_to: str | None
+    trial: str = ""
+
+    @property
+    def prompt(self) -> str:
+        """What the operator is asked: ``Trial 3/60, d1 (screw A), metres (expected ...): ``."""
+        back = f"; back: correct {self.back_to}" if self.back_to else ""
+        where = f"{self.trial}, " if self.trial else ""
+        return f"{where}{self.label}, metres ({self.expected.hint()}{back}): "
 
 
 @dataclass(frozen=True)
@@ -161,14 +175,24 @@ class TapeEntry:
         labels: Sequence[str],
         ranges: Sequence[ExpectedRange],
         kept: Mapping[int, float] | None = None,
+        trial: str = "",
     ) -> None:
         self.labels = tuple(labels)
         self.ranges = tuple(ranges)
         self.kept = dict(kept or {})
+        self.trial = trial
         self._typed: dict[int, float] = {}
         self._handed: set[int] = set()
         self._first = 0
         self._unconfirmed: tuple[int, float] | None = None
+
+    @classmethod
+    def for_attempt(
+        cls, ctx: TrialContext, description: RobotDescription, kept: Mapping[int, float] | None
+    ) -> TapeEntry:
+        """The entry of a trial attempt, its ranges from the session's prediction."""
+        trial = f"Trial {ctx.trial}/{ctx.n_trials}"
+        return cls(ctx.labels, attempt_ranges(ctx, description), kept, trial)
 
     def _next_asked(self, index: int) -> int | None:
         return next((j for j in range(index + 1, len(self.labels)) if j not in self.kept), None)
@@ -198,7 +222,7 @@ class TapeEntry:
         )
         pending = self._pending(index)
         back_to = None if pending is None else self.labels[pending]
-        return Question(index, self.labels[index], self.ranges[index], back_to)
+        return Question(index, self.labels[index], self.ranges[index], back_to, self.trial)
 
     def feed(self, text: str) -> Reply:
         """Take one typed line as the answer to :meth:`question`."""
@@ -208,7 +232,7 @@ class TapeEntry:
             if pending is None:
                 return Reply(
                     "no_back",
-                    "only the value typed just before can be corrected, "
+                    "nothing to go back to: only the value typed just before can be corrected, "
                     "and the earlier ones are saved; type this distance",
                 )
             del self._typed[pending]
@@ -235,3 +259,37 @@ class TapeEntry:
         self._unconfirmed = None
         self._typed[asked.index] = value
         return Reply("entered")
+
+
+class TapeEntries:
+    """The operator's entries over a session: one :class:`TapeEntry` per round
+    of an attempt (trial, attempt, rejections; a rejection starts a round that
+    keeps the distances it did not name), and which attempts were introduced."""
+
+    def __init__(self, description: RobotDescription) -> None:
+        self.description = description
+        self._entries: dict[tuple[int, int, int], TapeEntry] = {}
+        self._kept: dict[tuple[int, int, int], dict[int, float]] = {}
+        self._seen: set[tuple[int, int]] = set()
+
+    def first_sight(self, ctx: TrialContext) -> bool:
+        """Whether ``ctx``'s attempt is seen for the first time (its header is due)."""
+        new = (ctx.trial, ctx.attempt) not in self._seen
+        self._seen.add((ctx.trial, ctx.attempt))
+        return new
+
+    def entry(self, ctx: TrialContext) -> tuple[TapeEntry, bool]:
+        """The entry of ``ctx``'s round, and whether it is new (its instructions are due)."""
+        key = (ctx.trial, ctx.attempt, ctx.rejections)
+        new = key not in self._entries
+        if new:
+            self._entries[key] = TapeEntry.for_attempt(ctx, self.description, self._kept.get(key))
+        return self._entries[key], new
+
+    def rejected(
+        self, ctx: TrialContext, rejection: InconsistentMeasurementError
+    ) -> dict[int, float]:
+        """The distances the next round keeps (:func:`kept_after`), by index."""
+        kept = kept_after(rejection, ctx.labels, ctx.measurements)
+        self._kept[(ctx.trial, ctx.attempt, ctx.rejections + 1)] = kept
+        return kept

@@ -26,6 +26,7 @@ from odohil.session.preflight import leg_check
 from odohil.session.sources import OperatorSource, TrialContext, relative_true_pose
 from odohil.session.tape_entry import (
     ExpectedRange,
+    TapeEntries,
     TapeEntry,
     attempt_ranges,
     expected_ranges,
@@ -110,6 +111,23 @@ def test_distances_a_typed_rejection_did_not_name_are_kept_without_asking() -> N
     assert entry.take(1) == kept[1]
     assert entry.take(0) is None
     assert entry.question().label == LABELS[0]
+
+
+def test_a_rejection_starts_a_round_that_keeps_what_it_did_not_name() -> None:
+    entries = TapeEntries(description())
+    first = _ctx(measurements=(0.1, 0.2, 0.3, 0.4, 0.5))
+    assert entries.first_sight(first)
+    assert not entries.first_sight(first)
+    entry, new = entries.entry(first)
+    assert new
+    assert entries.entry(first) == (entry, False)
+    named = InconsistentMeasurementError("d2 is off", (LABELS[1],))
+    assert entries.rejected(first, named) == {0: 0.1, 2: 0.3, 3: 0.4, 4: 0.5}
+    second, new = entries.entry(_ctx(rejections=1))
+    assert new
+    assert second.take(0) == 0.1
+    assert second.take(1) is None
+    assert second.question().prompt.startswith(f"Trial 1/2, {LABELS[1]}, metres (expected ")
 
 
 # --- expected ranges ---------------------------------------------------------------

@@ -13,8 +13,9 @@ from rich.console import Console
 
 from odohil.cli.render import MotionProgress, parameters_table
 from odohil.cli.run import final_estimate
-from odohil.cli.wizard import Interrupts, WizardObserver
+from odohil.cli.wizard import WizardObserver
 from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
+from odohil.session.interrupts import Interrupts
 from odohil.session.plan import parse_plan
 from odohil.session.sources import FakeTruthSource
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
@@ -33,7 +34,8 @@ def test_live_estimate_after_the_last_trial_is_the_final_recipes(tmp_path: Path)
         journal, state = start_session(
             tmp_path / "s", ROBOT_TOML, parse_plan("k=1,l=1,n=3"), measure="fake", settings={}
         )
-        observer = WizardObserver(console, Interrupts(), MotionProgress(console))
+        interrupts = Interrupts(print, 130, 4, "the robot may still be moving")
+        observer = WizardObserver(console, interrupts, MotionProgress(console))
         with journal:
             final = SessionEngine(
                 journal,
