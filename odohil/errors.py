@@ -78,7 +78,16 @@ class MeasurementError(OdohilError, ValueError):
 
 
 class InconsistentMeasurementError(MeasurementError):
-    """Distances that no rigid motion explains within the measurement error."""
+    """Distances that no rigid motion explains within the measurement error.
+
+    Attributes:
+        labels: the distances the rejection names (the suspect first, then any
+            whose removal would do about as well); empty when it names none.
+    """
+
+    def __init__(self, message: str, labels: tuple[str, ...] = ()) -> None:
+        super().__init__(message)
+        self.labels = labels
 
 
 class TrialFileError(MeasurementError):

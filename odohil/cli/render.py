@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 from rich.console import Console, Group, RenderableType
@@ -19,16 +18,8 @@ from odohil.science.estimators.verdict import Verdict
 from odohil.science.grouping import by_design
 from odohil.science.observables import observables
 from odohil.science.paths import Design, Leg, Turn
+from odohil.session.preflight import Check
 from odohil.session.state import CompletedTrial
-
-
-@dataclass(frozen=True)
-class Check:
-    """One pre-flight check: its name, whether it passed, and what was found."""
-
-    name: str
-    ok: bool
-    detail: str
 
 
 def check_line(check: Check) -> Text:
@@ -184,6 +175,8 @@ class MotionProgress:
         self._progress: Progress | None = None
         self._task: TaskID | None = None
         self._steps: tuple[Leg | Turn, ...] = ()
+        self._step = 0
+        self._step_start: OdometrySample | None = None
 
     @property
     def active(self) -> bool:
@@ -194,6 +187,7 @@ class MotionProgress:
         """Show a new motion of ``design``."""
         self.stop()
         self._steps = design.path().steps
+        self._step, self._step_start = 0, None
         self._progress = Progress(
             TextColumn("driving {task.description}"),
             BarColumn(),
@@ -205,6 +199,16 @@ class MotionProgress:
         )
         self._task = self._progress.add_task(design.label(), total=len(self._steps), pose="")
         self._progress.start()
+
+    def sample(self, sample: OdometrySample) -> None:
+        """An encoder sample of the motion: the first is taken before the first
+        step; a step ends at the first sample that shows the robot at rest."""
+        if self._step_start is None:
+            self._step_start = sample
+            return
+        self.update(self._step, self._step_start, sample)
+        if not sample.moving:
+            self._step, self._step_start = self._step + 1, sample
 
     def update(self, step: int, start: OdometrySample | None, sample: OdometrySample) -> None:
         """A new encoder sample in step ``step`` (0-based) that began at ``start``."""

@@ -279,9 +279,7 @@ def solve_marks(
     dof = measured.size - 3
     limit = float(stats.chi2.isf(CONSISTENCY_LEVEL, max(dof, 1)))
     if chi2.min() > limit:
-        raise InconsistentMeasurementError(
-            _inconsistency_message(geometry, measured, seeds, minima, float(chi2.min()), limit)
-        )
+        raise _inconsistency(geometry, measured, seeds, minima, float(chi2.min()), limit)
 
     candidates = [
         _candidate(pose, c2, geometry, measured, odometry, prior_mean, prior_cov)
@@ -651,14 +649,16 @@ def _close(a: FloatArray, b: FloatArray, cov: FloatArray) -> bool:
     return bool(np.all(np.abs(delta) <= 10.0 * spread + 1e-9))
 
 
-def _inconsistency_message(
+def _inconsistency(
     geometry: _Geometry,
     measured: FloatArray,
     seeds: FloatArray,
     minima: FloatArray,
     chi2: float,
     limit: float,
-) -> str:
+) -> InconsistentMeasurementError:
+    """The rejection, naming the suspect distance and those whose removal
+    would do about as well (in its message and its ``labels``)."""
     starts = np.vstack([seeds, minima])
     remaining: list[float] = []
     for k in range(measured.size):
@@ -672,9 +672,10 @@ def _inconsistency_message(
         geometry.labels[int(k)] for k in order[1:] if remaining[int(k)] <= remaining[suspect] + 1.0
     ]
     also = f"; removing {', '.join(others)} would do about as well" if others else ""
-    return (
+    message = (
         f"no rigid motion explains the floor-mark distances within sigma "
         f"{geometry.sigma:g} m (best chi2 {chi2:.1f}, limit {limit:.1f} at level "
         f"{CONSISTENCY_LEVEL:g}). Suspect distance: {geometry.labels[suspect]} = "
         f"{measured[suspect]:.4f} m (without it chi2 is {remaining[suspect]:.2f}){also}."
     )
+    return InconsistentMeasurementError(message, (geometry.labels[suspect], *others))

@@ -13,10 +13,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from odohil import units
-from odohil.errors import ParameterError, TrialFileError
+from odohil.errors import OdohilError, ParameterError, TrialFileError
 from odohil.science.estimators.checks import plan_problems
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.session.floor_space import check_floor
 from odohil.session.plan import Plan, check_session_plan, parse_plan
 from odohil.session.robot_file import read_robot_toml
 from odohil.session.trial_files import read_trials
@@ -173,3 +174,53 @@ def check_trial_file(
         raise TrialFileError(
             f"--measure {path}: {len(wrong)} row(s) of another design than the plan's:\n  {shown}"
         )
+
+
+# --- the checks as values (the wizard shows them as ticks) ---------------------
+
+
+@dataclass(frozen=True)
+class Check:
+    """One pre-flight check: its name, whether it passed, and what was found."""
+
+    name: str
+    ok: bool
+    detail: str
+
+
+def leg_check(plan: Plan, max_leg_m: float) -> Check:
+    """Do the plan's legs fit the floor (``--max-leg-m``)? What one move
+    command carries is the robot's own limit, checked with the plan
+    (:func:`~odohil.session.plan.check_session_plan`), not here."""
+    problems = [
+        f"{item.design.label()}: legs of {item.design.l_m:g} m exceed {max_leg_m:g} m"
+        for item in plan.items
+        if item.design.l_m > max_leg_m
+    ]
+    detail = (
+        "; ".join(problems)
+        if problems
+        else f"{units.plural(plan.n_trials, 'trial')}, {plan.distance_m:.1f} m of driving "
+        f"({plan.to_text()})"
+    )
+    return Check("plan feasible", not problems, detail)
+
+
+def estimable_check(plan: Plan, description: RobotDescription) -> Check:
+    """:func:`check_estimable` as a check."""
+    try:
+        check_estimable(plan, description)
+    except OdohilError as exc:
+        return Check("plan estimable", False, str(exc))
+    return Check("plan estimable", True, "its trials can identify the four parameters")
+
+
+def floor_check(plan: Plan, description: RobotDescription) -> Check:
+    """Does the plan fit the robot description's free floor ([floor] length_m)?"""
+    try:
+        check_floor(plan, description)
+    except OdohilError as exc:
+        return Check("floor space", False, str(exc))
+    given = description.floor_length_m
+    limit = f"of {given:g} m" if given is not None else "(no [floor] length_m given)"
+    return Check("floor space", True, f"the plan needs {plan.excursion_m:g} m of floor {limit}")

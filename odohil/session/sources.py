@@ -43,6 +43,7 @@ from odohil.errors import InconsistentMeasurementError, MeasurementError
 from odohil.science import frames
 from odohil.science.floor_marks import (
     MarkDistances,
+    PosePrior,
     distance_labels,
     marks_from_pose,
     pose_covariance,
@@ -81,6 +82,7 @@ __all__ = [
     "as_pose_source",
     "check_distance",
     "pose_source_from_file",
+    "prediction",
     "recorded_source_from_file",
     "relative_true_pose",
 ]
@@ -111,9 +113,10 @@ class MeasurementSource(Protocol):
         Raises MeasurementError when it cannot be had."""
         ...
 
-    def rejected(self, ctx: TrialContext, reason: str) -> None:
-        """The distances of this attempt explain no rigid motion; they will be
-        asked for again (raise MeasurementError to give up instead)."""
+    def rejected(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+        """The distances of this attempt explain no rigid motion (``rejection``
+        says why and names the suspect distances in its ``labels``); they will
+        be asked for again (raise MeasurementError to give up instead)."""
         ...
 
     def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
@@ -149,8 +152,9 @@ class OperatorPrompts(Protocol):
         distance)."""
         ...
 
-    def show_rejection(self, ctx: TrialContext, reason: str) -> None:
-        """Tell the operator the distances are inconsistent and will be retaken."""
+    def show_rejection(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+        """Tell the operator the distances are inconsistent and will be retaken
+        (those ``rejection.labels`` names, or all when it names none)."""
         ...
 
     def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
@@ -187,9 +191,9 @@ class OperatorSource:
         """Ask the operator for the distance, metres."""
         return self.prompts.ask_distance(ctx, index)
 
-    def rejected(self, ctx: TrialContext, reason: str) -> None:
+    def rejected(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
         """Tell the operator."""
-        self.prompts.show_rejection(ctx, reason)
+        self.prompts.show_rejection(ctx, rejection)
 
     def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
         """Ask the operator to re-enter the suspect distance; None keeps it."""
@@ -200,6 +204,16 @@ class OperatorSource:
     ) -> float | None:
         """Ask the operator for the named cross distance; None if skipped."""
         return self.prompts.ask_extra_distance(ctx, label, reason)
+
+
+def prediction(ctx: TrialContext, description: RobotDescription) -> PosePrior:
+    """The model's predictive distribution of the attempt's pose change: the
+    engine's (``ctx.predicted``: at the live estimate, given the odometry),
+    else from the description's ``[priors]`` and the encoders' end pose."""
+    if ctx.predicted is not None:
+        return ctx.predicted
+    belief = ParameterBelief.from_priors(description.priors)
+    return predictive_pose(ctx.design, belief, ctx.encoder_end_pose)
 
 
 def check_distance(value_m: float, label: str) -> float:
@@ -279,7 +293,7 @@ class FakeTruthSource:
         noisy = np.abs(exact + rng.normal(0.0, self.sigma_m, exact.size))
         return float(noisy[index])
 
-    def rejected(self, ctx: TrialContext, reason: str) -> None:
+    def rejected(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
         """Nothing to do: the next draw differs (``rejections`` is in the seed)."""
 
     def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float:
@@ -356,10 +370,10 @@ class RecordedSource:
         """Recorded sessions have no extra distances: the trial is left out."""
         return None
 
-    def rejected(self, ctx: TrialContext, reason: str) -> None:
+    def rejected(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
         """Recorded distances cannot be retaken."""
         raise MeasurementError(
-            f"{self.origin}: row {self.row_for(ctx) + 1} (trial {ctx.trial}): {reason}"
+            f"{self.origin}: row {self.row_for(ctx) + 1} (trial {ctx.trial}): {rejection}"
         )
 
 
@@ -466,10 +480,7 @@ class TapeSource:
             end_pose = ctx.encoder_end_pose
             if end_pose is None:
                 raise MeasurementError(f"trial {ctx.trial}: no odometry end pose to solve against")
-            predicted = ctx.predicted
-            if predicted is None:
-                belief = ParameterBelief.from_priors(self.description.priors)
-                predicted = predictive_pose(ctx.design, belief, end_pose)
+            predicted = prediction(ctx, self.description)
             try:
                 selection = select_pose(self.description, marks, end_pose, predicted)
             except InconsistentMeasurementError as exc:
@@ -478,7 +489,7 @@ class TapeSource:
                         f"trial {ctx.trial}: the distances were rejected "
                         f"{ctx.rejections + 1} times; last: {exc}"
                     ) from exc
-                self.distances.rejected(ctx, str(exc))
+                self.distances.rejected(ctx, exc)
                 ctx = log(ev.MEASUREMENTS_REJECTED, {**ids, "reason": str(exc)})
                 continue
             selection = resolve_with_extra(self.description, marks, selection, ctx.extra)

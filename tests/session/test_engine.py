@@ -10,7 +10,6 @@ from typing import Any
 import numpy as np
 import pytest
 
-from odohil.cli.wizard import parse_metres
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError
 from odohil.science.estimators import EstimateResult
@@ -34,6 +33,7 @@ from odohil.session.sources import (
     relative_true_pose,
 )
 from odohil.session.state import SessionState, load_session_trials, replay
+from odohil.session.tape_entry import parse_metres
 from tests.session.helpers import FAST, ROBOT_TOML, PortTruth, description, fake_robot
 
 PLAN = "k=1,l=1,n=3;k=0.5,l=1.5,n=3"
@@ -209,7 +209,7 @@ def test_recorded_row_of_another_design_is_refused(tmp_path: Path) -> None:
 class _TapeOperator:
     """An operator with a perfect tape behind the wizard's parser: each distance
     is typed with more digits than a float holds ("0.1 + tiny digits"), parsed
-    once by :func:`odohil.cli.wizard.parse_metres` and handed over as a float;
+    once by :func:`odohil.session.tape_entry.parse_metres` and handed over as a float;
     ``negative`` makes the interface hand over a negative number instead."""
 
     def __init__(self, truth: PortTruth, negative: bool = False) -> None:
