@@ -79,6 +79,7 @@ from odohil.session.engine import (
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
+from odohil.session.pose_sources import OPERATOR
 from odohil.session.preflight import (
     check_estimable,
     check_session_folder,
@@ -714,7 +715,7 @@ def _start(
             folder,
             text,
             plan,
-            measure="operator",
+            measure=OPERATOR,
             settings=line.to_json(),
             robot_path=str(robot_file),
         )
