@@ -61,8 +61,8 @@ def resume(
         str | None,
         typer.Option(
             "--measure",
-            help="`fake`, a trial file (CSV) or tcp://HOST:PORT (motion capture) for the "
-            "remaining trials (default: the session's).",
+            help="`fake`, a trial file (CSV), tcp://HOST:PORT (motion capture) or another "
+            "installed pose source's form for the remaining trials (default: the session's).",
         ),
     ] = None,
     json_out: Annotated[

@@ -555,8 +555,9 @@ def run(
         str,
         typer.Option(
             "--measure",
-            help="`fake` (the fake robot's true pose), a trial file (CSV), or "
-            "tcp://HOST:PORT (a motion-capture stream, docs/motion-capture.md).",
+            help="`fake` (the fake robot's true pose), a trial file (CSV), "
+            "tcp://HOST:PORT (a motion-capture stream, docs/motion-capture.md), or the form "
+            "of another installed pose source (docs/pose-sources.md).",
         ),
     ],
     session: Annotated[
