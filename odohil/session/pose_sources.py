@@ -33,16 +33,19 @@ The built-in kinds (odohil/session/pose_kinds.py: ``fake``, ``file``,
 ``tcp``) are always there, also in a source checkout without installed
 metadata; another package adds a kind by declaring an entry point in the
 group (``toy = "toy_module:TOY"``: an object with the members above, or a
-class whose instances have them). Nothing here names a kind.
+class whose instances have them). Nothing here names a kind. The entry
+points found are cached while ``sys.path`` stays the same (:func:`clear_cache`).
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
+import sys
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from typing import Any, Protocol, cast
 
 from odohil.errors import InitError, ParameterError
@@ -156,6 +159,22 @@ def _builtin() -> dict[str, PoseSourceKind]:
     return {kind.name: kind for kind in BUILTIN_KINDS}
 
 
+@functools.lru_cache(maxsize=4)
+def _registered(search_path: tuple[str, ...]) -> tuple[EntryPoint, ...]:
+    """The group's entry points on ``search_path`` (sys.path: the cache
+    follows it), by name."""
+    return tuple(sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name))
+
+
+def clear_cache() -> None:
+    """Forget the entry points found so far (a package installed since)."""
+    _registered.cache_clear()
+
+
+def _entry_points() -> tuple[EntryPoint, ...]:
+    return _registered(tuple(sys.path))
+
+
 def kinds() -> dict[str, PoseSourceKind]:
     """Every kind by name: the built-in ones, then those registered in the
     group (an entry point cannot replace a built-in one).
@@ -164,7 +183,7 @@ def kinds() -> dict[str, PoseSourceKind]:
         InitError: a registered kind cannot be loaded (it is named).
     """
     found = _builtin()
-    for entry in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+    for entry in _entry_points():
         if entry.name in found:
             continue
         try:
@@ -185,7 +204,7 @@ def kinds() -> dict[str, PoseSourceKind]:
 def kind_names() -> tuple[str, ...]:
     """The names of every pose source (built-in and registered), sorted,
     without loading a registered one."""
-    names = set(_builtin()) | {e.name for e in entry_points(group=ENTRY_POINT_GROUP)}
+    names = set(_builtin()) | {e.name for e in _entry_points()}
     return tuple(sorted(names))
 
 
