@@ -31,6 +31,20 @@ _SCHEME = re.compile(r"[A-Za-z][A-Za-z0-9+.-]+:")
 ``toy:``), not a trial file (unless such a file exists)."""
 
 
+def journaled_text(journaled: Mapping[str, Any], key: str, form: str) -> str:
+    """The header's ``settings[key]`` (non-empty text).
+
+    Raises:
+        ParameterError: it is missing (the message names ``--measure`` and ``form``).
+    """
+    value = journaled.get(key)
+    if not isinstance(value, str) or not value:
+        raise ParameterError(
+            f"the session's journal names no {key} for its measurement: give --measure {form}"
+        )
+    return value
+
+
 class SnapshotTruth:
     """The fake robot's true pose through anything with a ``truth()`` snapshot
     (the in-process fake's port) or a ``snapshot()`` (a truth socket's client)."""
@@ -135,13 +149,7 @@ class TrialFileKind:
         Raises:
             ParameterError: the header names none.
         """
-        path = journaled.get("trial_file")
-        if not isinstance(path, str) or not path:
-            raise ParameterError(
-                "the session measures from a trial file but its journal names none: "
-                "give --measure PATH"
-            )
-        return TrialFileSettings(path)
+        return TrialFileSettings(journaled_text(journaled, "trial_file", "PATH (a trial file)"))
 
     def check(self, settings: TrialFileSettings, preflight: Preflight) -> None:
         """The file serves the plan (odohil/session/preflight.py ``check_trial_file``)."""
@@ -185,13 +193,7 @@ class MotionCaptureKind:
         Raises:
             ParameterError: the header names none.
         """
-        url = journaled.get("mocap_url")
-        if not isinstance(url, str) or not url:
-            raise ParameterError(
-                "the session measures by motion capture but its journal names no stream: "
-                "give --measure tcp://HOST:PORT"
-            )
-        return MotionCaptureSettings(url)
+        return MotionCaptureSettings(journaled_text(journaled, "mocap_url", "tcp://HOST:PORT"))
 
     def check(self, settings: MotionCaptureSettings, preflight: Preflight) -> None:
         """The URL's form and the description's pose_sigma (nothing connects).
