@@ -195,3 +195,25 @@ def test_the_built_in_kinds_parse_as_before() -> None:
     assert (parse_measure("fake").kind, parse_measure("tcp://h:1").kind) == ("fake", "tcp")
     assert parse_measure("trials.csv").kind == "file"
     assert parse_measure("C:/trials.csv").kind == "file"  # a drive letter is no scheme
+
+
+def test_validate_refuses_fake_without_truth_before_anything_moves(tmp_path: Path) -> None:
+    """The fake's pre-flight check is the registry's, the same for run and
+    validate: no truth channel is bad input (exit 2) before the port opens
+    (validate said exit 1 from inside the connection before)."""
+    session = tmp_path / "calibration"
+    ran = invoke(
+        "run", "--robot", NOMAD, "--port", PORT, "--measure", "fake", "--plan", PLAN,
+        "--session", session,
+    )  # fmt: skip
+    assert ran.exit_code == 0, ran.output
+    out = tmp_path / "validation"
+    checked = invoke(
+        "validate", session, "--path", "forth-back:2,0.5,reverse", "--trials", "2",
+        "--measure", "fake", "--port", str(tmp_path / "no-such-port"), "--out", out,
+    )  # fmt: skip
+    assert checked.exit_code == 2, checked.output
+    assert "--measure fake needs the fake robot's truth side channel" in " ".join(
+        checked.output.split()
+    )
+    assert not out.exists()
