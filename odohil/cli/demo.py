@@ -22,7 +22,6 @@ from odohil.cli.render import parameters_line
 from odohil.cli.robot_option import robot_protocol
 from odohil.cli.run import (
     Outcome,
-    SnapshotTruth,
     connect,
     execute,
     finish,
@@ -34,6 +33,7 @@ from odohil.science.robot_description import RobotDescription, parse_robot_descr
 from odohil.session.engine import start_session
 from odohil.session.journal import Journal
 from odohil.session.plan import parse_plan
+from odohil.session.pose_kinds import SnapshotTruth
 from odohil.session.robot import Robot
 from odohil.session.sources import FakeTruthSource, TapeSource
 from odohil.session.state import SessionState

@@ -10,23 +10,30 @@ from rich.console import Console
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
-from odohil.cli.line import resolve_line
+from odohil.cli.line import resolve_line, truth_available
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.run import (
     Outcome,
     connect,
     execute,
     finish,
-    make_source,
-    open_mocap,
-    parse_measure,
     session_exit_codes,
     session_input,
 )
 from odohil.errors import InitError
 from odohil.session.engine import description_of, resume_session
 from odohil.session.floor_space import check_floor
-from odohil.session.preflight import check_session_folder, check_trial_file
+from odohil.session.pose_sources import (
+    OPERATOR,
+    Connection,
+    OpenContext,
+    Preflight,
+    check_measure,
+    journaled_measure,
+    open_measure,
+    parse_measure,
+)
+from odohil.session.preflight import check_session_folder
 from odohil.session.start_pose import (
     HEADING_TOLERANCE_DEG,
     POSITION_TOLERANCE_M,
@@ -54,8 +61,8 @@ def resume(
         str | None,
         typer.Option(
             "--measure",
-            help="`fake`, a trial file (CSV) or tcp://HOST:PORT (motion capture) for the "
-            "remaining trials (default: the session's).",
+            help="`fake`, a trial file (CSV), tcp://HOST:PORT (motion capture) or another "
+            "installed pose source's form for the remaining trials (default: the session's).",
         ),
     ] = None,
     json_out: Annotated[
@@ -94,7 +101,7 @@ def resume(
             if resumed.torn is not None:
                 console.print(f"[yellow]warning[/]: {resumed.torn.describe()}")
             state = resumed.state
-            if state.header.get("measure") == "operator":
+            if state.header.get("measure") == OPERATOR:
                 raise InitError(
                     f"{session} is a wizard session (the operator measures): continue it "
                     f"with `odohil wizard --port PORT --session {session}`"
@@ -104,19 +111,17 @@ def resume(
             robot_path = str(state.header.get("robot_path") or "robot.toml")
             line = resolve_line(description, port, baud, robot_path, journaled=settings)
             socket_path = truth_socket or settings.get("truth_socket")
-            kind = str(state.header.get("measure"))
-            trial_file = settings.get("trial_file")
-            mocap_url = settings.get("mocap_url") if kind == "tcp" else None
+            option = journaled_measure(state.header)
             if measure is not None:
                 option = parse_measure(measure)
-                kind, trial_file, mocap_url = option.kind, option.trial_file, option.mocap_url
-                settings["trial_file"] = str(Path(measure).resolve()) if trial_file else None
-                settings["mocap_url"] = mocap_url
+                settings.update(trial_file=None, mocap_url=None)
+                settings.update(option.journal_settings())
             done = len(state.completed)
             assert state.plan is not None
             check_floor(state.plan, description_of(state))
-            if kind == "file" and trial_file:  # before the port opens
-                check_trial_file(trial_file, description, state.plan)
+            seed = int(settings.get("seed") or 0)
+            available = truth_available(line, socket_path)  # before the port opens:
+            check_measure(option, Preflight(description, state.plan, available))
             console.print(
                 f"resuming {session}: {done} of "
                 f"{units.plural(state.plan.n_trials, 'trial')} done"
@@ -124,17 +129,12 @@ def resume(
             )
             console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
             with (
-                open_mocap(mocap_url, description, console) as mocap,  # before the port opens
+                open_measure(option, OpenContext(description, seed)) as opened,  # before the port
                 connect(line, socket_path) as (robot, truth),
             ):
-                source = make_source(
-                    kind,
-                    description,
-                    truth,
-                    int(settings.get("seed") or 0),
-                    trial_file,
-                    mocap,
-                )
+                if opened.note:
+                    console.print(opened.note, soft_wrap=True)
+                source = opened.make(Connection(robot, truth))
                 connection = {**settings, **line.to_json()}
                 connection["truth_socket"] = socket_path
                 refused: list[StartPose] = []

@@ -46,9 +46,7 @@ from odohil.cli.render import parameters_table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.verdict import export_refusal_lines, outcome_line
 from odohil.errors import (
-    InitError,
     JournalError,
-    MeasurementError,
     OdohilError,
     ParameterError,
     RobotDescriptionError,
@@ -69,20 +67,25 @@ from odohil.session.engine import (
 )
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
-from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
 from odohil.session.outcome import EstimateOutcome, estimate_state
 from odohil.session.plan import Plan
 from odohil.session.pose_source import PoseSource
+from odohil.session.pose_sources import (
+    Connection,
+    OpenContext,
+    Preflight,
+    check_measure,
+    open_measure,
+    parse_measure,
+)
 from odohil.session.preflight import (
     check_new_session,
-    check_trial_file,
     check_trials_per_design,
     turn_designs,
 )
 from odohil.session.robot import Robot
 from odohil.session.robots import open_robot
 from odohil.session.signals import signal_name, signal_of, signals_raise
-from odohil.session.sources import FakeTruthSource, TapeSource, TruthReader
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState, load_session
 
@@ -93,18 +96,6 @@ _PLAN_HELP = (
     'Designs and trial counts, e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30" '
     "(k pairs, l metres, n trials, optional variant=turn|reverse)."
 )
-
-
-class SnapshotTruth:
-    """The fake robot's true pose through anything with a ``truth()`` snapshot."""
-
-    def __init__(self, owner: Any) -> None:
-        self.owner = owner
-
-    def true_pose(self) -> tuple[float, float, float]:
-        """True (x m, y m, heading rad)."""
-        snapshot = self.owner.truth() if hasattr(self.owner, "truth") else self.owner.snapshot()
-        return (snapshot.true_x_m, snapshot.true_y_m, snapshot.true_theta_rad)
 
 
 @contextlib.contextmanager
@@ -134,96 +125,6 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
         finally:
             if truth is not None and hasattr(truth, "close") and truth is not transport:
                 truth.close()
-
-
-def make_source(
-    measure: str,
-    description: RobotDescription,
-    truth: Any,
-    seed: int,
-    trial_file: str | None,
-    mocap: PoseStream | None = None,
-) -> PoseSource:
-    """The pose source named by ``measure``: ``fake`` (the fake's truth as a
-    tape with simulated noise, through the floor-marks solver), ``file`` (a
-    trial file: poses read as poses, raw distances through the solver) or
-    ``tcp`` (motion capture on the open ``mocap`` stream)."""
-    if measure == "tcp":
-        if mocap is None:
-            raise InitError(
-                "the session measures by motion capture but names no stream: give "
-                "--measure tcp://HOST:PORT"
-            )
-        return MotionCaptureSource(mocap, pose_sigma_of(description, mocap.url))
-    if measure == "fake":
-        if truth is None:
-            raise InitError(
-                "--measure fake needs the fake robot's truth side channel: give "
-                "--truth-socket PATH (the path `odohil emulate` printed) or the fake's own URL "
-                "(fakerobot://, fakecreate2://)"
-            )
-        reader: TruthReader = SnapshotTruth(truth)
-        return TapeSource(FakeTruthSource(reader, description, seed=seed), description)
-    if measure == "file" and trial_file:
-        from odohil.session.sources import pose_source_from_file
-
-        return pose_source_from_file(trial_file, description)
-    raise ParameterError(f"unknown measurement source {measure!r}")
-
-
-MOCAP_SCHEME = "tcp://"
-"""``--measure`` values starting so name a motion-capture stream."""
-MOCAP_FIRST_POSE_S = 3.0
-"""How long a motion-capture stream may take to deliver its first pose, s."""
-
-
-@dataclass(frozen=True)
-class MeasureOption:
-    """What ``--measure`` names.
-
-    Attributes:
-        kind: ``fake``, ``file`` or ``tcp`` (as journaled in the header).
-        trial_file: the trial file of ``file``.
-        mocap_url: the stream of ``tcp``.
-    """
-
-    kind: str
-    trial_file: str | None = None
-    mocap_url: str | None = None
-
-
-def parse_measure(measure: str) -> MeasureOption:
-    """``--measure``: ``fake``, ``tcp://HOST:PORT`` or a trial file's path."""
-    if measure == "fake":
-        return MeasureOption("fake")
-    if measure.startswith(MOCAP_SCHEME) or "://" in measure:
-        return MeasureOption("tcp", mocap_url=measure)
-    return MeasureOption("file", trial_file=measure)
-
-
-@contextlib.contextmanager
-def open_mocap(
-    url: str | None, description: RobotDescription, console: Console
-) -> Iterator[PoseStream | None]:
-    """The motion-capture stream at ``url``, checked before anything moves: the
-    URL's form and the description's pose_sigma (exit 2), then a connection
-    that delivers a pose within :data:`MOCAP_FIRST_POSE_S` (exit 1: nothing
-    moved). None when ``url`` is None. Closed on exit."""
-    if url is None:
-        yield None
-        return
-    stream = PoseStream(url)  # ParameterError on a bad URL
-    pose_sigma_of(description, url)
-    try:
-        stream.open()
-        require_pose(stream, MOCAP_FIRST_POSE_S)
-    except (InitError, MeasurementError) as exc:
-        stream.close()
-        console.print(f"[red]error[/]: {escape(str(exc))}; nothing moved", soft_wrap=True)
-        raise typer.Exit(EXIT_ERROR) from None
-    console.print(f"motion capture {url}: poses arriving", soft_wrap=True)
-    with stream:
-        yield stream
 
 
 class ProgressObserver:
@@ -654,8 +555,9 @@ def run(
         str,
         typer.Option(
             "--measure",
-            help="`fake` (the fake robot's true pose), a trial file (CSV), or "
-            "tcp://HOST:PORT (a motion-capture stream, docs/motion-capture.md).",
+            help="`fake` (the fake robot's true pose), a trial file (CSV), "
+            "tcp://HOST:PORT (a motion-capture stream, docs/motion-capture.md), or the form "
+            "of another installed pose source (docs/pose-sources.md).",
         ),
     ],
     session: Annotated[
@@ -708,8 +610,7 @@ def run(
         warn_turns(console, plan, description)
         exclude = checked_exclude(exclude_text, plan.n_trials, console)
         option = parse_measure(measure)
-        kind, trial_file = option.kind, option.trial_file
-        if kind != "tcp":  # the tape's cross distances must tell the designs apart
+        if option.floor_marks:  # the tape's cross distances must tell the designs apart
             refuse_unredundant(description, plan, console)
         try:
             check_floor(plan, description)
@@ -717,31 +618,26 @@ def run(
             console.print(f"[red]error[/]: {exc}; nothing moved")
             raise typer.Exit(EXIT_BAD_INPUT) from None
         line = resolve_line(description, port, baud, str(robot_file))
-        if trial_file:
-            check_trial_file(trial_file, description, plan)
+        check_measure(option, Preflight(description, plan, truth_available(line, truth_socket)))
         settings = {
             **line.to_json(),
             "truth_socket": truth_socket,
             "seed": seed,
-            "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
+            "trial_file": None,
+            **option.journal_settings(),
         }
-        if option.mocap_url:
-            settings["mocap_url"] = option.mocap_url
-        if kind == "fake" and not truth_available(line, truth_socket):
-            try:
-                make_source(kind, description, None, seed, trial_file)  # says what is missing
-            except OdohilError as exc:
-                console.print(f"[red]error[/]: {exc}", soft_wrap=True)  # bad input: nothing moved
-                raise typer.Exit(EXIT_BAD_INPUT) from None
-        with open_mocap(option.mocap_url, description, console) as mocap:
+        with open_measure(option, OpenContext(description, seed)) as opened:
+            if opened.note:
+                console.print(opened.note, soft_wrap=True)
             with session_input(console):
                 journal, state = start_session(
-                    folder, toml, plan, measure=kind, settings=settings, robot_path=str(robot_file)
-                )
+                    folder, toml, plan, measure=option.kind, settings=settings,
+                    robot_path=str(robot_file),
+                )  # fmt: skip
             console.print(f"session {folder}")
             console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
             with journal, connect(line, truth_socket) as (robot, truth):
-                source = make_source(kind, description, truth, seed, trial_file, mocap)
+                source = opened.make(Connection(robot, truth))
                 outcome = execute(
                     journal, state, robot, source, settings, console, exclude=exclude, system=system
                 )

@@ -47,9 +47,6 @@ from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
     Outcome,
     connect,
-    make_source,
-    open_mocap,
-    parse_measure,
     refuse_unredundant,
     run_engine,
     session_exit_codes,
@@ -67,7 +64,15 @@ from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.engine import start_session
 from odohil.session.floor_space import check_floor
 from odohil.session.plan import Plan, check_session_plan
-from odohil.session.preflight import check_trial_file
+from odohil.session.pose_kinds import TrialFileSettings
+from odohil.session.pose_sources import (
+    Connection,
+    OpenContext,
+    Preflight,
+    check_measure,
+    open_measure,
+    parse_measure,
+)
 from odohil.session.robot_file import load_robot_description, read_robot_toml
 from odohil.session.state import description_of_header, load_session
 from odohil.session.validation import (
@@ -246,7 +251,7 @@ def validate(
             check_not_fitted(plan, [d.forward for d in measured.designs])
         elif vpath.kind == "square":
             assert vpath.path is not None
-            if port is not None or measure in (None, "fake"):
+            if port is not None or not _file_measure(measure):
                 raise ParameterError(
                     f"--path {path_text}: a square has in-place turns and the robot protocol "
                     "drives forth-and-back designs only; give the square's measured poses "
@@ -308,6 +313,11 @@ def _no_robot(vpath: ValidationPath, port: str | None, measure: str | None) -> N
         )
 
 
+def _file_measure(measure: str | None) -> bool:
+    """Whether ``--measure`` names a trial file (of a square's measured poses)."""
+    return measure is not None and isinstance(parse_measure(measure).settings, TrialFileSettings)
+
+
 def _drive_or_reload(
     folder: Path,
     vpath: ValidationPath,
@@ -344,36 +354,33 @@ def _drive_or_reload(
         )
     plan = check_session_plan(Plan.of([(vpath.design, trials)]))
     option = parse_measure(measure)
-    kind, trial_file = option.kind, option.trial_file
-    if kind != "tcp":  # the tape's cross distances must tell the designs apart
+    if option.floor_marks:  # the tape's cross distances must tell the designs apart
         refuse_unredundant(description, plan, console)
     check_floor(plan, description)
     line = resolve_line(description, port, baud, robot_path or "the session's robot description")
-    if trial_file:
-        check_trial_file(trial_file, description, plan)
-    if kind == "fake" and not truth_available(line, truth_socket):
-        make_source(kind, description, None, seed, trial_file)  # says what is missing
+    check_measure(option, Preflight(description, plan, truth_available(line, truth_socket)))
     settings = {
         **line.to_json(),
         "truth_socket": truth_socket,
         "seed": seed,
-        "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
+        "trial_file": None,
         "validation_of": str(session.resolve()),
         "validation_path": vpath.text,
     }
-    if option.mocap_url:
-        settings["mocap_url"] = option.mocap_url
+    settings.update(option.journal_settings())
     with contextlib.ExitStack() as stack:
-        mocap = stack.enter_context(open_mocap(option.mocap_url, description, console))
+        opened = stack.enter_context(open_measure(option, OpenContext(description, seed)))
+        if opened.note:
+            console.print(opened.note, soft_wrap=True)
         journal, state = start_session(
-            folder, toml, plan, measure=kind, settings=settings, robot_path=robot_path
+            folder, toml, plan, measure=option.kind, settings=settings, robot_path=robot_path
         )
         console.print(f"validation session {folder}")
         console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
         stack.enter_context(session_exit_codes(console))
         stack.enter_context(journal)
         robot, truth = stack.enter_context(connect(line, truth_socket))
-        source = make_source(kind, description, truth, seed, trial_file, mocap)
+        source = opened.make(Connection(robot, truth))
         ran = run_engine(journal, state, robot, source, settings, console)
         if isinstance(ran, Outcome):
             raise typer.Exit(ran.exit_code)

@@ -74,6 +74,7 @@ from odohil.session.engine import (
 from odohil.session.interrupts import Interrupts, wait_readable
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
+from odohil.session.pose_sources import OPERATOR
 from odohil.session.preflight import (
     Check,
     check_session_folder,
@@ -393,7 +394,7 @@ def _start(
             folder,
             text,
             plan,
-            measure="operator",
+            measure=OPERATOR,
             settings=line.to_json(),
             robot_path=str(robot_file),
         )

@@ -25,7 +25,10 @@ journaled and left out of every estimate.
 
 Sources: the tape with the floor-marks solver, the fake robot's truth
 channel, a trial file of poses (odohil/session/sources.py); motion capture
-over tcp.
+over tcp (odohil/session/mocap/). ``--measure`` names one through the
+registry of pose sources (odohil/session/pose_sources.py, the
+``odohil.pose_sources`` entry-point group; docs/pose-sources.md), which
+parses, checks and opens it.
 """
 
 from __future__ import annotations

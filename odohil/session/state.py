@@ -70,6 +70,7 @@ from odohil.science.robot_description import RobotDescription, parse_robot_descr
 from odohil.session.journal import Record, TornRecord, read_journal
 from odohil.session.mocap.stream import parse_tcp_url
 from odohil.session.plan import Plan, check_session_plan
+from odohil.session.pose_sources import OPERATOR, kind_names
 from odohil.session.trial_files import Trial, TrialSet
 
 FORMAT = 1
@@ -266,8 +267,12 @@ def replay(records: Iterable[Record]) -> SessionState:
     return state
 
 
-MEASURES = ("fake", "file", "operator", "tcp")
-"""The measurement sources a session header may name."""
+def measures() -> tuple[str, ...]:
+    """The measurement sources a session header may name: the wizard's
+    operator and every pose source (odohil/session/pose_sources.py), sorted."""
+    return tuple(sorted({OPERATOR, *kind_names()}))
+
+
 _SETTING_TYPES: dict[str, tuple[type, ...]] = {
     "port": (str,),
     "truth_socket": (str,),
@@ -303,8 +308,8 @@ def validate_header(data: Mapping[str, Any], where: str = "session record") -> N
     if robot_path is not None and not isinstance(robot_path, str):
         raise bad("robot_path", "a path (text)", robot_path)
     measure = data.get("measure")
-    if "measure" in data and measure not in MEASURES:
-        raise bad("measure", f"one of {', '.join(MEASURES)}", measure)
+    if "measure" in data and measure not in (known := measures()):
+        raise bad("measure", f"one of {', '.join(known)}", measure)
     if "plan" in data:
         plan = data["plan"]
         if not isinstance(plan, dict):
