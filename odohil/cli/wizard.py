@@ -67,7 +67,6 @@ from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MAX_LEG_M
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription, parse_robot_description
-from odohil.session import state as ev
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     SessionEngine,
@@ -76,6 +75,7 @@ from odohil.session.engine import (
     resume_session,
     start_session,
 )
+from odohil.session.events import Finished, MotionStart, Solved, Void
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
@@ -511,15 +511,15 @@ class WizardObserver:
 
     def record(self, record: Record, state: SessionState) -> None:
         """React to one journaled record."""
-        kind, data = record.kind, record.data
-        if kind == ev.MOTION_START:
+        event = record.event
+        if isinstance(event, MotionStart):
             opened = state.open_trial
             assert opened is not None
             assert state.plan is not None
             self._step, self._step_start = 0, None
             self.interrupts.in_motion = True
             self.progress.start(state.plan.design_of(opened.trial))
-        elif kind == ev.SOLVED:
+        elif isinstance(event, Solved):
             trial = state.completed[-1]
             x, y, theta = trial.pose_change
             self.console.print(
@@ -529,12 +529,12 @@ class WizardObserver:
             )
             if not _can_estimate(state):
                 self.console.print("No estimate yet: it needs 2 trials of a design.")
-        elif kind == ev.VOID:
+        elif isinstance(event, Void):
             self.progress.stop()
-            self.console.print(f"[yellow]Trial {data['trial']} attempt voided:[/] {data['reason']}")
-        elif kind == ev.FINISHED:
+            self.console.print(f"[yellow]Trial {event.trial} attempt voided:[/] {event.reason}")
+        elif isinstance(event, Finished):
             self.console.print(
-                f"[bold green]Session complete:[/] {units.plural(data['n_trials'], 'trial')}."
+                f"[bold green]Session complete:[/] {units.plural(event.n_trials or 0, 'trial')}."
             )
 
     def estimated(self, result: EstimateResult, state: SessionState) -> None:
@@ -859,8 +859,8 @@ def _guided(
                     description_of(opened.state),
                     port,
                     baud,
-                    str(header.get("robot_path") or "robot.toml"),
-                    header.get("settings"),
+                    header.robot_path or "robot.toml",
+                    header.settings,
                 )
             except BaseException:
                 opened.journal.close()

@@ -14,7 +14,9 @@ from typing import Any
 import pytest
 
 from odohil.session.engine import IncrementalLiveEstimator
+from odohil.session.events import encode
 from odohil.session.state import load_session, session_trials
+from odohil.session.tape_records import TapeReadings
 
 JOURNALS = Path(__file__).resolve().parent / "data" / "journals"
 
@@ -23,6 +25,8 @@ def _open_trial(state: Any) -> dict[str, Any] | None:
     opened = state.open_trial
     if opened is None:
         return None
+    tape = opened.readings or TapeReadings()
+    assert isinstance(tape, TapeReadings)
     return {
         "trial": opened.trial,
         "attempt": opened.attempt,
@@ -32,11 +36,11 @@ def _open_trial(state: Any) -> dict[str, Any] | None:
         "end": dict(opened.end),
         "encoder_end_pose": opened.encoder_end_pose,
         "n_trajectory": len(opened.trajectory),
-        "measurements": list(opened.measurements),
-        "rejections": opened.rejections,
-        "remeasures": opened.remeasures,
-        "slip": opened.slip,
-        "extra": [list(e) for e in opened.extra],
+        "measurements": list(tape.measurements),
+        "rejections": tape.rejections,
+        "remeasures": tape.remeasures,
+        "slip": tape.slip,
+        "extra": [list(e) for e in tape.extra],
     }
 
 
@@ -49,8 +53,9 @@ def snapshot(folder: Path) -> dict[str, Any]:
         if not trial.ambiguous:
             result = estimator.add(trial)
     trials = session_trials(state)
+    last = state.last_estimate
     snap = {
-        "header": dict(state.header),
+        "header": encode(state.header)[1],
         "plan": state.plan.to_json() if state.plan is not None else None,
         "completed": [
             {
@@ -76,7 +81,7 @@ def snapshot(folder: Path) -> dict[str, Any]:
         "open_trial": _open_trial(state),
         "voided": state.voided,
         "attempts": {str(k): v for k, v in sorted(state.attempts.items())},
-        "last_estimate": state.last_estimate,
+        "last_estimate": {"n_trials": last.n_trials, "result": last.result} if last else None,
         "finished": state.finished,
         "n_records": state.n_records,
         "trial_set": [
