@@ -112,3 +112,36 @@ def test_no_event_dict_literal_outside_the_journal_module() -> None:
             continue
         found += event_literals(path.read_text(encoding="utf-8"), str(relative))
     assert found == []
+
+
+TAPE_NAMES = frozenset(
+    {"rejections", "remeasures", "extra", "labels", "distance_labels", "MarkDistances"}
+)
+"""The tape's own fields and helpers (odohil/session/tape_records.py)."""
+
+
+def tape_names(source: str) -> set[str]:
+    """The tape's names ``source`` reads or sets (attributes, names, keywords)."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Attribute) and node.attr in TAPE_NAMES:
+            found.add(node.attr)
+        elif isinstance(node, ast.Name) and node.id in TAPE_NAMES:
+            found.add(node.id)
+        elif isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            if node.target.id in TAPE_NAMES:
+                found.add(node.target.id)
+        elif isinstance(node, ast.keyword) and node.arg in TAPE_NAMES and node.arg != "labels":
+            found.add(node.arg)
+    return found
+
+
+def test_the_check_finds_the_tape_fields_the_engine_and_state_carried_before() -> None:
+    before = "self.labels = distance_labels(d)\nrejections: int = 0\nx = opened.remeasures"
+    assert tape_names(before) == {"labels", "distance_labels", "rejections", "remeasures"}
+
+
+@pytest.mark.parametrize("module", ["odohil/session/engine.py", "odohil/session/state.py"])
+def test_the_engine_and_the_state_carry_nothing_of_the_tape(module: str) -> None:
+    """The tape's readings are its own record (TapeReadings), opaque here."""
+    assert tape_names((ROOT / module).read_text(encoding="utf-8")) == set()
