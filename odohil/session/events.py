@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import importlib
 import types
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import MISSING, dataclass, field, fields
 from typing import Any, ClassVar, Protocol, Union, get_args, get_origin, get_type_hints
 
@@ -434,48 +434,69 @@ def _to_json(value: Any) -> Any:
 
 def _from_json(value: Any, hint: Any, where: str) -> Any:
     """``value`` as type ``hint``; ValueError naming ``where`` when it is not."""
-    origin = get_origin(hint)
     if hint is Any:
         return value
-    if origin in (Union, types.UnionType):
-        options = [a for a in get_args(hint) if a is not type(None)]
-        if value is None:
-            if len(options) < len(get_args(hint)):
-                return None
-            raise ValueError(f"{where}: null")
-        return _from_json(value, options[0], where)
-    if hint is bool:
-        if not isinstance(value, bool):
-            raise ValueError(f"{where}: {value!r} is not true or false")
-        return value
-    if hint is int:
-        if isinstance(value, bool) or not isinstance(value, int):
-            raise ValueError(f"{where}: {value!r} is not an integer")
-        return value
-    if hint is float:
-        if isinstance(value, bool) or not isinstance(value, int | float):
-            raise ValueError(f"{where}: {value!r} is not a number")
-        return float(value)
-    if hint is str:
-        if not isinstance(value, str):
-            raise ValueError(f"{where}: {value!r} is not text")
-        return value
-    if origin is tuple:
-        if not isinstance(value, list):
-            raise ValueError(f"{where}: {value!r} is not a list")
-        args = get_args(hint)
-        if len(args) == 2 and args[1] is Ellipsis:
-            return tuple(_from_json(v, args[0], where) for v in value)
-        if len(value) != len(args):
-            raise ValueError(f"{where}: {len(value)} values where {len(args)} are expected")
-        return tuple(_from_json(v, a, where) for v, a in zip(value, args, strict=True))
-    if origin is Mapping or hint is Mapping:
-        if not isinstance(value, dict):
-            raise ValueError(f"{where}: {value!r} is not an object")
-        return value
-    if hint is Plan:
-        try:
-            return Plan.from_json(value)
-        except ParameterError as exc:
-            raise ValueError(f"{where}: bad plan: {exc}") from None
-    raise TypeError(f"{where}: the journal codec cannot read {hint!r}")
+    origin = get_origin(hint)
+    reader = _READERS.get(origin if origin is not None else hint)
+    if reader is None:
+        raise TypeError(f"{where}: the journal codec cannot read {hint!r}")
+    return reader(value, hint, where)
+
+
+def _scalar(kind: type, test: Callable[[Any], bool], what: str) -> Callable[[Any, Any, str], Any]:
+    def read(value: Any, hint: Any, where: str) -> Any:
+        if not test(value):
+            raise ValueError(f"{where}: {value!r} is not {what}")
+        return kind(value)
+
+    return read
+
+
+def _optional(value: Any, hint: Any, where: str) -> Any:
+    options = [a for a in get_args(hint) if a is not type(None)]
+    if value is None:
+        if len(options) < len(get_args(hint)):
+            return None
+        raise ValueError(f"{where}: null")
+    return _from_json(value, options[0], where)
+
+
+def _tuple(value: Any, hint: Any, where: str) -> tuple[Any, ...]:
+    if not isinstance(value, list):
+        raise ValueError(f"{where}: {value!r} is not a list")
+    args = get_args(hint)
+    if len(args) == 2 and args[1] is Ellipsis:
+        return tuple(_from_json(v, args[0], where) for v in value)
+    if len(value) != len(args):
+        raise ValueError(f"{where}: {len(value)} values where {len(args)} are expected")
+    return tuple(_from_json(v, a, where) for v, a in zip(value, args, strict=True))
+
+
+def _object(value: Any, hint: Any, where: str) -> Mapping[str, Any]:
+    if not isinstance(value, dict):
+        raise ValueError(f"{where}: {value!r} is not an object")
+    return value
+
+
+def _plan(value: Any, hint: Any, where: str) -> Plan:
+    try:
+        return Plan.from_json(value)
+    except ParameterError as exc:
+        raise ValueError(f"{where}: bad plan: {exc}") from None
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+_READERS: dict[Any, Callable[[Any, Any, str], Any]] = {
+    bool: _scalar(bool, lambda v: isinstance(v, bool), "true or false"),
+    int: _scalar(int, lambda v: _is_number(v) and isinstance(v, int), "an integer"),
+    float: _scalar(float, _is_number, "a number"),
+    str: _scalar(str, lambda v: isinstance(v, str), "text"),
+    Union: _optional,
+    types.UnionType: _optional,
+    tuple: _tuple,
+    Mapping: _object,
+    Plan: _plan,
+}
