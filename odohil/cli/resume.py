@@ -101,17 +101,17 @@ def resume(
             if resumed.torn is not None:
                 console.print(f"[yellow]warning[/]: {resumed.torn.describe()}")
             state = resumed.state
-            if state.header.get("measure") == OPERATOR:
+            if state.header.measure == OPERATOR:
                 raise InitError(
                     f"{session} is a wizard session (the operator measures): continue it "
                     f"with `odohil wizard --port PORT --session {session}`"
                 )
-            settings = dict(state.header.get("settings", {}))
+            settings = dict(state.header.settings)
             description = description_of(state)  # before the port opens
-            robot_path = str(state.header.get("robot_path") or "robot.toml")
+            robot_path = state.header.robot_path or "robot.toml"
             line = resolve_line(description, port, baud, robot_path, journaled=settings)
             socket_path = truth_socket or settings.get("truth_socket")
-            option = journaled_measure(state.header)
+            option = journaled_measure(state.header.measure, state.header.settings)
             if measure is not None:
                 option = parse_measure(measure)
                 settings.update(trial_file=None, mocap_url=None)

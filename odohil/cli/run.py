@@ -56,7 +56,6 @@ from odohil.errors import (
 from odohil.science.estimators import EstimateResult
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
-from odohil.session import state as ev
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     MotionSettings,
@@ -65,6 +64,7 @@ from odohil.session.engine import (
     StopOutcome,
     start_session,
 )
+from odohil.session.events import Solved, Void
 from odohil.session.floor_space import check_floor
 from odohil.session.journal import Journal, Record
 from odohil.session.outcome import EstimateOutcome, estimate_state
@@ -88,6 +88,7 @@ from odohil.session.robots import open_robot
 from odohil.session.signals import signal_name, signal_of, signals_raise
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState, load_session
+from odohil.session.tape_records import MeasurementsRejected, Remeasured
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
@@ -157,23 +158,23 @@ class ProgressObserver:
 
     def record(self, record: Record, state: SessionState) -> None:
         """Advance on each solved trial; print voids and rejections."""
-        if record.kind == ev.SOLVED:
+        event = record.event
+        if isinstance(event, Solved):
             self.progress.update(self.task, completed=len(state.completed))
-        elif record.kind == ev.VOID:
+        elif isinstance(event, Void):
             self.progress.console.print(
-                f"trial {record.data['trial']} attempt {record.data['attempt']} void: "
-                f"{record.data['reason']}"
+                f"trial {event.trial} attempt {event.attempt} void: {event.reason}"
             )
-        elif record.kind == ev.MEASUREMENTS_REJECTED:
+        elif isinstance(event, MeasurementsRejected):
             self.progress.console.print(
-                f"trial {record.data['trial']}: the distances {self.measurer} took fit no "
+                f"trial {event.trial}: the distances {self.measurer} took fit no "
                 f"rigid motion, so {self.measurer} measured them again: the check at work; "
                 "nothing is lost and the trial counts once (the reason is in the journal).",
                 soft_wrap=True,
                 highlight=False,
             )
-        elif record.kind == ev.REMEASURED and not record.data.get("kept"):
-            self.remeasured.setdefault(int(record.data["trial"]), None)
+        elif isinstance(event, Remeasured) and not event.kept:
+            self.remeasured.setdefault(event.trial, None)
 
     def remeasure_summary(self) -> str | None:
         """One line for every distance the slip check had taken again (None if none)."""

@@ -132,8 +132,8 @@ def _description(calibration: Calibration, robot: Path | None) -> tuple[RobotDes
             )
         return (
             description_of_header(state),
-            str(state.header["robot_toml"]),
-            str(state.header.get("robot_path") or ""),
+            str(state.header.robot_toml),
+            state.header.robot_path or "",
         )
     toml = read_robot_toml(robot, ParameterError, "--robot: robot description")
     return parse_robot_description(toml, str(robot)), toml, str(robot)
@@ -337,7 +337,7 @@ def _drive_or_reload(
     assert vpath.design is not None
     if (folder / "journal.jsonl").is_file():
         state = load_session(folder).state
-        settings = state.header.get("settings", {})
+        settings = state.header.settings
         if settings.get("validation_path") != vpath.text or not state.finished:
             raise JournalError(
                 f"{folder} holds {'another' if state.finished else 'an unfinished'} "

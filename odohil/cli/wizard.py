@@ -62,7 +62,6 @@ from odohil.science.estimators import EstimateResult
 from odohil.science.planner import DEFAULT_MAX_LEG_M
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription, parse_robot_description
-from odohil.session import state as ev
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     SessionEngine,
@@ -71,6 +70,7 @@ from odohil.session.engine import (
     resume_session,
     start_session,
 )
+from odohil.session.events import Finished, MotionStart, Solved, Void
 from odohil.session.interrupts import Interrupts, wait_readable
 from odohil.session.journal import Journal, Record, journal_path
 from odohil.session.plan import Plan, check_session_plan, parse_plan
@@ -240,19 +240,21 @@ class WizardObserver:
 
     def record(self, record: Record, state: SessionState) -> None:
         """React to one journaled record."""
-        kind, data = record.kind, record.data
-        if kind == ev.MOTION_START:
+        event = record.event
+        if isinstance(event, MotionStart):
+            opened = state.open_trial
+            assert opened is not None
             assert state.plan is not None
             self.interrupts.in_motion = True
-            self.progress.start(state.plan.design_of(data["trial"]))
-        elif kind == ev.SOLVED:
+            self.progress.start(state.plan.design_of(opened.trial))
+        elif isinstance(event, Solved):
             self._solved(state)
-        elif kind == ev.VOID:
+        elif isinstance(event, Void):
             self.progress.stop()
-            self.console.print(f"[yellow]Trial {data['trial']} attempt voided:[/] {data['reason']}")
-        elif kind == ev.FINISHED:
+            self.console.print(f"[yellow]Trial {event.trial} attempt voided:[/] {event.reason}")
+        elif isinstance(event, Finished):
             self.console.print(
-                f"[bold green]Session complete:[/] {units.plural(data['n_trials'], 'trial')}."
+                f"[bold green]Session complete:[/] {units.plural(event.n_trials or 0, 'trial')}."
             )
 
     def _solved(self, state: SessionState) -> None:
@@ -544,8 +546,8 @@ def _guided(
                     description_of(opened.state),
                     port,
                     baud,
-                    str(header.get("robot_path") or "robot.toml"),
-                    header.get("settings"),
+                    header.robot_path or "robot.toml",
+                    header.settings,
                 )
             except BaseException:
                 opened.journal.close()

@@ -62,10 +62,27 @@ from odohil.errors import (
     StopUnconfirmedError,
 )
 from odohil.science.estimators import EstimateResult, IncrementalEstimator, Observation
-from odohil.science.floor_marks import PosePrior, distance_labels
+from odohil.science.floor_marks import PosePrior
 from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.science.robot_description import RobotDescription, parse_robot_description
-from odohil.session import state as ev
+from odohil.session.events import (
+    Estimate,
+    Event,
+    Finished,
+    MotionDone,
+    MotionStart,
+    Resumed,
+    RobotConnected,
+    SessionHeader,
+    Solved,
+    SourceEvent,
+    StartPoseChecked,
+    Stopped,
+    StopUnconfirmed,
+    TornRecordKept,
+    TrialStart,
+    Void,
+)
 from odohil.session.journal import Journal, Record, TornRecord
 from odohil.session.plan import Plan
 from odohil.session.plausibility import far_window, judge
@@ -80,6 +97,7 @@ from odohil.session.signals import (
 from odohil.session.sources import MeasurementSource, as_pose_source
 from odohil.session.start_pose import StartPose, check_start
 from odohil.session.state import (
+    FORMAT,
     CompletedTrial,
     OpenTrial,
     Phase,
@@ -192,17 +210,16 @@ def start_session(
     parse_robot_description(description_toml, robot_path or "robot description")
     journal = Journal.create(folder)
     try:
-        header = journal.append(
-            ev.SESSION,
-            {
-                "format": ev.FORMAT,
-                "odohil": __version__,
-                "robot_toml": description_toml,
-                "robot_path": robot_path,
-                "measure": measure,
-                "settings": dict(settings),
-                "plan": plan.to_json(),
-            },
+        header = journal.write(
+            SessionHeader(
+                format=FORMAT,
+                odohil=__version__,
+                robot_toml=description_toml,
+                robot_path=robot_path,
+                measure=measure,
+                settings=dict(settings),
+                plan=plan,
+            )
         )
         state = replay([header])
     except BaseException:
@@ -241,17 +258,16 @@ def resume_session(folder: str | Path, note: Mapping[str, Any] | None = None) ->
             raise JournalError(f"the session in {folder} has no plan")
         if contents.torn is not None:
             torn = contents.torn
-            record = journal.append(
-                ev.TORN_RECORD,
-                {
-                    "file": torn.set_aside.name if torn.set_aside else "",
-                    "line": torn.line_number,
-                    "bytes": torn.size,
-                    "reason": torn.reason,
-                },
+            record = journal.write(
+                TornRecordKept(
+                    file=torn.set_aside.name if torn.set_aside else "",
+                    line=torn.line_number,
+                    bytes=torn.size,
+                    reason=torn.reason,
+                )
             )
             state = apply(state, record)
-        state = apply(state, journal.append(ev.RESUMED, dict(note or {})))
+        state = apply(state, journal.write(Resumed(dict(note or {}))))
     except BaseException:
         journal.close()
         raise
@@ -352,7 +368,6 @@ class SessionEngine:
         self.connection = dict(connection or {})
         self.on_sample = on_sample
         self.start_check = start_check
-        self.labels = distance_labels(self.description)
         self.latest_estimate: EstimateResult | None = None
         self.stop_outcome: StopOutcome | None = None
         self._predicted: PosePrior | None = None
@@ -360,8 +375,8 @@ class SessionEngine:
 
     # -- journal ---------------------------------------------------------
 
-    def _log(self, kind: str, data: Mapping[str, Any]) -> Record:
-        record = self.journal.append(kind, data)
+    def _log(self, event: Event) -> Record:
+        record = self.journal.write(event)
         self.state = apply(self.state, record)
         if self.observer is not None:
             self.observer.record(record, self.state)
@@ -391,7 +406,7 @@ class SessionEngine:
                     return self.state
                 self._run_trial(trial)
                 completed += 1
-            self._log(ev.FINISHED, {"n_trials": len(self.state.completed)})
+            self._log(Finished(n_trials=len(self.state.completed)))
         except BaseException as exc:
             if self._stopped(exc):
                 raise
@@ -424,23 +439,16 @@ class SessionEngine:
                 opened = self.state.open_trial
                 if opened is not None and opened.phase in (Phase.MARKED, Phase.MOVING):
                     self._log(
-                        ev.VOID,
-                        {
-                            "trial": opened.trial,
-                            "attempt": opened.attempt,
-                            "reason": f"{reason} before the motion ended: {message}",
-                        },
+                        Void(
+                            opened.trial,
+                            opened.attempt,
+                            reason=f"{reason} before the motion ended: {message}",
+                        )
                     )
                 if stopped:
-                    self._log(
-                        ev.STOPPED,
-                        {"reason": reason, "message": message, "robot": "stopped", "state": state},
-                    )
+                    self._log(Stopped(reason, message, robot="stopped", state=state))
                 else:
-                    self._log(
-                        ev.STOP_UNCONFIRMED,
-                        {"reason": reason, "message": message, "detail": detail},
-                    )
+                    self._log(StopUnconfirmed(reason, message, detail=detail))
             except (JournalError, OSError, ValueError) as failed:
                 self.stop_outcome = StopOutcome(stopped, detail, False, str(failed))
             else:
@@ -463,12 +471,11 @@ class SessionEngine:
     def _connect(self) -> None:
         sample = self.robot.arm(self.motion.drive_settings())
         self._log(
-            ev.ROBOT,
-            {
-                "connection": self.connection,
-                "motion": self.motion.to_json(),
-                "state": _sample_json(sample),
-            },
+            RobotConnected(
+                connection=self.connection,
+                motion=self.motion.to_json(),
+                state=_sample_json(sample),
+            )
         )
 
     def _check_start(self) -> None:
@@ -477,13 +484,12 @@ class SessionEngine:
         back, or raise)."""
         start = check_start(self.state, self._settle())
         self._log(
-            ev.START_POSE,
-            {
-                "trial": start.trial,
-                "expected": list(start.expected) if start.expected is not None else None,
-                "actual": list(start.actual),
-                "ok": start.ok,
-            },
+            StartPoseChecked(
+                trial=start.trial,
+                expected=_pose(start.expected) if start.expected is not None else None,
+                actual=_pose(start.actual),
+                ok=start.ok,
+            )
         )
         if self.start_check is not None:
             self.start_check(start)
@@ -497,31 +503,27 @@ class SessionEngine:
             return
         where = "before its motion" if opened.phase is Phase.MARKED else "during its motion"
         self._log(
-            ev.VOID,
-            {
-                "trial": opened.trial,
-                "attempt": opened.attempt,
-                "reason": f"the session stopped {where}; the trial is redone",
-            },
+            Void(
+                opened.trial,
+                opened.attempt,
+                reason=f"the session stopped {where}; the trial is redone",
+            )
         )
 
     def _context(self, opened: OpenTrial, predicted: PosePrior | None = None) -> TrialContext:
-        return TrialContext(
+        """What the source may know of the open attempt (its own readings included)."""
+        ctx = TrialContext(
             trial=opened.trial,
             attempt=opened.attempt,
             n_trials=self.plan.n_trials,
             design=self.plan.design_of(opened.trial),
-            labels=self.labels,
+            labels=(),
             start=opened.start,
             end=opened.end,
             encoder_end_pose=opened.encoder_end_pose,
-            measurements=opened.measurements,
-            rejections=opened.rejections,
-            remeasures=opened.remeasures,
-            slip=opened.slip,
-            extra=opened.extra,
             predicted=predicted,
         )
+        return opened.readings.context(ctx) if opened.readings is not None else ctx
 
     def _settle(self) -> OdometrySample:
         return self.robot.settle(self.motion.settle_timeout_s)
@@ -533,26 +535,21 @@ class SessionEngine:
         self._settle()
         zeroed = self.robot.zero()
         ctx = TrialContext(
-            trial=trial,
-            attempt=attempt,
-            n_trials=self.plan.n_trials,
-            design=design,
-            labels=self.labels,
+            trial=trial, attempt=attempt, n_trials=self.plan.n_trials, design=design, labels=()
         )
         start = dict(self.source.at_start(ctx))
-        ids = {"trial": trial, "attempt": attempt}
         self._log(
-            ev.TRIAL_START,
-            {
-                **ids,
-                "design": design_index,
-                "backward": design.backward,
-                "zeroed": _sample_json(zeroed),
-                "start": start,
-            },
+            TrialStart(
+                trial,
+                attempt,
+                design=design_index,
+                backward=design.backward,
+                zeroed=_sample_json(zeroed),
+                start=start,
+            )
         )
         with motion_signals_raise():  # Ctrl-Z mid-motion stops the robot, not odohil alone
-            self._log(ev.MOTION_START, ids)
+            self._log(MotionStart(trial, attempt))
             record = self.robot.drive(design, self.motion.drive_settings(), self.on_sample)
         opened = self.state.open_trial
         assert opened is not None
@@ -563,14 +560,14 @@ class SessionEngine:
         )
         end = dict(self.source.at_end(ctx))
         self._log(
-            ev.MOTION_DONE,
-            {
-                **ids,
-                "encoder_end_pose": list(record.end_pose),
-                "duration_s": record.duration_s,
-                "trajectory": _trajectory(record),
-                "end": end,
-            },
+            MotionDone(
+                trial,
+                attempt,
+                encoder_end_pose=_pose(record.end_pose),
+                duration_s=record.duration_s,
+                trajectory=_trajectory(record),
+                end=end,
+            )
         )
         self._measure()
 
@@ -584,9 +581,9 @@ class SessionEngine:
         except OdohilError:
             return ParameterBelief.from_priors(priors)
 
-    def _source_log(self, kind: str, data: Mapping[str, Any]) -> TrialContext:
+    def _source_log(self, event: SourceEvent) -> TrialContext:
         """The :class:`~odohil.session.pose_source.MeasurementLog` given to the source."""
-        self._log(kind, data)
+        self._log(event)
         opened = self.state.open_trial
         assert opened is not None
         return self._context(opened, self._predicted)
@@ -609,13 +606,10 @@ class SessionEngine:
             opened.trial, measured, predicted, opened.encoder_end_pose, opened.trajectory
         )
         if judged.refusal:  # void: the trial is redone once the measurement is fixed
-            self._log(
-                ev.VOID,
-                {"trial": opened.trial, "attempt": opened.attempt, "reason": judged.refusal},
-            )
+            self._log(Void(opened.trial, opened.attempt, reason=judged.refusal))
             raise MeasurementError(judged.refusal)
         measured = judged.measured
-        self._log(ev.SOLVED, _solved_json(opened, measured))
+        self._log(_solved(opened, measured))
         if self.state.completed[-1].ambiguous:
             self._estimated = len(self.state.completed)
             return
@@ -628,33 +622,39 @@ class SessionEngine:
                 # the live estimate is a display aid: a fit that fails on few
                 # trials must not stop the session (the trial is journaled)
                 self._estimated = n_completed
-                self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": None, "error": str(exc)})
+                self._log(Estimate(n_trials, result=None, error=str(exc)))
                 return
             self._estimated = n_completed
             self.latest_estimate = result
             if result is not None:
-                self._log(ev.ESTIMATE, {"n_trials": n_trials, "result": result.to_json_dict()})
+                self._log(Estimate(n_trials, result=result.to_json_dict()))
                 if self.observer is not None:
                     self.observer.estimated(result, self.state)
 
 
-def _solved_json(opened: OpenTrial, measured: MeasuredPose) -> dict[str, Any]:
-    """The ``solved`` record of a measured pose (the format replay reads)."""
-    data: dict[str, Any] = {
-        "trial": opened.trial,
-        "attempt": opened.attempt,
-        "pose_change": [float(v) for v in measured.pose],
-        "cov": [[float(v) for v in row] for row in measured.covariance],
-        **dict(measured.details),
-        "clear_cut": bool(measured.clear_cut),
-        "reason": measured.note,
-    }
-    if measured.flagged:
-        data["slip"] = measured.flag_reason or "flagged by the measurement source"
-    if measured.ambiguous:
-        data["ambiguous"] = True
-        data["candidates"] = [[float(v) for v in c] for c in measured.candidates]
-    return data
+def _solved(opened: OpenTrial, measured: MeasuredPose) -> Solved:
+    """The ``solved`` event of a measured pose."""
+    cov = measured.covariance
+    return Solved(
+        opened.trial,
+        opened.attempt,
+        pose_change=_pose(measured.pose),
+        cov=(_pose(cov[0]), _pose(cov[1]), _pose(cov[2])),
+        clear_cut=bool(measured.clear_cut),
+        reason=measured.note,
+        slip=(measured.flag_reason or "flagged by the measurement source")
+        if measured.flagged
+        else None,
+        ambiguous=True if measured.ambiguous else None,
+        candidates=tuple(_pose(c) for c in measured.candidates) if measured.ambiguous else None,
+        details=dict(measured.details),
+    )
+
+
+def _pose(values: Any) -> tuple[float, float, float]:
+    """Three numbers as a pose (x m, y m, theta rad) of floats."""
+    x, y, theta = (float(v) for v in values)
+    return (x, y, theta)
 
 
 def _sample_json(sample: OdometrySample) -> dict[str, Any]:
@@ -667,14 +667,14 @@ def _sample_json(sample: OdometrySample) -> dict[str, Any]:
     }
 
 
-def _trajectory(record: TrialMotion) -> list[list[float]]:
+def _trajectory(record: TrialMotion) -> tuple[tuple[float, ...], ...]:
     """Rows (t s since the run's first sample, x m, y m, heading rad)."""
     t0 = record.samples[0].robot_time_s if record.samples else 0.0
-    return [
-        [round(s.robot_time_s - t0, 3), s.x_m, s.y_m, s.theta_rad]
+    return tuple(
+        (round(s.robot_time_s - t0, 3), s.x_m, s.y_m, s.theta_rad)
         for s in record.samples
         if math.isfinite(s.robot_time_s)
-    ]
+    )
 
 
 ObserverCallback = Callable[[Record, SessionState], None]

@@ -42,6 +42,7 @@ from typing import Any
 
 from odohil.errors import JournalError
 from odohil.session.bounded_io import MIB, read_fd_bytes, read_file_bytes
+from odohil.session.events import Event, decode, encode
 from odohil.session.signals import HELD_SIGNALS
 
 JOURNAL_NAME = "journal.jsonl"
@@ -62,7 +63,7 @@ class Record:
 
     Attributes:
         seq: sequence number, 1 for the first record, no gaps.
-        kind: the event type (see :mod:`odohil.session.state`).
+        kind: the event type (see odohil/session/events.py).
         time: wall-clock time of the append, seconds since the epoch.
         data: the event's JSON payload.
     """
@@ -71,6 +72,15 @@ class Record:
     kind: str
     time: float
     data: Mapping[str, Any]
+
+    @property
+    def event(self) -> Event:
+        """The typed event (odohil/session/events.py).
+
+        Raises:
+            ValueError: an unknown kind, or data that is not that event's.
+        """
+        return decode(self.kind, self.data)
 
 
 @dataclass(frozen=True)
@@ -364,8 +374,15 @@ class Journal:
         kept = TornRecord(torn.line_number, torn.offset, torn.size, torn.reason, target)
         return JournalContents(contents.records, kept)
 
+    def write(self, event: Event) -> Record:
+        """Journal one event (its JSON through the one codec,
+        odohil/session/events.py) and make it durable (see :meth:`append`)."""
+        kind, data = encode(event)
+        return self.append(kind, data)
+
     def append(self, kind: str, data: Mapping[str, Any]) -> Record:
-        """Append one record and make it durable (write, then fsync).
+        """Append one raw record and make it durable (write, then fsync).
+        Sessions journal typed events through :meth:`write`.
 
         Raises:
             JournalError: the journal is closed or the write failed.

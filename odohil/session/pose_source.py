@@ -35,10 +35,13 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from odohil.science.floor_marks import PosePrior
 from odohil.science.paths import Design
+
+if TYPE_CHECKING:
+    from odohil.session.events import SourceEvent
 
 Pose = tuple[float, float, float]
 """(x m, y m, theta rad)."""
@@ -137,7 +140,7 @@ class MeasurementLog(Protocol):
     """Journals a source's intermediate readings (fsync before it returns) and
     hands back the trial's context as the journal now stands."""
 
-    def __call__(self, kind: str, data: Mapping[str, Any]) -> TrialContext: ...
+    def __call__(self, event: SourceEvent) -> TrialContext: ...
 
 
 class PoseSource(Protocol):

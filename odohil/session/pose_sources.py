@@ -291,18 +291,16 @@ def parse_measure(text: str) -> MeasureOption:
     )
 
 
-def journaled_measure(header: Mapping[str, Any]) -> MeasureOption:
-    """The pose source a session header names, with its settings from the
-    header's ``settings``.
+def journaled_measure(measure: str | None, settings: Mapping[str, Any]) -> MeasureOption:
+    """The pose source a session header names (its ``measure``), with its
+    settings from the header's ``settings``.
 
     Raises:
         ParameterError: no such pose source is installed, or its settings are
             missing from the header.
     """
-    name = str(header.get("measure"))
-    kind = find_kind(name, "the session's measure")
-    settings = header.get("settings")
-    return MeasureOption(name, kind.from_journal(settings if isinstance(settings, dict) else {}))
+    kind = find_kind(str(measure), "the session's measure")
+    return MeasureOption(str(measure), kind.from_journal(dict(settings)))
 
 
 def check_measure(option: MeasureOption, preflight: Preflight) -> None:

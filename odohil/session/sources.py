@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Protocol, cast
 
@@ -57,7 +58,6 @@ from odohil.science.pose_selection import (
     unmeasured_pair,
 )
 from odohil.science.robot_description import RobotDescription
-from odohil.session import state as ev
 from odohil.session.pose_source import (
     Covariance3,
     MeasuredPose,
@@ -65,6 +65,12 @@ from odohil.session.pose_source import (
     Pose,
     PoseSource,
     TrialContext,
+)
+from odohil.session.tape_records import (
+    ExtraDistance,
+    Measurement,
+    MeasurementsRejected,
+    Remeasured,
 )
 from odohil.session.trial_files import Trial, read_trials
 
@@ -448,22 +454,23 @@ class TapeSource:
         self.max_rejections = max_rejections
         self.max_remeasures = max_remeasures
 
+    def _labelled(self, ctx: TrialContext) -> TrialContext:
+        """``ctx`` with the names of the tape distances."""
+        return replace(ctx, labels=self.labels)
+
     def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
         """The start marks (the distance source's journal data)."""
-        return self.distances.mark_start(ctx)
+        return self.distances.mark_start(self._labelled(ctx))
 
     def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
         """The end marks (the distance source's journal data)."""
-        return self.distances.mark_end(ctx)
+        return self.distances.mark_end(self._labelled(ctx))
 
     def _measure_missing(self, ctx: TrialContext, log: MeasurementLog) -> TrialContext:
-        ids = {"trial": ctx.trial, "attempt": ctx.attempt}
         for index in range(len(ctx.measurements), len(self.labels)):
-            value = check_distance(self.distances.distance(ctx, index), self.labels[index])
-            ctx = log(
-                ev.MEASUREMENT,
-                {**ids, "index": index, "label": self.labels[index], "value_m": value},
-            )
+            label = self.labels[index]
+            value = check_distance(self.distances.distance(ctx, index), label)
+            ctx = self._labelled(log(Measurement(ctx.trial, ctx.attempt, index, value, label)))
         return ctx
 
     def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
@@ -473,7 +480,7 @@ class TapeSource:
             MeasurementError: the distances were rejected more than
                 ``max_rejections`` times, or the distance source gave up.
         """
-        ids = {"trial": ctx.trial, "attempt": ctx.attempt}
+        ctx = self._labelled(ctx)
         while True:
             ctx = self._measure_missing(ctx, log)
             marks = MarkDistances.of(self.description, ctx.measurements)
@@ -490,7 +497,8 @@ class TapeSource:
                         f"{ctx.rejections + 1} times; last: {exc}"
                     ) from exc
                 self.distances.rejected(ctx, exc)
-                ctx = log(ev.MEASUREMENTS_REJECTED, {**ids, "reason": str(exc)})
+                rejected = MeasurementsRejected(ctx.trial, ctx.attempt, reason=str(exc))
+                ctx = self._labelled(log(rejected))
                 continue
             selection = resolve_with_extra(self.description, marks, selection, ctx.extra)
             if selection.ambiguous and not ctx.extra:
@@ -500,16 +508,9 @@ class TapeSource:
                     ctx, (start, end), label, selection.solution.reason
                 )
                 if value is not None:
-                    ctx = log(
-                        ev.EXTRA_DISTANCE,
-                        {
-                            **ids,
-                            "start": start,
-                            "end": end,
-                            "label": label,
-                            "value_m": check_distance(value, label),
-                        },
-                    )
+                    value = check_distance(value, label)
+                    extra = ExtraDistance(ctx.trial, ctx.attempt, start, end, value, label)
+                    ctx = self._labelled(log(extra))
                     continue
             slip = selection.slip
             if slip.tripped and not ctx.slip and ctx.remeasures < self.max_remeasures:
@@ -518,18 +519,17 @@ class TapeSource:
                 value = self.distances.remeasure(ctx, slip.suspect, reason)
                 if value is not None:
                     value = check_distance(value, self.labels[slip.suspect])
-                ctx = log(
-                    ev.REMEASURED,
-                    {
-                        **ids,
-                        "index": slip.suspect,
-                        "label": self.labels[slip.suspect],
-                        "reason": reason,
-                        "previous_m": previous,
-                        "value_m": value,
-                        "kept": value is None,
-                    },
+                remeasured = Remeasured(
+                    ctx.trial,
+                    ctx.attempt,
+                    index=slip.suspect,
+                    reason=reason,
+                    kept=value is None,
+                    previous_m=previous,
+                    value_m=value,
+                    label=self.labels[slip.suspect],
                 )
+                ctx = self._labelled(log(remeasured))
                 if value is not None:
                     continue
             break

@@ -1,50 +1,11 @@
-"""The events of a session journal, and the session state they replay to.
+"""The session state a journal replays to.
 
-Event kinds, in the order a session writes them (``data`` members in brackets):
-
-- ``session`` (always record 1, written whole so that a session always has
-  its plan): format, robot description TOML text, the measurement source,
-  settings, plan [``format``, ``robot_toml``, ``robot_path``, ``measure``,
-  ``settings``, ``plan``: the :meth:`Plan.to_json` object];
-- ``plan``: the plan, for a session record without one;
-- ``robot``: identity and settings of the robot, after each connect;
-- ``resumed``: a later process took the session over;
-- ``torn_record``: the torn last record found on resume was kept aside
-  [``file``, ``bytes``, ``reason``];
-- ``trial_start``: the robot was re-zeroed and the start marks made
-  [``trial``, ``attempt``, ``design``, ``backward``: driven with every leg
-  reversed (one-way trials alternate), ``start``: the source's start data];
-- ``motion_start`` [``trial``, ``attempt``];
-- ``motion_done``: the motion finished [``trial``, ``attempt``,
-  ``encoder_end_pose`` (x m, y m, theta rad), ``trajectory`` (rows t s, x m,
-  y m, theta rad), ``end``: the source's end data];
-- ``measurement``: one distance [``trial``, ``attempt``, ``index``, ``label``,
-  ``value_m``];
-- ``measurements_rejected``: the distances of this attempt are discarded and
-  taken again [``trial``, ``attempt``, ``reason``];
-- ``remeasured``: the slip check doubted the trial's pose; the suspect
-  distance was taken again, or the operator kept it [``trial``, ``attempt``,
-  ``index``, ``label``, ``reason``, ``previous_m``, ``value_m`` (null when
-  kept), ``kept``]; a kept value flags the trial;
-- ``extra_distance``: an ambiguous trial's extra cross distance, asked for
-  by name [``trial``, ``attempt``, ``start``, ``end`` (screw names),
-  ``label``, ``value_m``];
-- ``solved``: the pose change; the trial is complete [``trial``, ``attempt``,
-  ``pose_change``, ``cov``, ``chi2``, ``clear_cut``, ``reason``, and
-  optionally ``ambiguous`` (two candidate poses stay plausible: the trial is
-  left out of every estimate), ``candidates`` (their poses), ``slip`` (why
-  the slip check, or the per-trial check of odohil/session/plausibility.py,
-  doubts the trial), ``check`` (that check's numbers: ``T``, ``limit``, the
-  measured and encoder distances from the start)];
-- ``estimate`` [``n_trials``, ``result``: the estimate's JSON object];
-- ``void``: the attempt is discarded and the trial redone [``trial``,
-  ``attempt``, ``reason``];
-- ``stopped``: the process stopped early and the robot reported that it
-  stopped [``reason``, ``message``, ``robot``, ``state``: the encoder sample];
-- ``stop_unconfirmed``: the process stopped early and the robot did NOT
-  report that it stopped: it may have driven on [``reason``, ``message``,
-  ``detail``];
-- ``finished`` [``n_trials``].
+The events are typed (odohil/session/events.py; the tape's own in
+odohil/session/tape_records.py, with the JSON members of each kind); this
+module applies them to the state one at a time, by a dispatch table on the
+event's type (:func:`apply`). A pose source's readings (``SourceEvent``) are
+folded into the open attempt's opaque ``readings``, which the state hands
+back to the engine and on to the source without looking inside.
 
 A trial is identified by its number in the plan (1-based); each try at it is
 an attempt (1, 2, ...). A trial counts once it has a ``solved`` record, and a
@@ -53,20 +14,40 @@ second ``solved`` for the same trial is a :class:`JournalError`.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from enum import Enum
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
 from odohil.errors import JournalError, OdohilError, ParameterError
 from odohil.science.estimators import Observation
-from odohil.science.floor_marks import MarkDistances
 from odohil.science.limits import RANGES
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.session.events import (
+    Estimate,
+    Event,
+    Finished,
+    MotionDone,
+    MotionStart,
+    PlanSet,
+    Resumed,
+    RobotConnected,
+    SessionHeader,
+    Solved,
+    SourceEvent,
+    SourceReadings,
+    StartPoseChecked,
+    Stopped,
+    StopUnconfirmed,
+    TornRecordKept,
+    TrialStart,
+    Void,
+    decode,
+)
 from odohil.session.journal import Record, TornRecord, read_journal
 from odohil.session.mocap.stream import parse_tcp_url
 from odohil.session.plan import Plan, check_session_plan
@@ -76,27 +57,26 @@ from odohil.session.trial_files import Trial, TrialSet
 FORMAT = 1
 """Version of the journal's event schema."""
 
-SESSION = "session"
-PLAN = "plan"
-ROBOT = "robot"
-RESUMED = "resumed"
-TORN_RECORD = "torn_record"
-TRIAL_START = "trial_start"
-MOTION_START = "motion_start"
-MOTION_DONE = "motion_done"
+# The record kinds, for readers of raw records (the events' ``KIND``s).
+SESSION = SessionHeader.KIND
+PLAN = PlanSet.KIND
+ROBOT = RobotConnected.KIND
+RESUMED = Resumed.KIND
+TORN_RECORD = TornRecordKept.KIND
+TRIAL_START = TrialStart.KIND
+MOTION_START = MotionStart.KIND
+MOTION_DONE = MotionDone.KIND
 MEASUREMENT = "measurement"
 MEASUREMENTS_REJECTED = "measurements_rejected"
 REMEASURED = "remeasured"
 EXTRA_DISTANCE = "extra_distance"
-SOLVED = "solved"
-ESTIMATE = "estimate"
-VOID = "void"
-STOPPED = "stopped"
-STOP_UNCONFIRMED = "stop_unconfirmed"
-FINISHED = "finished"
-START_POSE = "start_pose"
-
-_INFO_KINDS = frozenset({ROBOT, RESUMED, TORN_RECORD, STOPPED, STOP_UNCONFIRMED, START_POSE})
+SOLVED = Solved.KIND
+ESTIMATE = Estimate.KIND
+VOID = Void.KIND
+STOPPED = Stopped.KIND
+STOP_UNCONFIRMED = StopUnconfirmed.KIND
+FINISHED = Finished.KIND
+START_POSE = StartPoseChecked.KIND
 
 
 class Phase(Enum):
@@ -121,14 +101,10 @@ class OpenTrial:
         phase: where it stands.
         start: the measurement source's start-mark data.
         encoder_end_pose: (x m, y m, theta rad) once the motion is done.
+        trajectory: rows (t s, x m, y m, theta rad) of the motion.
         end: the measurement source's end-mark data once the motion is done.
-        measurements: the distances taken so far, metres, in order.
-        rejections: how many times this attempt's distances were rejected.
-        remeasures: how many suspect distances were taken again.
-        slip: why the slip check doubts the trial, when the operator kept the
-            suspect value (empty otherwise).
-        extra: extra cross distances (start screw, end screw, metres) taken
-            to settle an ambiguous choice.
+        readings: the pose source's own record of its readings so far (the
+            tape's: odohil/session/tape_records.py), None before the first.
     """
 
     trial: int
@@ -139,11 +115,12 @@ class OpenTrial:
     encoder_end_pose: tuple[float, float, float] | None = None
     trajectory: tuple[tuple[float, ...], ...] = ()
     end: Mapping[str, Any] = field(default_factory=dict)
-    measurements: tuple[float, ...] = ()
-    rejections: int = 0
-    remeasures: int = 0
-    slip: str = ""
-    extra: tuple[tuple[str, str, float], ...] = ()
+    readings: SourceReadings | None = None
+
+    @property
+    def measurements(self) -> tuple[float, ...]:
+        """The source's readings so far (the tape: distances, metres)."""
+        return self.readings.values if self.readings is not None else ()
 
 
 @dataclass(frozen=True)
@@ -156,7 +133,6 @@ class CompletedTrial:
         design: its design.
         design_index: index of the design in the plan.
         encoder_end_pose: (x m, y m, theta rad) the encoders reported.
-        measurements: the floor-mark distances, metres (same-screw then cross).
         pose_change: solved (dx m, dy m, dtheta rad).
         cov: 3x3 covariance of ``pose_change`` (m^2, m rad, rad^2), rows.
         clear_cut: whether the solver was sure of its choice.
@@ -168,6 +144,7 @@ class CompletedTrial:
             out of every estimate.
         candidates: the plausible poses of an ambiguous trial (dx m, dy m, dtheta rad).
         slip: why the slip check doubts the trial (empty when it does not).
+        readings: the pose source's own record of the attempt's readings.
     """
 
     trial: int
@@ -175,7 +152,6 @@ class CompletedTrial:
     design: Design
     design_index: int
     encoder_end_pose: tuple[float, float, float]
-    measurements: tuple[float, ...]
     pose_change: tuple[float, float, float]
     cov: tuple[tuple[float, float, float], ...]
     clear_cut: bool
@@ -186,6 +162,14 @@ class CompletedTrial:
     ambiguous: bool = False
     candidates: tuple[tuple[float, float, float], ...] = ()
     slip: str = ""
+    readings: SourceReadings | None = None
+
+    @property
+    def measurements(self) -> tuple[float, ...]:
+        """The readings the pose was solved from (the tape: the floor-mark
+        distances, metres, same-screw then cross; empty for a source that
+        measures poses)."""
+        return self.readings.values if self.readings is not None else ()
 
 
 @dataclass(frozen=True)
@@ -193,23 +177,24 @@ class SessionState:
     """A session as its journal tells it.
 
     Attributes:
-        header: the ``session`` record's data.
+        header: the ``session`` record.
         plan: the plan, once journaled.
         completed: completed trials, in completion order.
         open_trial: the attempt under way, if any.
         voided: number of voided attempts.
-        last_estimate: the data of the latest ``estimate`` record.
+        attempts: the last attempt number of each trial started.
+        last_estimate: the latest ``estimate`` record.
         finished: whether a ``finished`` record closes the session.
         n_records: number of records replayed.
     """
 
-    header: Mapping[str, Any]
+    header: SessionHeader
     plan: Plan | None = None
     completed: tuple[CompletedTrial, ...] = ()
     open_trial: OpenTrial | None = None
     voided: int = 0
     attempts: Mapping[int, int] = field(default_factory=dict)
-    last_estimate: Mapping[str, Any] | None = None
+    last_estimate: Estimate | None = None
     finished: bool = False
     n_records: int = 0
 
@@ -253,13 +238,12 @@ def replay(records: Iterable[Record]) -> SessionState:
                     f"record {record.seq}: journal format {fmt!r}, this odohil reads {FORMAT}"
                 )
             validate_header(record.data, f"record {record.seq}")
-            plan = None
-            if "plan" in record.data:
-                try:
-                    plan = Plan.from_json(record.data["plan"])
-                except ParameterError as exc:
-                    raise JournalError(f"record {record.seq}: bad plan: {exc}") from None
-            state = SessionState(header=record.data, plan=plan, n_records=1)
+            try:
+                header = decode(record.kind, record.data)
+            except ValueError as exc:
+                raise JournalError(f"record {record.seq}: {exc}") from None
+            assert isinstance(header, SessionHeader)
+            state = SessionState(header=header, plan=header.plan, n_records=1)
             continue
         state = apply(state, record)
     if state is None:
@@ -343,148 +327,110 @@ def apply(state: SessionState, record: Record) -> SessionState:
     """The state after one more record (not the first, ``session``, record).
 
     Raises:
-        JournalError: the record does not fit the state.
+        JournalError: the record does not fit the state, or is malformed.
     """
     try:
-        new = _apply(state, record)
-    except (KeyError, TypeError, ValueError, IndexError) as exc:
-        if isinstance(exc, JournalError):
-            raise
-        raise JournalError(f"record {record.seq} ({record.kind}) is malformed: {exc!r}") from None
+        event = decode(record.kind, record.data)
+    except ValueError as exc:
+        if str(exc).startswith("unknown event kind"):
+            raise JournalError(f"record {record.seq}: {exc}") from None
+        raise JournalError(f"record {record.seq} ({record.kind}) is malformed: {exc}") from None
+    return apply_event(state, event, record.seq)
+
+
+def apply_event(state: SessionState, event: Event, seq: int) -> SessionState:
+    """The state after one more event, journaled as record ``seq``.
+
+    Raises:
+        JournalError: the event does not fit the state (naming the record).
+    """
+    handler = _HANDLERS.get(type(event))
+    if handler is None and isinstance(event, SourceEvent):
+        handler = _source_reading
+    if handler is None:
+        raise JournalError(f"record {seq}: unknown event kind {event.KIND!r}")
+    try:
+        new = handler(state, event, seq)
+    except ValueError as exc:
+        raise JournalError(f"record {seq} ({event.KIND}) is malformed: {exc}") from None
     return replace(new, n_records=new.n_records + 1)
 
 
-def _apply(state: SessionState, record: Record) -> SessionState:
-    kind, data = record.kind, record.data
-    if kind in _INFO_KINDS:
-        return state
-    if kind == SESSION:
-        raise JournalError(f"record {record.seq}: a second session record")
-    if kind == PLAN:
-        if state.plan is not None:
-            raise JournalError(f"record {record.seq}: a second plan")
-        try:
-            return replace(state, plan=Plan.from_json(data))
-        except ParameterError as exc:
-            raise JournalError(f"record {record.seq}: bad plan: {exc}") from None
-    if kind == ESTIMATE:
-        return replace(state, last_estimate=data)
-    if kind == FINISHED:
-        return replace(state, finished=True)
+E = TypeVar("E", bound=Event)
+_Handler = Callable[[SessionState, Any, int], SessionState]
+_HANDLERS: dict[type[Event], _Handler] = {}
+
+
+def _on(*kinds: type[E]) -> Callable[[Callable[[SessionState, E, int], SessionState]], _Handler]:
+    """Register a handler of the events ``kinds``."""
+
+    def register(handler: Callable[[SessionState, E, int], SessionState]) -> _Handler:
+        for kind in kinds:
+            _HANDLERS[kind] = handler
+        return handler
+
+    return register
+
+
+@_on(RobotConnected, Resumed, TornRecordKept, Stopped, StopUnconfirmed, StartPoseChecked)
+def _information(state: SessionState, event: Event, seq: int) -> SessionState:
+    """Records for the reader: the state does not change."""
+    return state
+
+
+@_on(SessionHeader)
+def _second_session(state: SessionState, event: SessionHeader, seq: int) -> SessionState:
+    raise JournalError(f"record {seq}: a second session record")
+
+
+@_on(PlanSet)
+def _plan(state: SessionState, event: PlanSet, seq: int) -> SessionState:
+    if state.plan is not None:
+        raise JournalError(f"record {seq}: a second plan")
+    return replace(state, plan=event.plan)
+
+
+@_on(Estimate)
+def _estimate(state: SessionState, event: Estimate, seq: int) -> SessionState:
+    return replace(state, last_estimate=event)
+
+
+@_on(Finished)
+def _finished(state: SessionState, event: Finished, seq: int) -> SessionState:
+    return replace(state, finished=True)
+
+
+def _plan_of(state: SessionState, event: Event, seq: int) -> Plan:
     if state.plan is None:
-        raise JournalError(f"record {record.seq}: {kind} before the plan")
-    if kind == TRIAL_START:
-        return _trial_start(state, record, state.plan)
-    opened = _current(state, record)
-    if kind == MOTION_START:
-        _expect(opened, record, Phase.MARKED)
-        return replace(state, open_trial=replace(opened, phase=Phase.MOVING))
-    if kind == MOTION_DONE:
-        _expect(opened, record, Phase.MOVING)
-        pose = _triple(data["encoder_end_pose"])
-        trajectory = tuple(tuple(float(v) for v in row) for row in data.get("trajectory", []))
-        return replace(
-            state,
-            open_trial=replace(
-                opened,
-                phase=Phase.MEASURING,
-                encoder_end_pose=pose,
-                trajectory=trajectory,
-                end=dict(data.get("end", {})),
-            ),
-        )
-    if kind == MEASUREMENT:
-        _expect(opened, record, Phase.MEASURING)
-        if int(data["index"]) != len(opened.measurements):
-            raise JournalError(
-                f"record {record.seq}: measurement {data['index']} where "
-                f"{len(opened.measurements)} was expected"
-            )
-        value = float(data["value_m"])
-        return replace(
-            state, open_trial=replace(opened, measurements=(*opened.measurements, value))
-        )
-    if kind == MEASUREMENTS_REJECTED:
-        _expect(opened, record, Phase.MEASURING)
-        return replace(
-            state,
-            open_trial=replace(opened, measurements=(), rejections=opened.rejections + 1, extra=()),
-        )
-    if kind == REMEASURED:
-        _expect(opened, record, Phase.MEASURING)
-        index = int(data["index"])
-        if not 0 <= index < len(opened.measurements):
-            raise JournalError(f"record {record.seq}: re-measured distance {index} was not taken")
-        if bool(data["kept"]):
-            return replace(state, open_trial=replace(opened, slip=str(data["reason"])))
-        values = list(opened.measurements)
-        values[index] = float(data["value_m"])
-        return replace(
-            state,
-            open_trial=replace(
-                opened, measurements=tuple(values), remeasures=opened.remeasures + 1
-            ),
-        )
-    if kind == EXTRA_DISTANCE:
-        _expect(opened, record, Phase.MEASURING)
-        extra = (str(data["start"]), str(data["end"]), float(data["value_m"]))
-        return replace(state, open_trial=replace(opened, extra=(*opened.extra, extra)))
-    if kind == VOID:
-        return replace(state, open_trial=None, voided=state.voided + 1)
-    if kind == SOLVED:
-        _expect(opened, record, Phase.MEASURING)
-        if opened.trial in state.done_trials:
-            raise JournalError(f"record {record.seq}: trial {opened.trial} solved twice")
-        assert opened.encoder_end_pose is not None
-        cov = tuple(_triple(row) for row in data["cov"])
-        if len(cov) != 3:
-            raise ValueError("cov must be 3x3")
-        done = CompletedTrial(
-            trial=opened.trial,
-            attempt=opened.attempt,
-            design=state.plan.design_of(opened.trial),
-            design_index=opened.design_index,
-            encoder_end_pose=opened.encoder_end_pose,
-            measurements=opened.measurements,
-            pose_change=_triple(data["pose_change"]),
-            cov=cov,
-            clear_cut=bool(data["clear_cut"]),
-            start=opened.start,
-            end=opened.end,
-            note=str(data.get("reason", "")),
-            seq=record.seq,
-            ambiguous=bool(data.get("ambiguous", False)),
-            candidates=tuple(_triple(c) for c in data.get("candidates", [])),
-            slip=str(data.get("slip", "")),
-        )
-        return replace(state, completed=(*state.completed, done), open_trial=None)
-    raise JournalError(f"record {record.seq}: unknown event kind {kind!r}")
+        raise JournalError(f"record {seq}: {event.KIND} before the plan")
+    return state.plan
 
 
-def _trial_start(state: SessionState, record: Record, plan: Plan) -> SessionState:
-    data = record.data
+@_on(TrialStart)
+def _trial_start(state: SessionState, event: TrialStart, seq: int) -> SessionState:
+    plan = _plan_of(state, event, seq)
+    trial, attempt, design_index = event.trial, event.attempt, event.design
     if state.open_trial is not None:
         raise JournalError(
-            f"record {record.seq}: trial {data.get('trial')} starts while trial "
+            f"record {seq}: trial {trial} starts while trial "
             f"{state.open_trial.trial} attempt {state.open_trial.attempt} is still open"
         )
-    trial, attempt, design_index = int(data["trial"]), int(data["attempt"]), int(data["design"])
     if trial in state.done_trials:
-        raise JournalError(f"record {record.seq}: trial {trial} started again after it completed")
+        raise JournalError(f"record {seq}: trial {trial} started again after it completed")
     if design_index != plan.design_index(trial):
         raise JournalError(
-            f"record {record.seq}: trial {trial} runs design {design_index}, the plan says "
+            f"record {seq}: trial {trial} runs design {design_index}, the plan says "
             f"{plan.design_index(trial)}"
         )
-    if "backward" in data and bool(data["backward"]) != plan.design_of(trial).backward:
+    if event.backward is not None and event.backward != plan.design_of(trial).backward:
         raise JournalError(
-            f"record {record.seq}: trial {trial} was driven "
-            f"{'backward' if data.get('backward') else 'forward'}, the plan says "
+            f"record {seq}: trial {trial} was driven "
+            f"{'backward' if event.backward else 'forward'}, the plan says "
             f"{plan.design_of(trial).label()}"
         )
     if attempt != state.next_attempt(trial):
         raise JournalError(
-            f"record {record.seq}: attempt {attempt} of trial {trial}, expected "
+            f"record {seq}: attempt {attempt} of trial {trial}, expected "
             f"{state.next_attempt(trial)}"
         )
     opened = OpenTrial(
@@ -492,34 +438,88 @@ def _trial_start(state: SessionState, record: Record, plan: Plan) -> SessionStat
         attempt=attempt,
         design_index=design_index,
         phase=Phase.MARKED,
-        start=dict(data.get("start", {})),
+        start=dict(event.start),
     )
     attempts = {**state.attempts, trial: attempt}
     return replace(state, open_trial=opened, attempts=attempts)
 
 
-def _current(state: SessionState, record: Record) -> OpenTrial:
+@_on(MotionStart)
+def _motion_start(state: SessionState, event: MotionStart, seq: int) -> SessionState:
+    opened = _current(state, event, seq, Phase.MARKED)
+    return replace(state, open_trial=replace(opened, phase=Phase.MOVING))
+
+
+@_on(MotionDone)
+def _motion_done(state: SessionState, event: MotionDone, seq: int) -> SessionState:
+    opened = _current(state, event, seq, Phase.MOVING)
+    measuring = replace(
+        opened,
+        phase=Phase.MEASURING,
+        encoder_end_pose=event.encoder_end_pose,
+        trajectory=event.trajectory,
+        end=dict(event.end),
+    )
+    return replace(state, open_trial=measuring)
+
+
+def _source_reading(state: SessionState, event: SourceEvent, seq: int) -> SessionState:
+    """A pose source's reading, folded into the open attempt's own record."""
+    opened = _current(state, event, seq, Phase.MEASURING)
+    return replace(state, open_trial=replace(opened, readings=event.fold(opened.readings)))
+
+
+@_on(Void)
+def _void(state: SessionState, event: Void, seq: int) -> SessionState:
+    _current(state, event, seq)
+    return replace(state, open_trial=None, voided=state.voided + 1)
+
+
+@_on(Solved)
+def _solved(state: SessionState, event: Solved, seq: int) -> SessionState:
+    opened = _current(state, event, seq, Phase.MEASURING)
+    plan = _plan_of(state, event, seq)
+    if opened.trial in state.done_trials:
+        raise JournalError(f"record {seq}: trial {opened.trial} solved twice")
+    assert opened.encoder_end_pose is not None
+    done = CompletedTrial(
+        trial=opened.trial,
+        attempt=opened.attempt,
+        design=plan.design_of(opened.trial),
+        design_index=opened.design_index,
+        encoder_end_pose=opened.encoder_end_pose,
+        pose_change=event.pose_change,
+        cov=event.cov,
+        clear_cut=event.clear_cut,
+        start=opened.start,
+        end=opened.end,
+        note=event.reason,
+        seq=seq,
+        ambiguous=bool(event.ambiguous),
+        candidates=event.candidates or (),
+        slip=event.slip or "",
+        readings=opened.readings,
+    )
+    return replace(state, completed=(*state.completed, done), open_trial=None)
+
+
+def _current(state: SessionState, event: Any, seq: int, phase: Phase | None = None) -> OpenTrial:
+    """The open attempt ``event`` (with its ``trial`` and ``attempt``) belongs
+    to, in ``phase`` when given."""
+    _plan_of(state, event, seq)
     opened = state.open_trial
-    trial, attempt = int(record.data["trial"]), int(record.data["attempt"])
+    trial, attempt = event.trial, event.attempt
     if opened is None or (opened.trial, opened.attempt) != (trial, attempt):
         raise JournalError(
-            f"record {record.seq}: {record.kind} for trial {trial} attempt {attempt}, "
+            f"record {seq}: {event.KIND} for trial {trial} attempt {attempt}, "
             "which is not the open trial"
         )
-    return opened
-
-
-def _expect(opened: OpenTrial, record: Record, phase: Phase) -> None:
-    if opened.phase is not phase:
+    if phase is not None and opened.phase is not phase:
         raise JournalError(
-            f"record {record.seq}: {record.kind} while trial {opened.trial} is "
+            f"record {seq}: {event.KIND} while trial {opened.trial} is "
             f"{opened.phase.value}, not {phase.value}"
         )
-
-
-def _triple(value: Any) -> tuple[float, float, float]:
-    x, y, z = (float(v) for v in value)
-    return (x, y, z)
+    return opened
 
 
 def session_trials(state: SessionState, source: str = "session") -> TrialSet:
@@ -536,9 +536,7 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
             design=t.design,
             pose_change=np.array(t.pose_change, dtype=np.float64),
             pose_cov=np.array(t.cov, dtype=np.float64),
-            marks=MarkDistances.of(description, t.measurements)
-            if t.measurements
-            else None,  # measured as a pose (a trial file of poses, motion capture)
+            marks=t.readings.marks(description) if t.readings is not None else None,
             odometry_end_pose=np.array(t.encoder_end_pose, dtype=np.float64),
             flagged=not t.clear_cut or bool(t.slip),
             note="; ".join(part for part in (t.note, t.slip) if part),
@@ -618,8 +616,7 @@ def description_of_header(state: SessionState) -> RobotDescription:
     Raises:
         JournalError: the header has no robot description.
     """
-    if not isinstance(state.header.get("robot_toml"), str):
+    toml = state.header.robot_toml
+    if toml is None:
         raise JournalError("the session record holds no robot description (robot_toml)")
-    return parse_robot_description(
-        str(state.header["robot_toml"]), str(state.header.get("robot_path") or "session")
-    )
+    return parse_robot_description(toml, state.header.robot_path or "session")

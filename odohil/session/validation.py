@@ -206,7 +206,7 @@ def load_calibration(
         outcome = estimate_source([source], description, exclude, recording=recording)
         return Calibration(outcome, None)
     state = load_session(source).state
-    if state.header.get("settings", {}).get("validation_of"):
+    if state.header.settings.get("validation_of"):
         raise JournalError(
             f"{source} is a validation session; give the calibration session it validates"
         )
@@ -570,7 +570,7 @@ def load_validations(
         path = folder.name
         try:
             state = load_session(folder).state
-            path = str(state.header.get("settings", {}).get("validation_path") or path)
+            path = str(state.header.settings.get("validation_path") or path)
             trials = trials_of_session(state, source=str(folder))
             result = check_trials(trials, calibration, alpha)
             plots = tuple(plot_data(trials, calibration))

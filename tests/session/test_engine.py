@@ -76,8 +76,9 @@ def test_every_trial_once_with_the_true_pose_change(tmp_path: Path) -> None:
     on_disk = replay(read_journal(tmp_path).records)
     assert on_disk.completed == final.completed
     assert on_disk.last_estimate is not None
-    assert on_disk.last_estimate["n_trials"] == 6
-    assert on_disk.last_estimate["result"]["n_trials"] == 6
+    assert on_disk.last_estimate.n_trials == 6
+    assert on_disk.last_estimate.result is not None
+    assert on_disk.last_estimate.result["n_trials"] == 6
     trials = load_session_trials(tmp_path)
     assert [t.line for t in trials.trials] == [t.seq for t in final.completed]
     np.testing.assert_array_equal(trials.trials[0].pose_change, final.completed[0].pose_change)

@@ -9,6 +9,7 @@ import pytest
 
 from odohil.errors import JournalError
 from odohil.session import state as ev
+from odohil.session.events import Estimate
 from odohil.session.journal import Record
 from odohil.session.plan import parse_plan
 from odohil.session.state import Phase, replay
@@ -137,7 +138,7 @@ def test_finished_and_estimate() -> None:
     state = replay(log.records)
     assert state.finished
     assert state.next_trial() is None
-    assert state.last_estimate == {"n_trials": 3, "result": {}}
+    assert state.last_estimate == Estimate(n_trials=3, result={})
 
 
 def test_a_trial_solved_twice_is_an_error() -> None:

@@ -201,7 +201,7 @@ def _session(report: SessionReport) -> str:
         f"{units.plural(state.plan.n_trials if state.plan else 0, 'trial')} completed"
         f"{' (session finished)' if state.finished else ' (session not finished)'}; "
         f"{state.voided} attempt(s) voided. Robot description: "
-        f"<code>{e(str(state.header.get('robot_path') or 'journaled'))}</code>.</p>"
+        f"<code>{e(state.header.robot_path or 'journaled')}</code>.</p>"
     )
 
 
