@@ -13,14 +13,12 @@ from rich.table import Table
 
 from odohil import units
 from odohil.cli.options import (
-    E_R_DEFAULT,
-    E_T_DEFAULT,
-    K_RHO_DEFAULT,
-    K_THETA_DEFAULT,
     UNITS_DEFAULT,
     JsonOption,
+    Parameters,
     UnitsOption,
     option,
+    parameters_option,
     unit_system,
 )
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
@@ -101,6 +99,7 @@ def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
         console.print(f"[yellow]note:[/yellow] {note}", highlight=False)
 
 
+@parameters_option
 def plan(
     budget_m: Metres = None,
     budget_min: Annotated[float | None, option("--budget-min", bound="budget_min", help="Most "
@@ -117,14 +116,6 @@ def plan(
         f"estimate, m/s, {RANGES['speed'].text()}.")] = DEFAULT_SPEED_M_PER_S,
     max_trials: Annotated[int | None, option("--max-trials", bound="max_trials",
         help="Most trials in all (each is marked and measured).")] = None,
-    e_r: Annotated[float, option("--E-R", bound="E_R",
-        help="Prior guess of E_R, deg/m.")] = E_R_DEFAULT,
-    e_t: Annotated[float, option("--E-T", bound="E_T",
-        help="Prior guess of E_T (no unit).")] = E_T_DEFAULT,
-    k_theta: Annotated[float, option("--K-theta", bound="K_theta",
-        help="Prior K_theta, deg^2/m.")] = K_THETA_DEFAULT,
-    k_rho: Annotated[float, option("--K-rho", bound="K_rho",
-        help="Prior K_rho, m.")] = K_RHO_DEFAULT,
     sigma_m: Annotated[float | None, option("--sigma-m", bound="sigma_m", help="Tape sigma of "
         f"one floor-mark distance, m (default {DEFAULT_SIGMA_M}), with three screws on a "
         "0.2 m radius circle and one cross distance.")] = None,
@@ -147,11 +138,14 @@ def plan(
         f"length_m, else {DEFAULT_FLOOR_M:g}).")] = None,
     as_json: JsonOption = False,
     units_choice: UnitsOption = UNITS_DEFAULT,
+    *,
+    params: Parameters,
 ) -> None:  # fmt: skip
     """Recommend designs for a budget (or score one with --evaluate); print each
     parameter's expected stderr against its target, and the operator time.
 
-    Priors are in the paper's units (default: the Nomad 150 values). Every
+    Priors (--E-R, --E-T, --K-theta, --K-rho) are in the paper's units
+    (default: the Nomad 150 values). Every
     parameter has a target: those not given default to a fraction of the
     prior (25 % of |E_R| and |E_T|, 50 % of K_theta and K_rho, with floors).
     The plan minimises the largest stderr/target ratio; every design gets at
@@ -159,7 +153,7 @@ def plan(
     """
     targets = {"E_R": target_e_r, "E_T": target_e_t, "K_theta": target_k_theta,
                "K_rho": target_k_rho}  # fmt: skip
-    request = PlanRequest((e_r, e_t, k_theta, k_rho), targets, budget_m, budget_min, evaluate,
+    request = PlanRequest(params, targets, budget_m, budget_min, evaluate,
                           sigma_m, robot, min_trials_per_design, measure_s, speed, max_trials,
                           max_designs, max_leg_m, floor_m)  # fmt: skip
     try:

@@ -34,18 +34,18 @@ DEFAULT_SIGMA_M = 0.001
 
 @dataclass(frozen=True)
 class PlanRequest:
-    """What ``odohil plan`` is asked (units as its options: priors and targets
-    in the paper's units, budgets in metres and minutes).
+    """What ``odohil plan`` is asked (units as its options: targets in the
+    paper's units, budgets in metres and minutes).
 
     Attributes:
-        prior_paper: E_R deg/m, E_T, K_theta deg^2/m, K_rho m.
+        prior: the prior guess of the parameters.
         targets_paper: the wanted standard errors given, by parameter name.
         budget_m, budget_min: the budgets (None: not given).
         evaluate: a plan to score instead of searching (``--evaluate``).
         sigma_m, robot: the measurement: a tape sigma or a robot description.
     """
 
-    prior_paper: tuple[float, float, float, float]
+    prior: ErrorParameters
     targets_paper: dict[str, float | None] = field(default_factory=dict)
     budget_m: float | None = None
     budget_min: float | None = None
@@ -120,7 +120,7 @@ def make_plan(request: PlanRequest) -> PlannedExperiment:
         raise ParameterError("--evaluate scores a given plan: give no --budget-m/--budget-min")
     targets = _targets(request)
     operator = OperatorTime(request.measure_s, request.speed_m_per_s, DEFAULT_TURN_RATE_RAD_PER_S)
-    prior = ErrorParameters.from_paper_units(*request.prior_paper)
+    prior = request.prior
     turns: list[str] = []
     if request.evaluate is not None:
         try:
