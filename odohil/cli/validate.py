@@ -31,6 +31,7 @@ from odohil.cli.run import (
     run_engine,
     session_exit_codes,
 )
+from odohil.cli.verdict import outcome_line
 from odohil.errors import (
     JournalError,
     MeasurementError,
@@ -134,6 +135,7 @@ def validate(
     if result is None or not (result.verdict.trusted or force):
         print_refusal(console, outcome, None if result is None else "test it", "nothing tested")
         raise typer.Exit(EXIT_UNTRUSTED)
+    console.print(outcome_line(outcome), highlight=False)  # the calibration's verdict
     folder: Path | None = None
     try:
         if vpath.kind == "file":

@@ -140,6 +140,15 @@ def test_validate_refuses_a_failed_calibration_and_bad_alpha(
     assert "--alpha must be within (0, 0.5]" in alpha.stderr
 
 
+def test_validate_prints_the_calibrations_verdict_line_then_its_own(trusted: Path) -> None:
+    """Every command that estimates prints the verdict line: validate's is the
+    calibration's (stderr), then the validation's (in sample: a pass)."""
+    done = odohil("validate", trusted, "--path", f"file:{trusted}", "--robot", "nomad150")
+    assert done.exit_code == EXIT_OK, done.output
+    assert done.stderr.splitlines()[0] == "verdict: TRUSTED"
+    assert done.stdout.startswith("validation: PASS (60 trials of file:")
+
+
 def test_import_refuses_a_log_that_is_not_there(tmp_path: Path) -> None:
     done = odohil("import", tmp_path / "nope.csv", "--robot", "nomad150", "--out", tmp_path / "t")
     assert done.exit_code == EXIT_BAD_INPUT
