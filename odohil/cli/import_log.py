@@ -9,11 +9,10 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.table import Table
 
 from odohil import units
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input
+from odohil.cli.render import bad_input, table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.errors import OdohilError
 from odohil.session.logs import ImportOptions, guess_format, read_recording
@@ -59,17 +58,12 @@ def import_log(
     except (OdohilError, OSError) as exc:
         raise bad_input(exc, err) from None
     read_as = recording.format or guess_format(logs)
-    table = Table(
-        title=f"{units.plural(written, 'trial')} from {units.plural(len(logs), 'log path')}, "
-        f"read as {read_as}"
-    )
-    table.add_column("family")
-    table.add_column("direction")
-    table.add_column("trials", justify="right")
-    table.add_column("distance (m)", justify="right")
+    title = f"{units.plural(written, 'trial')} from {units.plural(len(logs), 'log path')}"
+    columns = ("family", "direction", "trials", "distance (m)")
+    summary = table(f"{title}, read as {read_as}", columns, ("family", "direction"))
     for family, direction, count, distance in summary_rows(trials):
-        table.add_row(family, direction, str(count), f"{distance:.3f}")
-    console.print(table)
+        summary.add_row(family, direction, str(count), f"{distance:.3f}")
+    console.print(summary)
     total = sum(trial.path.distance_m for trial in trials)
     console.print(
         f"wrote {units.plural(written, 'trial')} ({total:.3f} m driven) to {out}", highlight=False

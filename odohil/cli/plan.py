@@ -9,7 +9,6 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.table import Table
 
 from odohil import units
 from odohil.cli.options import (
@@ -21,6 +20,7 @@ from odohil.cli.options import (
     parameters_option,
     unit_system,
 )
+from odohil.cli.render import table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.errors import OdohilError
 from odohil.science.limits import RANGES
@@ -55,9 +55,7 @@ Metres = Annotated[float | None, option("--budget-m", bound="budget_m", help="Mo
 def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
     console = Console()
     plan = planned.plan
-    designs = Table(title=planned.title)
-    for column in ("k", "l (m)", "variant", "trials", "metres", "minutes"):
-        designs.add_column(column, justify="right")
+    designs = table(planned.title, ("k", "l (m)", "variant", "trials", "metres", "minutes"))
     for i, item in enumerate(plan.items):
         d = item.design
         minutes = f"{trial_minutes(plan, i):.0f}"
@@ -65,9 +63,9 @@ def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
                         f"{item.distance_m:g}", minutes)  # fmt: skip
     console.print(designs)
     op = plan.operator
-    errors = Table(title="Expected standard errors (Cramer-Rao)", caption=planned.measurement)
-    for column in ("parameter", "prior", "stderr", "target", "unit"):
-        errors.add_column(column, justify="left" if column in ("parameter", "unit") else "right")
+    columns = ("parameter", "prior", "stderr", "target", "unit")
+    title = "Expected standard errors (Cramer-Rao)"
+    errors = table(title, columns, ("parameter", "unit"), planned.measurement)
     prior_si = planned.prior.to_si_dict()
     for name, se in zip(PARAMETER_NAMES, plan.standard_errors, strict=True):
         target, shown = plan.targets[name], units.parameter_in

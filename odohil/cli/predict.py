@@ -7,7 +7,6 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.table import Table
 
 from odohil import units
 from odohil.cli.options import (
@@ -22,7 +21,7 @@ from odohil.cli.options import (
     parameters_option,
     unit_system,
 )
-from odohil.cli.render import parameters_line
+from odohil.cli.render import parameters_line, table
 from odohil.errors import OdohilError
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.paths import Design
@@ -52,23 +51,18 @@ def predict(
         typer.echo(json.dumps(predict_document(design, params, means), indent=2))
         return
     system = unit_system(units_choice)
-    table = Table(
-        title=f"Expected observables, forth and back {design.label()} "
-        f"(rho = {design.distance_m:g} m)",
-        caption=parameters_line(params.to_si_dict(), system) + f" (1+E_T = {1.0 + params.e_t:g})",
-    )
-    for column in ("observable", "meaning", "value (SI)", "unit", "in degrees"):
-        table.add_column(
-            column, justify="right" if column in ("value (SI)", "in degrees") else "left"
-        )
+    title = f"Expected observables, forth and back {design.label()} (rho = {design.distance_m:g} m)"
+    caption = parameters_line(params.to_si_dict(), system) + f" (1+E_T = {1.0 + params.e_t:g})"
+    columns = ("observable", "meaning", "value (SI)", "unit", "in degrees")
+    shown = table(title, columns, ("observable", "meaning", "unit"), caption)
     degrees = {
         "phi1": f"{units.radians_to_degrees(means.phi1):.6g} deg",
         "phi2": f"{units.rad2_to_deg2(means.phi2):.6g} deg^2",
     }
     for key, value in means.as_dict().items():
         unit, meaning = OBSERVABLES[key]
-        table.add_row(key, meaning, f"{value:.6g}", unit, degrees.get(key, ""))
-    Console().print(table)
+        shown.add_row(key, meaning, f"{value:.6g}", unit, degrees.get(key, ""))
+    Console().print(shown)
 
 
 def register(app: typer.Typer) -> None:

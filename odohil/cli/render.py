@@ -28,6 +28,16 @@ from odohil.session.outcome import EstimateOutcome
 from odohil.session.state import CompletedTrial
 
 
+def table(
+    title: str, columns: Sequence[str], left: Sequence[str] = (), caption: str | None = None
+) -> Table:
+    """A table of ``columns``, right-aligned (numbers) but for those in ``left``."""
+    made = Table(title=title, caption=caption)
+    for column in columns:
+        made.add_column(column, justify="left" if column in left else "right")
+    return made
+
+
 def bad_input(exc: BaseException | str, console: Console | None = None) -> typer.Exit:
     """Print ``error: <message>`` on stderr; the exit of bad input (2) to raise."""
     (console or Console(stderr=True)).print(

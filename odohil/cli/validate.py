@@ -12,14 +12,13 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED
 from odohil.cli.line import resolve_line, truth_available
 from odohil.cli.options import JsonOption, option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, print_refusal
+from odohil.cli.render import bad_input, print_refusal, table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
     Outcome,
@@ -265,14 +264,12 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
     out.print(text, highlight=False)
     for reason in tested.reasons():
         out.print(f"  {reason}", highlight=False)
-    table = Table(
-        title="chi-square tests (NEES: the spread; bias: the mean residual), "
-        f"each at level {tested.level:g}"
-    )
-    for column in ("test", "statistic", "dof", "p-value", "threshold", "result"):
-        table.add_column(column, justify="left" if column in ("test", "result") else "right")
+    title = "chi-square tests (NEES: the spread; bias: the mean residual), each at level"
+    title += f" {tested.level:g}"
+    columns = ("test", "statistic", "dof", "p-value", "threshold", "result")
+    tests = table(title, columns, ("test", "result"))
     for t in tested.tests:
-        table.add_row(
+        tests.add_row(
             t.name,
             f"{t.statistic:.4g}",
             str(t.dof),
@@ -280,7 +277,7 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
             f"{t.threshold:.4g}",
             "pass" if t.passed else "[red]FAIL[/]",
         )
-    out.print(table)
+    out.print(tests)
     out.print(f"parameter uncertainty: {data['verdict']['parameter_uncertainty']}", highlight=False)
     if measured.left_out:
         out.print(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")
