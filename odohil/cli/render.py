@@ -17,7 +17,7 @@ from rich.text import Text
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
-from odohil.cli.verdict import export_refusal_lines, gaussian_line, outcome_line
+from odohil.cli.verdict import export_refusal_lines, gaussian_line, outcome_line, verdict_line
 from odohil.driver.odometry import OdometrySample
 from odohil.science.estimators import EstimateResult, ParameterEstimate
 from odohil.science.estimators.verdict import Verdict
@@ -254,10 +254,9 @@ def estimate_panel(
 
 
 def verdict_text(verdict: Verdict) -> Text:
-    """``Verdict: trusted`` (green) or ``Verdict: doubtful: reasons`` (red)."""
-    reasons = "; ".join(verdict.reasons)
-    style = "green" if verdict.trusted else "bold red"
-    return Text(f"Verdict: {verdict.status}" + (f": {reasons}" if reasons else ""), style=style)
+    """The verdict line (:func:`~odohil.cli.verdict.verdict_line`), green when
+    trusted, else red."""
+    return Text(verdict_line(verdict), style="green" if verdict.trusted else "bold red")
 
 
 class MotionProgress:

@@ -15,6 +15,9 @@ from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_OK, EXIT_UNTRUSTED
+from odohil.cli.render import verdict_text
+from odohil.cli.verdict import verdict_line
+from odohil.science.estimators.verdict import Status, Verdict
 
 HEADER = "k,l_m,variant,dx_m,dy_m,dtheta_rad"
 
@@ -210,3 +213,14 @@ def test_a_usage_error_exits_with_the_tables_bad_input_status() -> None:
     """typer.BadParameter (a usage error) exits with click's status: it must be
     the table's 2, so every bad input says the same."""
     assert typer.BadParameter("x").exit_code == EXIT_BAD_INPUT
+
+
+@pytest.mark.parametrize(("status", "reasons"), [("trusted", ()), ("doubtful", ("few trials",))])
+def test_the_live_panel_shows_the_same_verdict_line_as_estimate(
+    status: Status, reasons: tuple[str, ...]
+) -> None:
+    """The wizard's live panel said "Verdict: doubtful: ..." where every command
+    prints "verdict: DOUBTFUL (...)": one renderer now."""
+    verdict = Verdict(status, reasons)
+    assert verdict_text(verdict).plain == verdict_line(verdict)
+    assert verdict_line(verdict).startswith(f"verdict: {status.upper()}")
