@@ -64,7 +64,7 @@ app = typer.Typer(
     "K_theta, K_rho) with the robot in the loop: a synchronous drive (the Nomad 150) "
     "or a differential drive (the iRobot Create 2), or another through a robot backend.",
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,
     pretty_exceptions_enable=False,
 )
 

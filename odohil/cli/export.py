@@ -8,33 +8,13 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
-from odohil.cli.estimate import SOURCES_HELP, load_outcome
-from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
-from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
-from odohil.cli.options import bounded
-from odohil.cli.recording_options import (
-    MAX_TIME_DIFF_DEFAULT,
-    MAX_TRUTH_GAP_DEFAULT,
-    MIN_EDGE_REST_DEFAULT,
-    MIN_REST_DEFAULT,
-    ODOM_TOPIC_DEFAULT,
-    TRUTH_TOPIC_DEFAULT,
-    DirectionOption,
-    FamilyOption,
-    LogFormatOnlyOption,
-    MaxTimeDiffOption,
-    MaxTruthGapOption,
-    MinEdgeRestOption,
-    MinRestOption,
-    OdomTopicOption,
-    TimeOffsetOption,
-    TruthTopicOption,
-    import_options,
-)
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.verdict import export_refusal_lines, outcome_line
+from odohil.cli.estimate import SOURCES_HELP, load_outcome, robot_option
+from odohil.cli.exit_codes import EXIT_UNTRUSTED
+from odohil.cli.options import option
+from odohil.cli.recording_options import source_options
+from odohil.cli.render import bad_input, print_refusal
+from odohil.cli.verdict import outcome_line
 from odohil.errors import OdohilError
 from odohil.science.exports import (
     DEFAULT_RATE_HZ,
@@ -45,12 +25,12 @@ from odohil.science.exports import (
 from odohil.science.limits import RANGES
 from odohil.science.planner import DEFAULT_SPEED_M_PER_S
 from odohil.session.exports import export_text
+from odohil.session.logs import ImportOptions
 from odohil.session.outcome import Selection
 
-SPEED_RANGE = RANGES["speed"]
-RATE_RANGE = RANGES["rate_hz"]
-UPDATE_D_RANGE = RANGES["update_min_d_m"]
-UPDATE_A_RANGE = RANGES["update_min_a_rad"]
+
+def _ranged(flag: str, name: str, text: str) -> object:
+    return option(flag, bound=name, help=f"{text}, {RANGES[name].text()}.")
 
 
 class FormatChoice(StrEnum):
@@ -63,45 +43,25 @@ class FormatChoice(StrEnum):
     json = "json"
 
 
+@source_options(format_flags=("--log-format",))
 def export(
     sources: Annotated[list[Path], typer.Argument(help=SOURCES_HELP)],
     fmt: Annotated[
         FormatChoice,
-        typer.Option(
-            "--format", help="ros2-diff-drive, odometry-msg, robot-localization, amcl, json."
-        ),
+        option("--format", help="ros2-diff-drive, odometry-msg, robot-localization, amcl, json."),
     ],
     speed: Annotated[
-        float,
-        typer.Option(
-            "--speed",
-            callback=bounded("speed"),
-            help=f"Driving speed the constants are linearised at, m/s, {SPEED_RANGE.text()}.",
-        ),
+        float, _ranged("--speed", "speed", "Driving speed the constants are linearised at, m/s")
     ] = DEFAULT_SPEED_M_PER_S,
     rate_hz: Annotated[
         float,
-        typer.Option(
-            "--rate-hz",
-            callback=bounded("rate_hz"),
-            help=f"Odometry publication rate, Hz (one step = speed / rate), {RATE_RANGE.text()}.",
-        ),
+        _ranged("--rate-hz", "rate_hz", "Odometry publication rate, Hz (one step = speed / rate)"),
     ] = DEFAULT_RATE_HZ,
     update_min_d: Annotated[
-        float,
-        typer.Option(
-            "--update-min-d-m",
-            callback=bounded("update_min_d_m"),
-            help=f"AMCL's update distance, m, {UPDATE_D_RANGE.text()}.",
-        ),
+        float, _ranged("--update-min-d-m", "update_min_d_m", "AMCL's update distance, m")
     ] = DEFAULT_UPDATE_MIN_D_M,
     update_min_a: Annotated[
-        float,
-        typer.Option(
-            "--update-min-a-rad",
-            callback=bounded("update_min_a_rad"),
-            help=f"AMCL's update angle, rad, {UPDATE_A_RANGE.text()}.",
-        ),
+        float, _ranged("--update-min-a-rad", "update_min_a_rad", "AMCL's update angle, rad")
     ] = DEFAULT_UPDATE_MIN_A_RAD,
     out: Annotated[
         Path | None, typer.Option("--out", help="File to write (default: standard output).")
@@ -113,25 +73,11 @@ def export(
             help="Export an estimate that is not trusted (the file then states its verdict).",
         ),
     ] = False,
-    robot: Annotated[
-        Path | None,
-        typer.Option(
-            "--robot",
-            callback=robot_callback,
-            help=ROBOT_HELP + " Needed for raw marks and recordings.",
-        ),
-    ] = None,
-    exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
-    family: FamilyOption = None,
-    direction: DirectionOption = None,
-    log_format: LogFormatOnlyOption = None,
-    odom_topic: OdomTopicOption = ODOM_TOPIC_DEFAULT,
-    truth_topic: TruthTopicOption = TRUTH_TOPIC_DEFAULT,
-    max_time_diff: MaxTimeDiffOption = MAX_TIME_DIFF_DEFAULT,
-    time_offset: TimeOffsetOption = 0.0,
-    min_rest: MinRestOption = MIN_REST_DEFAULT,
-    min_edge_rest: MinEdgeRestOption = MIN_EDGE_REST_DEFAULT,
-    max_truth_gap: MaxTruthGapOption = MAX_TRUTH_GAP_DEFAULT,
+    robot: Annotated[Path | None, robot_option(" Needed for raw marks and recordings.")] = None,
+    *,
+    exclude: frozenset[int],
+    recording: ImportOptions,
+    selection: Selection,
 ) -> None:
     """Write the estimate in the shape a fusion stack takes (docs/exports.md).
 
@@ -143,58 +89,21 @@ def export(
     """
     lin = Linearisation(speed, rate_hz, update_min_d, update_min_a)
     err = Console(stderr=True)
-    try:
-        recording = import_options(
-            log_format,
-            odom_topic,
-            truth_topic,
-            max_time_diff,
-            time_offset,
-            min_rest,
-            min_edge_rest,
-            max_truth_gap,
-        )
-        outcome = load_outcome(
-            sources,
-            robot,
-            parse_exclude(exclude),
-            err,
-            recording=recording,
-            selection=Selection(family, direction),
-        )
-    except (OdohilError, OSError) as exc:
-        err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+    outcome = load_outcome(sources, robot, exclude, err, "robust", recording, selection)
     result = outcome.result
-    if result is None:
-        err.print(outcome_line(outcome), highlight=False)
-        err.print("[red]refused:[/red] no estimate to export; nothing written.", highlight=False)
+    if result is None or not (outcome.exportable or force):
+        print_refusal(err, outcome, None if result is None else "export it", "nothing written")
         raise typer.Exit(EXIT_UNTRUSTED)
     err.print(outcome_line(outcome), highlight=False)
-    if not outcome.exportable and not force:
-        for line in export_refusal_lines(outcome):
-            err.print(line, highlight=False)
-        err.print(
-            "[red]refused:[/red] the estimate is not "
-            + ("trusted" if not outcome.trusted else "precise enough to export")
-            + "; nothing written. Fix the trials (or leave them out with --exclude N,...), "
-            "add trials, or pass --force to export it with the verdict stated in the file.",
-            highlight=False,
-        )
-        raise typer.Exit(EXIT_UNTRUSTED)
     try:
         text = export_text(fmt.value, result, lin, source=sources[0].name)
-    except OdohilError as exc:
-        err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+        if out is not None:
+            out.write_text(text, encoding="utf-8")
+    except (OdohilError, OSError) as exc:
+        raise bad_input(exc, err) from None
     if out is None:
         typer.echo(text, nl=False)
     else:
-        try:
-            out.write_text(text, encoding="utf-8")
-        except OSError as exc:
-            err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
-            raise typer.Exit(EXIT_BAD_INPUT) from None
         err.print(f"wrote {out} ({fmt.value})", highlight=False)
     if not outcome.exportable:
         err.print("exported with --force although refused without it", highlight=False)

@@ -9,35 +9,18 @@ from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
-from rich.table import Table
 
 from odohil import units
-from odohil.cli.exit_codes import EXIT_BAD_INPUT
-from odohil.cli.recording_options import (
-    MAX_TIME_DIFF_DEFAULT,
-    MAX_TRUTH_GAP_DEFAULT,
-    MIN_EDGE_REST_DEFAULT,
-    MIN_REST_DEFAULT,
-    ODOM_TOPIC_DEFAULT,
-    TRUTH_TOPIC_DEFAULT,
-    LogFormatOption,
-    MaxTimeDiffOption,
-    MaxTruthGapOption,
-    MinEdgeRestOption,
-    MinRestOption,
-    OdomTopicOption,
-    TimeOffsetOption,
-    TruthTopicOption,
-    import_options,
-)
+from odohil.cli.recording_options import source_options
+from odohil.cli.render import bad_input, table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.errors import OdohilError
-from odohil.session.logs import guess_format, read_recording
+from odohil.session.logs import ImportOptions, guess_format, read_recording
 from odohil.session.path_trial_file import summary_rows, write_path_trials
 from odohil.session.robot_file import load_robot_description
 
 
+@source_options(selection=False, exclude=False)
 def import_log(
     logs: Annotated[
         list[Path],
@@ -58,14 +41,8 @@ def import_log(
     out: Annotated[
         Path, typer.Option("--out", help="The general-path trial file to write (JSON lines).")
     ],
-    log_format: LogFormatOption = None,
-    odom_topic: OdomTopicOption = ODOM_TOPIC_DEFAULT,
-    truth_topic: TruthTopicOption = TRUTH_TOPIC_DEFAULT,
-    max_time_diff: MaxTimeDiffOption = MAX_TIME_DIFF_DEFAULT,
-    time_offset: TimeOffsetOption = 0.0,
-    min_rest: MinRestOption = MIN_REST_DEFAULT,
-    min_edge_rest: MinEdgeRestOption = MIN_EDGE_REST_DEFAULT,
-    max_truth_gap: MaxTruthGapOption = MAX_TRUTH_GAP_DEFAULT,
+    *,
+    recording: ImportOptions,
 ) -> None:
     """Cut a recording into trials (at rest, or by a trial column or file) and write them.
 
@@ -75,34 +52,18 @@ def import_log(
     console = Console()
     err = Console(stderr=True)
     try:
-        options = import_options(
-            log_format,
-            odom_topic,
-            truth_topic,
-            max_time_diff,
-            time_offset,
-            min_rest,
-            min_edge_rest,
-            max_truth_gap,
-        )
         description = load_robot_description(robot)
-        trials = read_recording(logs, description, options)
+        trials = read_recording(logs, description, recording)
         written = write_path_trials(out, trials, robot=robot.stem)
     except (OdohilError, OSError) as exc:
-        err.print(f"[red]error:[/red] {escape(str(exc))}", highlight=False)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
-    read_as = options.format or guess_format(logs)
-    table = Table(
-        title=f"{units.plural(written, 'trial')} from {units.plural(len(logs), 'log path')}, "
-        f"read as {read_as}"
-    )
-    table.add_column("family")
-    table.add_column("direction")
-    table.add_column("trials", justify="right")
-    table.add_column("distance (m)", justify="right")
+        raise bad_input(exc, err) from None
+    read_as = recording.format or guess_format(logs)
+    title = f"{units.plural(written, 'trial')} from {units.plural(len(logs), 'log path')}"
+    columns = ("family", "direction", "trials", "distance (m)")
+    summary = table(f"{title}, read as {read_as}", columns, ("family", "direction"))
     for family, direction, count, distance in summary_rows(trials):
-        table.add_row(family, direction, str(count), f"{distance:.3f}")
-    console.print(table)
+        summary.add_row(family, direction, str(count), f"{distance:.3f}")
+    console.print(summary)
     total = sum(trial.path.distance_m for trial in trials)
     console.print(
         f"wrote {units.plural(written, 'trial')} ({total:.3f} m driven) to {out}", highlight=False

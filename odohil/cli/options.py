@@ -4,9 +4,11 @@ forth-and-back variant."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+import inspect
+from collections.abc import Callable, Sequence
 from enum import StrEnum
-from typing import Annotated, TypeVar
+from typing import Annotated, Any, TypeVar
 
 import typer
 
@@ -16,6 +18,43 @@ from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, ErrorParameters
 
 N = TypeVar("N", int, float, int | None, float | None)
+Command = Callable[..., None]
+
+
+def add_options(
+    added: Sequence[inspect.Parameter],
+    typed: Sequence[str],
+    resolve: Callable[[dict[str, Any]], dict[str, Any]],
+) -> Callable[[Command], Command]:
+    """A decorator that gives a command the options ``added``: ``resolve``
+    takes their values out of the command's arguments and gives the typed
+    values of the command's parameters ``typed`` (which the command line
+    then does not show). Options declared and resolved once for many commands."""
+
+    def decorate(command: Command) -> Command:
+        signature = inspect.signature(command, eval_str=True)
+        kept = [p for p in signature.parameters.values() if p.name not in typed]
+
+        @functools.wraps(command)
+        def wrapper(**values: Any) -> None:
+            typed = resolve(values)  # takes the raw values out
+            command(**values, **typed)
+
+        del wrapper.__wrapped__
+        parameters = kept + list(added)
+        wrapper.__signature__ = signature.replace(parameters=parameters)  # type: ignore[attr-defined]
+        wrapper.__annotations__ = {p.name: p.annotation for p in parameters}
+        return wrapper
+
+    return decorate
+
+
+def keyword(name: str, kind: Any, default: Any, *flags: str, help: str) -> inspect.Parameter:
+    """An option as a keyword parameter of a command (for :func:`add_options`)."""
+    option = typer.Option(*flags, help=help)
+    return inspect.Parameter(
+        name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=Annotated[kind, option]
+    )
 
 
 def bounded(name: str) -> Callable[[N], N]:
@@ -34,6 +73,18 @@ def bounded(name: str) -> Callable[[N], N]:
         return value
 
     return callback  # type: ignore[return-value]
+
+
+def option(*flags: str, help: str, bound: str | None = None) -> Any:
+    """``typer.Option(*flags, help=help)``, its value checked against
+    ``RANGES[bound]`` when ``bound`` is given (:func:`bounded`)."""
+    return typer.Option(*flags, help=help, callback=None if bound is None else bounded(bound))
+
+
+K_OPTION = option("--k", bound="k", help="Forth-and-back pairs k, a multiple of 1/2.")
+L_OPTION = option("--l", bound="l", help="Leg length l of the forth-and-back runs, m.")
+SEGMENT_OPTION = option("--segment-m", bound="segment_m", help="Largest simulated segment, m.")
+JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JSON (SI).")]
 
 
 PAPER_DEFAULTS = NOMAD150.to_paper_units()
@@ -74,15 +125,28 @@ VariantOption = Annotated[
 ]
 
 
-def parameters_from_paper_units(
-    e_r: float, e_t: float, k_theta: float, k_rho: float
-) -> ErrorParameters:
-    """The parameters given on the command line, or a usage error (exit 2)
-    that says what is wrong with them."""
+def _parameters(values: dict[str, Any]) -> dict[str, Any]:
+    given = [values.pop(name) for name in ("e_r", "e_t", "k_theta", "k_rho")]
     try:
-        return ErrorParameters.from_paper_units(e_r, e_t, k_theta, k_rho)
+        return {"params": ErrorParameters.from_paper_units(*given)}
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
+
+
+Parameters = ErrorParameters
+_PARAMETER_TYPES = (("e_r", ERDegPerM), ("e_t", ETOption), ("k_theta", KThetaDeg2PerM),
+                    ("k_rho", KRhoM))  # fmt: skip
+parameters_option = add_options(
+    [
+        inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=kind)
+        for (name, kind), default in zip(_PARAMETER_TYPES, PAPER_DEFAULTS.values(), strict=True)
+    ],
+    ["params"],
+    _parameters,
+)
+"""Gives a command ``--E-R``, ``--E-T``, ``--K-theta``, ``--K-rho`` (the paper's
+units; default: the Nomad 150) as its keyword parameter ``params``
+(:class:`~odohil.science.parameters.ErrorParameters`); bad values exit 2."""
 
 
 class UnitsChoice(StrEnum):

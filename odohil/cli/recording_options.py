@@ -1,20 +1,25 @@
-"""Options of commands that read a recorded log (``odohil import``, and
-``estimate``, ``export``, ``validate``, which take a recording in place of a
-trial file): the format, the bag topics, the time association and the rest
-thresholds, as Annotated types to declare, and :func:`import_options` to
-gather them; ``--family``/``--direction`` select general-path trials
-(:class:`odohil.session.outcome.Selection`)."""
+"""The options of every command that reads a source in place of a session
+(``import``, ``estimate``, ``export``, ``report``, ``validate``), declared and
+resolved in one place: :func:`source_options` adds them to a command, which
+receives them typed: ``recording`` (:class:`~odohil.session.logs.ImportOptions`:
+format, bag topics, time association, rest thresholds), ``selection``
+(:class:`~odohil.session.outcome.Selection`: ``--family``/``--direction``) and
+``exclude`` (the trial numbers of ``--exclude``). A value the session layer
+refuses is reported as every bad input is (exit 2, nothing done)."""
 
 from __future__ import annotations
 
+import inspect
+from collections.abc import Callable
 from enum import StrEnum
-from typing import Annotated
+from typing import Any
 
-import typer
-
-from odohil.science.rest_cutting import MIN_EDGE_REST_S, MIN_REST_S
+from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
+from odohil.cli.options import Command, add_options, keyword
+from odohil.cli.render import bad_input
+from odohil.errors import OdohilError
 from odohil.session.logs import ImportOptions
-from odohil.session.logs.recording import DEFAULT_MAX_TIME_DIFF_S, MAX_TRUTH_GAP_S
+from odohil.session.outcome import Selection
 
 
 class FormatChoice(StrEnum):
@@ -26,104 +31,80 @@ class FormatChoice(StrEnum):
     optiodom = "optiodom"
 
 
-LogFormatOption = Annotated[
-    FormatChoice | None,
-    typer.Option(
-        "--format", "--log-format", help="The log format (default: guessed from the paths)."
-    ),
-]
-LogFormatOnlyOption = Annotated[
-    FormatChoice | None,
-    typer.Option(
-        "--log-format",
-        help="The log format of a recording (default: guessed from the paths).",
-    ),
-]
-"""``odohil export``, whose ``--format`` is the export's."""
-OdomTopicOption = Annotated[
-    str, typer.Option("--odom-topic", help="Bags: the odometry topic (nav_msgs/msg/Odometry).")
-]
-TruthTopicOption = Annotated[
-    str,
-    typer.Option(
-        "--truth-topic",
-        help="Bags: the ground-truth topic (geometry_msgs/msg/PoseStamped or "
-        "nav_msgs/msg/Odometry).",
-    ),
-]
-MaxTimeDiffOption = Annotated[
-    float,
-    typer.Option(
-        "--max-time-diff",
-        help="TUM, bags: largest stamp difference of an odometry and ground-truth pair, s.",
-    ),
-]
-TimeOffsetOption = Annotated[
-    float, typer.Option("--time-offset", help="TUM, bags: added to the ground truth's stamps, s.")
-]
-MinRestOption = Annotated[
-    float, typer.Option("--min-rest", help="Shortest rest between two trials, s.")
-]
-MinEdgeRestOption = Annotated[
-    float,
-    typer.Option(
-        "--min-edge-rest",
-        help="Shortest rest at either end of a trial cut by a trial column or file, s.",
-    ),
-]
-MaxTruthGapOption = Annotated[
-    float, typer.Option("--max-truth-gap", help="Longest time without ground truth in a trial, s.")
-]
-
-FamilyOption = Annotated[
-    str | None,
-    typer.Option(
-        "--family",
-        help="Use only the general-path trials of this path family (straight, spin, arc, "
-        "square, ...: what `odohil import` lists), e.g. the straight runs of a recording "
-        "that also holds spins.",
-    ),
-]
-DirectionOption = Annotated[
-    str | None,
-    typer.Option(
-        "--direction",
-        help="Use only the general-path trials of this direction (forward, backward, cw, "
-        "ccw, mixed).",
-    ),
-]
-
-ODOM_TOPIC_DEFAULT = ImportOptions().odom_topic
-TRUTH_TOPIC_DEFAULT = ImportOptions().truth_topic
-MAX_TIME_DIFF_DEFAULT = DEFAULT_MAX_TIME_DIFF_S
-MIN_REST_DEFAULT = MIN_REST_S
-MIN_EDGE_REST_DEFAULT = MIN_EDGE_REST_S
-MAX_TRUTH_GAP_DEFAULT = MAX_TRUTH_GAP_S
+_DEFAULTS = ImportOptions()
+_SECONDS = (  # (parameter, flag, field of ImportOptions, help)
+    ("max_time_diff", "--max-time-diff", "max_time_diff_s", "TUM, bags: largest stamp "
+     "difference of an odometry and ground-truth pair, s."),
+    ("time_offset", "--time-offset", "time_offset_s", "TUM, bags: added to the ground "
+     "truth's stamps, s."),
+    ("min_rest", "--min-rest", "min_rest_s", "Shortest rest between two trials, s."),
+    ("min_edge_rest", "--min-edge-rest", "min_edge_rest_s", "Shortest rest at either end of "
+     "a trial cut by a trial column or file, s."),
+    ("max_truth_gap", "--max-truth-gap", "max_truth_gap_s", "Longest time without ground "
+     "truth in a trial, s."),
+)  # fmt: skip
+_SELECTION = (
+    ("family", "--family", "Use only the general-path trials of this path family (straight, "
+     "spin, arc, square, ...: what `odohil import` lists), e.g. the straight runs of a "
+     "recording that also holds spins."),
+    ("direction", "--direction", "Use only the general-path trials of this direction "
+     "(forward, backward, cw, ccw, mixed)."),
+)  # fmt: skip
 
 
-def import_options(
-    log_format: FormatChoice | None,
-    odom_topic: str,
-    truth_topic: str,
-    max_time_diff: float,
-    time_offset: float,
-    min_rest: float,
-    min_edge_rest: float,
-    max_truth_gap: float,
-) -> ImportOptions:
-    """The options as the session layer takes them.
+def _parameters(format_flags: tuple[str, ...], selection: bool) -> list[inspect.Parameter]:
+    params = [
+        keyword(
+            "log_format",
+            FormatChoice | None,
+            None,
+            *format_flags,
+            help="The log format of a recording (default: guessed from the paths).",
+        ),
+        keyword("odom_topic", str, _DEFAULTS.odom_topic, "--odom-topic",
+                help="Bags: the odometry topic (nav_msgs/msg/Odometry)."),
+        keyword("truth_topic", str, _DEFAULTS.truth_topic, "--truth-topic",
+                help="Bags: the ground-truth topic (geometry_msgs/msg/PoseStamped or "
+                "nav_msgs/msg/Odometry)."),
+    ]  # fmt: skip
+    params += [
+        keyword(name, float, getattr(_DEFAULTS, field), flag, help=text)
+        for name, flag, field, text in _SECONDS
+    ]
+    if selection:
+        params += [keyword(n, str | None, None, flag, help=text) for n, flag, text in _SELECTION]
+    return params
 
-    Raises:
-        ParameterError: a time that is not positive (or not finite); the
-            message names the option.
-    """
-    return ImportOptions(
-        format=None if log_format is None else log_format.value,
-        odom_topic=odom_topic,
-        truth_topic=truth_topic,
-        max_time_diff_s=max_time_diff,
-        time_offset_s=time_offset,
-        min_rest_s=min_rest,
-        min_edge_rest_s=min_edge_rest,
-        max_truth_gap_s=max_truth_gap,
-    )
+
+def _resolve(values: dict[str, Any]) -> dict[str, Any]:
+    log_format = values.pop("log_format")
+    try:
+        typed: dict[str, Any] = {
+            "recording": ImportOptions(
+                format=None if log_format is None else log_format.value,
+                odom_topic=values.pop("odom_topic"),
+                truth_topic=values.pop("truth_topic"),
+                **{field: values.pop(name) for name, _, field, _ in _SECONDS},
+            )
+        }
+        if "exclude" in values:
+            typed["exclude"] = parse_exclude(values.pop("exclude"))
+    except OdohilError as exc:
+        raise bad_input(exc) from None
+    if "family" in values:
+        typed["selection"] = Selection(values.pop("family"), values.pop("direction"))
+    return typed
+
+
+def source_options(
+    format_flags: tuple[str, ...] = ("--format", "--log-format"),
+    selection: bool = True,
+    exclude: bool = True,
+) -> Callable[[Command], Command]:
+    """Add the recording options (and ``--exclude``, ``--family``/``--direction``
+    unless turned off) to a command whose keyword parameters ``recording``,
+    ``exclude`` and ``selection`` then receive them typed; a bad value exits 2."""
+    added = _parameters(format_flags, selection)
+    if exclude:
+        added.insert(0, keyword("exclude", str | None, None, "--exclude", help=EXCLUDE_HELP))
+    return add_options(added, ("recording", "selection", "exclude"), _resolve)

@@ -1,4 +1,5 @@
-"""Rich renderings shared by interactive commands: checks, live estimate, motion progress."""
+"""Rich renderings shared by the commands: an error, an estimate's outcome
+(verdict line and table), checks, live estimate, motion progress."""
 
 from __future__ import annotations
 
@@ -6,20 +7,107 @@ import math
 from collections.abc import Mapping, Sequence
 
 import numpy as np
+import typer
 from rich.console import Console, Group, RenderableType
+from rich.markup import escape
 from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 from rich.table import Table
 from rich.text import Text
 
 from odohil import units
+from odohil.cli.exit_codes import EXIT_BAD_INPUT
+from odohil.cli.verdict import export_refusal_lines, gaussian_line, outcome_line, verdict_line
 from odohil.driver.odometry import OdometrySample
 from odohil.science.estimators import EstimateResult, ParameterEstimate
 from odohil.science.estimators.verdict import Verdict
 from odohil.science.grouping import by_design
 from odohil.science.observables import observables
 from odohil.science.paths import Design, Leg, Turn
+from odohil.session.outcome import EstimateOutcome
 from odohil.session.preflight import Check
 from odohil.session.state import CompletedTrial
+
+
+def table(
+    title: str, columns: Sequence[str], left: Sequence[str] = (), caption: str | None = None
+) -> Table:
+    """A table of ``columns``, right-aligned (numbers) but for those in ``left``."""
+    made = Table(title=title, caption=caption)
+    for column in columns:
+        made.add_column(column, justify="left" if column in left else "right")
+    return made
+
+
+def bad_input(exc: BaseException | str, console: Console | None = None) -> typer.Exit:
+    """Print ``error: <message>`` on stderr; the exit of bad input (2) to raise."""
+    (console or Console(stderr=True)).print(
+        f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True, highlight=False
+    )
+    return typer.Exit(EXIT_BAD_INPUT)
+
+
+def torn_warning(outcome: EstimateOutcome, console: Console) -> None:
+    """Say that a session journal's torn last record was not used (if so)."""
+    if outcome.torn is not None:
+        console.print(
+            f"[yellow]warning:[/yellow] {outcome.source}: the last journal record (line "
+            f"{outcome.torn.line_number}) is torn and was not used: {outcome.torn.reason}",
+            highlight=False,
+        )
+
+
+def print_refusal(
+    console: Console, outcome: EstimateOutcome, force: str | None, undone: str
+) -> None:
+    """Why an estimate is not used: the verdict line, why it is not precise
+    enough to export, and how to go on (``force``: what --force does, e.g.
+    "export it", None when it does not help; ``undone``: "nothing written")."""
+    console.print(outcome_line(outcome), highlight=False)
+    for line in export_refusal_lines(outcome):
+        console.print(line, highlight=False)
+    what = "the estimate is not " + ("precise enough" if outcome.trusted else "trusted")
+    if outcome.result is None:
+        what = "there is no estimate"
+    console.print(
+        f"[red]refused:[/red] {what}; {undone}. Fix the trials (or leave them out with "
+        "--exclude N,...), add trials"
+        + (f", or pass --force to {force} with the verdict stated." if force else "."),
+        highlight=False,
+    )
+
+
+def print_outcome(
+    out: Console, outcome: EstimateOutcome, system: units.UnitSystem, title: str | None = None
+) -> None:
+    """An estimate's outcome for people: the verdict line (``verdict: NO
+    ESTIMATE (why)`` when there is none), the parameters table, the checks,
+    notes and refusals, the Gaussian fit beside, and the trials left out."""
+    out.print(outcome_line(outcome), highlight=False)
+    result = outcome.result
+    if result is None:
+        return
+    out.print(parameters_table(result, system, title))
+    out.print(f"model check: {result.model_check.verdict}", highlight=False)
+    out.print(f"sufficiency: {result.sufficiency.verdict}", highlight=False)
+    lines = [f"  - {reason}" for reason in result.sufficiency.reasons]
+    lines += [f"note: {note}" for note in result.notes] + export_refusal_lines(outcome)
+    if result.gaussian:
+        lines.append(gaussian_line(result, system))
+    if result.excluded:
+        lines.append(
+            f"left out (--exclude): {units.plural_noun(len(result.excluded), 'trial')} "
+            + ", ".join(map(str, result.excluded))
+        )
+    if outcome.ambiguous:
+        lines.append(
+            "ambiguous trials left out (two candidate poses stay plausible): "
+            + ", ".join(map(str, outcome.ambiguous))
+        )
+    if outcome.flagged:
+        named = ", ".join(f"{trial} ({note})" for trial, note in outcome.flagged)
+        lines.append(f"flagged trials (pose from the marks in doubt): {named}")
+    for line in lines:
+        out.print(line, highlight=False)
 
 
 def check_line(check: Check) -> Text:
@@ -157,10 +245,9 @@ def estimate_panel(
 
 
 def verdict_text(verdict: Verdict) -> Text:
-    """``Verdict: trusted`` (green) or ``Verdict: doubtful: reasons`` (red)."""
-    reasons = "; ".join(verdict.reasons)
-    style = "green" if verdict.trusted else "bold red"
-    return Text(f"Verdict: {verdict.status}" + (f": {reasons}" if reasons else ""), style=style)
+    """The verdict line (:func:`~odohil.cli.verdict.verdict_line`), green when
+    trusted, else red."""
+    return Text(verdict_line(verdict), style="green" if verdict.trusted else "bold red")
 
 
 class MotionProgress:

@@ -1,12 +1,11 @@
-"""``odohil simulate``: Monte Carlo trials of a forth-and-back design, written as a trial file."""
+"""``odohil simulate``: Monte Carlo trials of a forth-and-back design, written
+as a trial file (odohil/session/design_tools.py writes it)."""
 
 from __future__ import annotations
 
-import os
-import tempfile
 import time
 from pathlib import Path
-from typing import Annotated, TextIO
+from typing import Annotated
 
 import numpy as np
 import typer
@@ -15,59 +14,29 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TimeR
 
 from odohil import units
 from odohil.cli.options import (
-    E_R_DEFAULT,
-    E_T_DEFAULT,
-    K_RHO_DEFAULT,
-    K_THETA_DEFAULT,
-    ERDegPerM,
-    ETOption,
-    KRhoM,
-    KThetaDeg2PerM,
+    K_OPTION,
+    L_OPTION,
+    SEGMENT_OPTION,
+    Parameters,
     VariantChoice,
     VariantOption,
-    bounded,
-    parameters_from_paper_units,
+    option,
+    parameters_option,
 )
 from odohil.errors import OdohilError
-from odohil.science.limits import check_simulation_work, segments_of
-from odohil.science.paths import Design, FloatArray
+from odohil.science.paths import Design
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.science.simulator import simulate as run_simulation
+from odohil.session.design_tools import check_simulation, write_simulated_trials
 
-TRIAL_FILE_HEADER = "k,l_m,variant,dx_m,dy_m,dtheta_rad"
 _PROGRESS_AFTER_S = 1.0
-
-
-def write_trial_rows(stream: TextIO, design: Design, pose_change: FloatArray) -> None:
-    """Write the trial file: a header, then one row per trial, floats in full (repr) precision.
-
-    Columns: k, l_m (m), variant, dx_m, dy_m (m, start frame), dtheta_rad (rad).
-    """
-    stream.write(TRIAL_FILE_HEADER + "\n")
-    prefix = f"{float(design.k)!r},{float(design.l_m)!r},{design.variant},"
-    for dx, dy, dtheta in pose_change.tolist():
-        stream.write(f"{prefix}{dx!r},{dy!r},{dtheta!r}\n")
-
-
-def _write_atomically(out: Path, design: Design, pose_change: FloatArray) -> None:
-    """Write to a temporary file next to ``out``, then rename: never a half-written ``out``."""
-    handle, temporary = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
-            write_trial_rows(stream, design, pose_change)
-        os.replace(temporary, out)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
 
 
 class _LazyProgress:
     """A progress bar on stderr that appears only once the run has taken over a second."""
 
     def __init__(self, total: int, console: Console) -> None:
-        self._total = total
-        self._console = console
-        self._started = time.monotonic()
+        self._total, self._console, self._started = total, console, time.monotonic()
         self._bar: Progress | None = None
         self._task = TaskID(0)
 
@@ -75,14 +44,8 @@ class _LazyProgress:
         if self._bar is None:
             if time.monotonic() - self._started < _PROGRESS_AFTER_S:
                 return
-            self._bar = Progress(
-                "simulating",
-                BarColumn(),
-                MofNCompleteColumn(),
-                TimeRemainingColumn(),
-                console=self._console,
-                transient=True,
-            )
+            columns = (BarColumn(), MofNCompleteColumn(), TimeRemainingColumn())
+            self._bar = Progress("simulating", *columns, console=self._console, transient=True)
             self._bar.start()
             self._task = self._bar.add_task("trials", total=self._total)
         self._bar.update(self._task, completed=done)
@@ -92,36 +55,20 @@ class _LazyProgress:
             self._bar.stop()
 
 
+@parameters_option
 def simulate(
-    k: Annotated[
-        float,
-        typer.Option(
-            "--k", callback=bounded("k"), help="Forth-and-back pairs k, a multiple of 1/2."
-        ),
-    ],
-    l_m: Annotated[float, typer.Option("--l", callback=bounded("l"), help="Leg length l, metres.")],
-    trials: Annotated[
-        int,
-        typer.Option("--trials", callback=bounded("trials"), help="Number of simulated trials."),
-    ],
+    k: Annotated[float, K_OPTION],
+    l_m: Annotated[float, L_OPTION],
+    trials: Annotated[int, option("--trials", bound="trials", help="Simulated trials.")],
     out: Annotated[Path, typer.Option("--out", help="Trial file to write (CSV).")],
     variant: VariantOption = VariantChoice.turn,
-    e_r: ERDegPerM = E_R_DEFAULT,
-    e_t: ETOption = E_T_DEFAULT,
-    k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
-    k_rho: KRhoM = K_RHO_DEFAULT,
-    seed: int | None = typer.Option(
-        None,
-        "--seed",
-        callback=bounded("seed"),
-        help="Random seed (a non-negative integer); default: fresh, reported.",
-    ),
-    segment_m: float = typer.Option(
-        DEFAULT_SEGMENT_M,
-        "--segment-m",
-        callback=bounded("segment_m"),
-        help="Largest simulated segment, metres.",
-    ),
+    seed: Annotated[
+        int | None,
+        option("--seed", bound="seed", help="Random seed; default: fresh, reported."),
+    ] = None,
+    segment_m: Annotated[float, SEGMENT_OPTION] = DEFAULT_SEGMENT_M,
+    *,
+    params: Parameters,
 ) -> None:
     """Simulate trials of k forth-and-back runs of length l and write them as a trial file.
 
@@ -132,26 +79,9 @@ def simulate(
     err = Console(stderr=True)
     try:
         design = Design(k, l_m, variant.value)
+        check_simulation(design, trials, segment_m, out)
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
-    params = parameters_from_paper_units(e_r, e_t, k_theta, k_rho)
-    if trials < 1:
-        raise typer.BadParameter(f"must be at least 1, got {trials}", param_hint="--trials")
-    if not np.isfinite(segment_m) or segment_m <= 0:
-        raise typer.BadParameter(
-            f"must be a positive length in metres, got {segment_m}", param_hint="--segment-m"
-        )
-    if seed is not None and seed < 0:
-        raise typer.BadParameter(f"must be a non-negative integer, got {seed}", param_hint="--seed")
-    try:
-        segments = segments_of(design.path().legs.length_m.tolist(), segment_m)
-        check_simulation_work(trials, segments)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--trials") from exc
-    if not out.parent.is_dir():
-        raise typer.BadParameter(f"folder {str(out.parent)!r} does not exist", param_hint="--out")
-    if out.is_dir():
-        raise typer.BadParameter(f"{str(out)!r} is a folder", param_hint="--out")
     if seed is None:
         seed = int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
         err.print(f"seed {seed}", highlight=False)
@@ -163,7 +93,7 @@ def simulate(
     finally:
         progress.stop()
     try:
-        _write_atomically(out, design, result.pose_change)
+        write_simulated_trials(out, design, result.pose_change)
     except OSError as exc:
         raise typer.BadParameter(f"cannot write {str(out)!r}: {exc}", param_hint="--out") from exc
     err.print(

@@ -6,43 +6,19 @@ from __future__ import annotations
 
 import contextlib
 import json
-import math
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.table import Table
 
 from odohil import units
-from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
-from odohil.cli.exit_codes import (
-    EXIT_BAD_INPUT,
-    EXIT_ERROR,
-    EXIT_OK,
-    EXIT_UNTRUSTED,
-    exit_for_outcome,
-)
+from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED
 from odohil.cli.line import resolve_line, truth_available
-from odohil.cli.options import bounded
-from odohil.cli.recording_options import (
-    MAX_TIME_DIFF_DEFAULT,
-    MAX_TRUTH_GAP_DEFAULT,
-    MIN_EDGE_REST_DEFAULT,
-    MIN_REST_DEFAULT,
-    ODOM_TOPIC_DEFAULT,
-    TRUTH_TOPIC_DEFAULT,
-    LogFormatOption,
-    MaxTimeDiffOption,
-    MaxTruthGapOption,
-    MinEdgeRestOption,
-    MinRestOption,
-    OdomTopicOption,
-    TimeOffsetOption,
-    TruthTopicOption,
-    import_options,
-)
+from odohil.cli.options import JsonOption, option
+from odohil.cli.recording_options import source_options
+from odohil.cli.render import bad_input, print_refusal, table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.run import (
     Outcome,
@@ -59,10 +35,11 @@ from odohil.errors import (
     ParameterError,
     RobotDescriptionError,
 )
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.engine import start_session
 from odohil.session.floor_space import check_floor
+from odohil.session.logs import ImportOptions
 from odohil.session.plan import Plan, check_session_plan
 from odohil.session.pose_kinds import TrialFileSettings
 from odohil.session.pose_sources import (
@@ -73,23 +50,24 @@ from odohil.session.pose_sources import (
     open_measure,
     parse_measure,
 )
-from odohil.session.robot_file import load_robot_description, read_robot_toml
-from odohil.session.state import description_of_header, load_session
+from odohil.session.robot_file import load_robot_description
+from odohil.session.state import load_session
 from odohil.session.validation import (
     PATH_SYNTAX,
-    Calibration,
     ValidationPath,
     ValidationTrials,
-    check_not_fitted,
     check_trials,
-    default_folder,
-    held_out_trials,
     load_calibration,
-    parameter_covariance,
     parse_validation_path,
-    predictions_of,
-    read_path_poses,
     trials_of_session,
+)
+from odohil.session.validation_steps import (
+    calibration_robot,
+    check_alpha,
+    drive_folder,
+    first_trials,
+    measured_trials,
+    validation_document,
 )
 
 _HELP = (
@@ -109,165 +87,69 @@ _HELP = (
     "optionally sigma_x_m,sigma_y_m,sigma_theta_rad). file:CSV reads a trial file (pose rows, "
     "or raw distances solved with the session's robot description).\n\n"
     "Each trial's predicted mean and covariance (the measurement covariance and, by the delta "
-    "method, the estimate's own covariance included) are tested by a NEES chi-square test over "
-    "all trials and per axis (x, y, theta), each at --alpha/4.\n\n"
+    "method, the estimate's own covariance included) are tested by a NEES and a bias "
+    "chi-square test over all trials and per axis (x, y, theta), each at --alpha/8.\n\n"
     "Exit 0 pass; 3 fail, or an untrusted calibration refused without --force; 2 bad input "
     "(nothing moved)."
 )
 
 
-def _bad(console: Console, message: str) -> typer.Exit:
-    console.print(f"[red]error[/]: {escape(message)}", soft_wrap=True, highlight=False)
-    return typer.Exit(EXIT_BAD_INPUT)
-
-
-def _description(calibration: Calibration, robot: Path | None) -> tuple[RobotDescription, str, str]:
-    """The robot description (from --robot, else the session's) and its TOML text."""
-    if robot is None:
-        state = calibration.state
-        if state is None:
-            raise ParameterError(
-                f"--robot is needed: the calibration {calibration.outcome.source} is a file or "
-                "a recording, not a session (whose robot description is journaled)"
-            )
-        return (
-            description_of_header(state),
-            str(state.header.robot_toml),
-            state.header.robot_path or "",
-        )
-    toml = read_robot_toml(robot, ParameterError, "--robot: robot description")
-    return parse_robot_description(toml, str(robot)), toml, str(robot)
-
-
+@source_options(selection=False)
 def validate(
-    session: Annotated[
-        Path,
-        typer.Argument(
-            help="The calibration: a session folder, a trial file or a recording (with --robot)."
-        ),
-    ],
+    session: Annotated[Path, typer.Argument(help="The calibration: a session folder, a trial "
+                       "file or a recording (with --robot).")],
     *,
-    path_text: Annotated[str, typer.Option("--path", help=PATH_SYNTAX)],
-    trials: Annotated[
-        int | None,
-        typer.Option(
-            "--trials",
-            callback=bounded("plan_n"),
-            help="Trials to drive (forth-back), or to use from a file (default: all rows).",
-        ),
-    ] = None,
-    measure: Annotated[
-        str | None,
-        typer.Option(
-            "--measure",
-            help="`fake` (the fake robot's true pose), `tcp://HOST:PORT` (motion capture) "
-            "or a file: a trial file for a driven path (as run), a pose file for a square.",
-        ),
-    ] = None,
-    port: Annotated[
-        str | None, typer.Option("--port", help="Serial device, pty path or pyserial URL.")
-    ] = None,
-    robot_file: Annotated[
-        Path | None,
-        typer.Option(
-            "--robot", callback=robot_callback, help=ROBOT_HELP + " Default: the session's."
-        ),
-    ] = None,
-    baud: Annotated[
-        int | None, typer.Option("--baud", callback=bounded("baud"), help="Line speed.")
-    ] = None,
-    truth_socket: Annotated[
-        str | None,
-        typer.Option("--truth-socket", help="The fake robot's truth socket (--measure fake)."),
-    ] = None,
-    seed: Annotated[
-        int, typer.Option("--seed", callback=bounded("seed"), help="Seed of the simulated tape.")
-    ] = 0,
-    out: Annotated[
-        Path | None,
-        typer.Option(
-            "--out", help="Validation session folder (default SESSION/validation/<path>)."
-        ),
-    ] = None,
-    alpha: Annotated[
-        float,
-        typer.Option("--alpha", help="False-rejection level of the verdict, in (0, 0.5]."),
-    ] = DEFAULT_ALPHA,
-    force: Annotated[
-        bool, typer.Option("--force", help="Validate an estimate that is not trusted.")
-    ] = False,
-    exclude: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON.")] = False,
-    log_format: LogFormatOption = None,
-    odom_topic: OdomTopicOption = ODOM_TOPIC_DEFAULT,
-    truth_topic: TruthTopicOption = TRUTH_TOPIC_DEFAULT,
-    max_time_diff: MaxTimeDiffOption = MAX_TIME_DIFF_DEFAULT,
-    time_offset: TimeOffsetOption = 0.0,
-    min_rest: MinRestOption = MIN_REST_DEFAULT,
-    min_edge_rest: MinEdgeRestOption = MIN_EDGE_REST_DEFAULT,
-    max_truth_gap: MaxTruthGapOption = MAX_TRUTH_GAP_DEFAULT,
-) -> None:
+    path_text: Annotated[str, option("--path", help=PATH_SYNTAX)],
+    trials: Annotated[int | None, option("--trials", bound="plan_n", help="Trials to drive "
+                      "(forth-back), or to use from a file (default: all rows).")] = None,
+    measure: Annotated[str | None, option("--measure", help="`fake` (the fake robot's true "
+                       "pose), `tcp://HOST:PORT` (motion capture) or a file: a trial file for a "
+                       "driven path (as run), a pose file for a square.")] = None,
+    port: Annotated[str | None, option("--port", help="Serial device, pty path or pyserial "
+                    "URL.")] = None,
+    robot_file: Annotated[Path | None, typer.Option("--robot", callback=robot_callback,
+                          help=ROBOT_HELP + " Default: the session's.")] = None,
+    baud: Annotated[int | None, option("--baud", bound="baud", help="Line speed.")] = None,
+    truth_socket: Annotated[str | None, option("--truth-socket", help="The fake robot's truth "
+                            "socket (--measure fake).")] = None,
+    seed: Annotated[int, option("--seed", bound="seed", help="Seed of the simulated "
+                    "tape.")] = 0,
+    out: Annotated[Path | None, option("--out", help="Validation session folder (default "
+                   "SESSION/validation/<path>).")] = None,
+    alpha: Annotated[float, option("--alpha", help="False-rejection level of the verdict, in "
+                     "(0, 0.5].")] = DEFAULT_ALPHA,
+    force: Annotated[bool, option("--force", help="Validate an estimate that is not "
+                     "trusted.")] = False,
+    as_json: JsonOption = False,
+    exclude: frozenset[int],
+    recording: ImportOptions,
+) -> None:  # fmt: skip
     console = Console(stderr=True)
-    if not (math.isfinite(alpha) and 0.0 < alpha <= 0.5):
-        raise _bad(console, f"--alpha must be within (0, 0.5], got {alpha!r}")
+    bad = (ParameterError, RobotDescriptionError, JournalError, MeasurementError, OSError)
     try:
+        check_alpha(alpha)
         vpath = parse_validation_path(path_text)
-        left_out = parse_exclude(exclude)
-        recording = import_options(
-            log_format,
-            odom_topic,
-            truth_topic,
-            max_time_diff,
-            time_offset,
-            min_rest,
-            min_edge_rest,
-            max_truth_gap,
-        )
         given = None if robot_file is None else load_robot_description(robot_file)
-        calibration = load_calibration(session, left_out, given, recording)
-        description, toml, robot_path = _description(calibration, robot_file)
+        calibration = load_calibration(session, exclude, given, recording)
+        robot = calibration_robot(calibration, robot_file)
     except (OdohilError, OSError) as exc:
-        raise _bad(console, str(exc)) from None
+        raise bad_input(exc, console) from None
     outcome = calibration.outcome
-    if outcome.result is None:
-        console.print(outcome_line(outcome), highlight=False)
-        console.print("[red]refused:[/red] the calibration gives no estimate; nothing tested.")
-        raise typer.Exit(exit_for_outcome(outcome))
     result = outcome.result
-    if not result.verdict.trusted and not force:
-        console.print(outcome_line(outcome), highlight=False)
-        console.print(
-            "[red]refused:[/red] the calibration's estimate is not trusted; nothing tested. "
-            "Fix its trials (or leave them out with --exclude), or pass --force."
-        )
+    if result is None or not (result.verdict.trusted or force):
+        print_refusal(console, outcome, None if result is None else "test it", "nothing tested")
         raise typer.Exit(EXIT_UNTRUSTED)
+    console.print(outcome_line(outcome), highlight=False)  # the calibration's verdict
     folder: Path | None = None
     try:
         if vpath.kind == "file":
-            assert vpath.file is not None
             _no_robot(vpath, port, measure)
-            measured = held_out_trials(vpath.file, description, recording)
-            plan = None if calibration.state is None else calibration.state.plan
-            check_not_fitted(plan, [d.forward for d in measured.designs])
-        elif vpath.kind == "square":
-            assert vpath.path is not None
-            if port is not None or not _file_measure(measure):
-                raise ParameterError(
-                    f"--path {path_text}: a square has in-place turns and the robot protocol "
-                    "drives forth-and-back designs only; give the square's measured poses "
-                    "with --measure FILE (no --port)"
-                )
-            measured = read_path_poses(Path(str(measure)), vpath.path, vpath.text)
+        if vpath.kind != "forth-back":
+            measured = measured_trials(
+                vpath, calibration, robot.description, recording, port, measure
+            )
         else:
-            assert vpath.design is not None
-            if calibration.state is None:
-                raise ParameterError(
-                    f"--path {path_text} drives the robot and journals a validation session "
-                    f"beside the calibration's: {session} is no session; give the held-out "
-                    "trials with --path file:HELDOUT"
-                )
-            check_not_fitted(calibration.state.plan, [vpath.design])
-            folder = out or default_folder(session, vpath)
+            folder = drive_folder(vpath, calibration, session, out)
             measured = _drive_or_reload(
                 folder,
                 vpath,
@@ -277,27 +159,20 @@ def validate(
                 baud,
                 truth_socket,
                 seed,
-                description,
-                toml,
-                robot_path,
+                robot.description,
+                robot.toml,
+                robot.path,
                 session,
                 console,
             )
-        if trials is not None:
-            if trials > len(measured):
-                raise ParameterError(
-                    f"--trials {trials}: {measured.source} has {len(measured)} usable trials"
-                )
-            measured = measured.first(trials)
+        measured = first_trials(measured, trials)
         tested = check_trials(measured, result, alpha)
-    except typer.Exit:
-        raise
-    except (ParameterError, RobotDescriptionError, JournalError, MeasurementError) as exc:
-        raise _bad(console, str(exc)) from None
+    except bad as exc:
+        raise bad_input(exc, console) from None
     except OdohilError as exc:
         console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_ERROR) from None
-    data = _json(session, vpath, folder, measured, calibration, tested)
+    data = validation_document(session, vpath, folder, measured, calibration, tested)
     if as_json:
         typer.echo(json.dumps(data))
     else:
@@ -387,61 +262,6 @@ def _drive_or_reload(
     return trials_of_session(ran, source=str(folder))
 
 
-def _json(
-    session: Path,
-    vpath: ValidationPath,
-    folder: Path | None,
-    measured: ValidationTrials,
-    calibration: Calibration,
-    tested: ValidationResult,
-) -> dict[str, Any]:
-    result = calibration.result
-    verdict = tested.to_json_dict()
-    verdict["parameter_uncertainty"] = (
-        "included (delta method, the estimate's covariance)"
-        if tested.parameter_uncertainty
-        else "left out: the estimate's covariance is not finite"
-    )
-    predictions = {}
-    for label, p in zip(measured.labels, predictions_of(measured, result), strict=True):
-        if label not in predictions:
-            predictions[label] = {"mean": p.mean.tolist(), "cov": p.cov.tolist()}
-    return {
-        "verdict": verdict,
-        "path": vpath.text,
-        "session": str(session),
-        "validation_session": str(folder) if folder is not None else None,
-        "source": measured.source,
-        "n_trials": len(measured),
-        "left_out_ambiguous": list(measured.left_out),
-        "trials": [
-            {
-                "trial": n,
-                "path": label,
-                "pose_change": pose.tolist(),
-                "residual": r.tolist(),
-                "nees": float(e),
-            }
-            for n, label, pose, r, e in zip(
-                measured.numbers,
-                measured.labels,
-                measured.poses,
-                tested.residuals,
-                tested.trial_nees,
-                strict=True,
-            )
-        ],
-        "prediction": predictions,
-        "calibration": {
-            "verdict": result.verdict.to_json_dict(),
-            "parameters": {p.name: p.to_json_dict() for p in result.parameters},
-            "covariance": [list(row) for row in result.covariance]
-            if parameter_covariance(result) is not None
-            else None,
-        },
-    }
-
-
 def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationTrials) -> None:
     out = Console(width=max(100, Console().width))
     status = "PASS" if tested.passed else "FAIL"
@@ -451,14 +271,12 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
     out.print(text, highlight=False)
     for reason in tested.reasons():
         out.print(f"  {reason}", highlight=False)
-    table = Table(
-        title="chi-square tests (NEES: the spread; bias: the mean residual), "
-        f"each at level {tested.level:g}"
-    )
-    for column in ("test", "statistic", "dof", "p-value", "threshold", "result"):
-        table.add_column(column, justify="left" if column in ("test", "result") else "right")
+    title = "chi-square tests (NEES: the spread; bias: the mean residual), each at level"
+    title += f" {tested.level:g}"
+    columns = ("test", "statistic", "dof", "p-value", "threshold", "result")
+    tests = table(title, columns, ("test", "result"))
     for t in tested.tests:
-        table.add_row(
+        tests.add_row(
             t.name,
             f"{t.statistic:.4g}",
             str(t.dof),
@@ -466,7 +284,7 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
             f"{t.threshold:.4g}",
             "pass" if t.passed else "[red]FAIL[/]",
         )
-    out.print(table)
+    out.print(tests)
     out.print(f"parameter uncertainty: {data['verdict']['parameter_uncertainty']}", highlight=False)
     if measured.left_out:
         out.print(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")

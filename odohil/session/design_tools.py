@@ -1,0 +1,165 @@
+"""What the design tools (``odohil predict``, ``covariance``, ``simulate``)
+compute beyond calling science: the path their options name, their JSON
+documents (SI), and the simulated trials written as a trial file."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
+from typing import Any
+
+from odohil.errors import ParameterError
+from odohil.science.closed_forms import ObservableMeans, forth_and_back_means
+from odohil.science.covariance import SimulatedMoments, predicted_moments, simulated_moments
+from odohil.science.limits import check_simulation_work, segments_of
+from odohil.science.moments import PoseMoments
+from odohil.science.parameters import SI_UNITS, ErrorParameters
+from odohil.science.paths import Design, EncoderPath, FloatArray, Variant, square
+
+COMPONENTS = ("x", "y", "Delta")
+COMPONENT_UNITS = ("m", "m", "rad")
+OBSERVABLES = {  # name: (SI unit, meaning)
+    "phi1": ("rad", "mean heading change"),
+    "phi2": ("rad^2", "variance of the heading change"),
+    "phi3": ("m", "mean x of the end point"),
+    "phi4": ("m", "mean y of the end point"),
+    "phi5": ("m^2", "mean squared distance start-end"),
+    "x": ("m", "<x>"),
+    "y": ("m", "<y>"),
+}
+TRIAL_FILE_HEADER = "k,l_m,variant,dx_m,dy_m,dtheta_rad"
+
+
+def named_path(
+    kind: str | None, k: float | None, l_m: float | None, variant: Variant, side: float | None
+) -> EncoderPath:
+    """The path of ``--path`` (``forth-and-back`` or ``square``; None: the one
+    ``--k``/``--l`` or ``--side`` names).
+
+    Raises:
+        ParameterError: options of both paths, or of neither, or missing ones.
+    """
+    if kind is None:
+        if side is not None and k is None and l_m is None:
+            kind = "square"
+        elif side is None and (k is not None or l_m is not None):
+            kind = "forth-and-back"
+        else:
+            raise ParameterError(
+                "give --k K --l L (forth-and-back) or --side S (square)"
+                + (", not both" if side is not None else "")
+            )
+    if kind == "forth-and-back":
+        if k is None or l_m is None:
+            raise ParameterError("--path forth-and-back needs --k and --l")
+        if side is not None:
+            raise ParameterError("--side is for --path square")
+        return Design(k, l_m, variant).path()
+    if side is None:
+        raise ParameterError("--path square needs --side")
+    if k is not None or l_m is not None:
+        raise ParameterError("--k and --l are for --path forth-and-back")
+    return square(side)
+
+
+def path_moments(
+    path: EncoderPath,
+    params: ErrorParameters,
+    n_simulate: int | None,
+    seed: int | None,
+    segment_m: float,
+) -> tuple[PoseMoments, SimulatedMoments | None]:
+    """The closed-form moments of the path's pose change, and simulated ones
+    when ``n_simulate`` is given.
+
+    Raises:
+        ParameterError: more simulation work than one command runs.
+    """
+    if n_simulate is None:
+        return predicted_moments(path, params), None
+    check_simulation_work(n_simulate, segments_of(path.legs.length_m.tolist(), segment_m))
+    sim = simulated_moments(path, params, n_simulate, seed=seed, segment_m=segment_m)
+    return predicted_moments(path, params), sim
+
+
+def _matrix(matrix: FloatArray) -> list[list[float]]:
+    return [[float(v) for v in row] for row in matrix]
+
+
+def covariance_document(
+    path: EncoderPath, params: ErrorParameters, exact: PoseMoments, sim: SimulatedMoments | None
+) -> dict[str, object]:
+    """The JSON document of ``odohil covariance --json``."""
+    document: dict[str, object] = {
+        "path": path.name,
+        "distance_m": path.distance_m,
+        "parameters_si": params.to_si_dict(),
+        "components": list(COMPONENTS),
+        "units": {"mean": list(COMPONENT_UNITS), "cov": "products of the component units"},
+        "closed_form": {"mean": [float(v) for v in exact.mean], "cov": _matrix(exact.cov)},
+    }
+    if sim is not None:
+        document["simulated"] = {
+            "n_trials": sim.n_trials,
+            "mean": [float(v) for v in sim.mean],
+            "mean_se": [float(v) for v in sim.mean_se],
+            "cov": _matrix(sim.cov),
+            "cov_se": _matrix(sim.cov_se),
+        }
+    return document
+
+
+def predict_document(
+    design: Design, params: ErrorParameters, means: ObservableMeans | None = None
+) -> dict[str, Any]:
+    """The JSON document of ``odohil predict --json``: phi1..phi5, <x>, <y> (SI)."""
+    means = means or forth_and_back_means(design, params)
+    document: dict[str, Any] = dict(means.as_dict())
+    document["design"] = {"k": design.k, "l_m": design.l_m, "variant": design.variant}
+    document["parameters"] = params.to_si_dict()
+    document["units"] = {
+        **{name: unit for name, (unit, _) in OBSERVABLES.items()},
+        "parameters": dict(SI_UNITS),
+        "design": {"k": "1", "l_m": "m"},
+    }
+    return document
+
+
+def check_simulation(design: Design, trials: int, segment_m: float, out: Path) -> None:
+    """Refuse a simulation before it runs: too much work, or an ``--out`` that
+    cannot be written.
+
+    Raises:
+        ParameterError: naming ``--trials`` or ``--out``.
+    """
+    try:
+        check_simulation_work(trials, segments_of(design.path().legs.length_m.tolist(), segment_m))
+    except ParameterError as exc:
+        raise ParameterError(f"--trials: {exc}") from None
+    if not out.parent.is_dir():
+        raise ParameterError(f"--out: folder {str(out.parent)!r} does not exist")
+    if out.is_dir():
+        raise ParameterError(f"--out: {str(out)!r} is a folder")
+
+
+def write_simulated_trials(out: Path, design: Design, pose_change: FloatArray) -> None:
+    """Write the trial file (a header, then one row per trial, floats in full
+    precision: k, l_m m, variant, dx_m, dy_m m in the start frame,
+    dtheta_rad) through a temporary file next to ``out`` and a rename: never
+    a half-written ``out``.
+
+    Raises:
+        OSError: it cannot be written.
+    """
+    handle, temporary = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    try:
+        with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
+            stream.write(TRIAL_FILE_HEADER + "\n")
+            prefix = f"{float(design.k)!r},{float(design.l_m)!r},{design.variant},"
+            for dx, dy, dtheta in pose_change.tolist():
+                stream.write(f"{prefix}{dx!r},{dy!r},{dtheta!r}\n")
+        os.replace(temporary, out)
+    except BaseException:
+        Path(temporary).unlink(missing_ok=True)
+        raise
