@@ -62,13 +62,14 @@ from odohil.errors import (
     ParameterError,
     RobotDescriptionError,
 )
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.engine import start_session
 from odohil.session.floor_space import check_floor
 from odohil.session.plan import Plan, check_session_plan
 from odohil.session.preflight import check_trial_file
 from odohil.session.robot_file import load_robot_description, read_robot_toml
+from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.state import description_of_header, load_session
 from odohil.session.validation import (
     PATH_SYNTAX,
@@ -342,7 +343,7 @@ def _drive_or_reload(
         raise ParameterError(
             "--measure is needed to drive: `fake`, `tcp://HOST:PORT` or a trial file (CSV)"
         )
-    plan = check_session_plan(Plan.of([(vpath.design, trials)]))
+    plan = check_session_plan(Plan.of([(vpath.design, trials)]), description.robot.protocol)
     option = parse_measure(measure)
     kind, trial_file = option.kind, option.trial_file
     if kind != "tcp":  # the tape's cross distances must tell the designs apart

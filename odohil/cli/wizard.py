@@ -66,7 +66,7 @@ from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MAX_LEG_M
 from odohil.science.pose_selection import check_redundancy
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.session import state as ev
 from odohil.session.engine import (
     IncrementalLiveEstimator,
@@ -88,6 +88,7 @@ from odohil.session.preflight import (
 from odohil.session.robot import Robot
 from odohil.session.robot_file import load_robot_description, read_robot_toml
 from odohil.session.robots import open_robot
+from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext, check_distance
 from odohil.session.start_pose import StartPose, pose_text, sample_pose
@@ -96,8 +97,6 @@ from odohil.session.state import SessionState, load_session
 SECOND_CTRL_C_STOP_S = 0.5
 """How long a second Ctrl-C waits for the robot to confirm its one ``st``, s."""
 DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
-MAX_WIRE = 32767
-"""Largest relative move one ``pr`` carries, 0.1 in."""
 _SAMPLES = 400
 _SPREAD_SIGMAS = 4.0
 BACK_WORDS = ("back", "-")
@@ -557,14 +556,13 @@ def _can_estimate(state: SessionState) -> bool:
 
 
 def plan_checks(plan: Plan, max_leg_m: float) -> list[Check]:
-    """Is every design of the plan something the robot can drive?"""
+    """Does every design of the plan fit the floor (``max_leg_m``)? (What
+    the robot can drive, its backend's leg limits, check_session_plan checks.)"""
     problems = []
     for item in plan.items:
         leg = item.design.l_m
         if leg > max_leg_m:
             problems.append(f"{item.design.label()}: legs of {leg:g} m exceed {max_leg_m:g} m")
-        if abs(units.metres_to_wire(leg)) > MAX_WIRE:
-            problems.append(f"{item.design.label()}: a leg does not fit one move command")
     detail = (
         f"{units.plural(plan.n_trials, 'trial')}, {plan.distance_m:.1f} m of driving "
         f"({plan.to_text()})"
@@ -677,8 +675,9 @@ def _prepare(
         _fail(console, Check("robot description", False, str(exc)))
     console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))
     try:
-        plan = check_session_plan(  # wire range, caps; the robot's default variant
-            parse_plan(plan_text or DEFAULT_PLAN, default_variant(description))
+        plan = check_session_plan(  # the robot's leg limits, caps; its default variant
+            parse_plan(plan_text or DEFAULT_PLAN, default_variant(description)),
+            description.robot.protocol,
         )
         check_turns(plan, description, allow_turns)
     except OdohilError as exc:
