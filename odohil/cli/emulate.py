@@ -1,8 +1,11 @@
 """``odohil emulate``: serve a fake robot (the Nomad 150 or the Create 2) on a
 pseudo-terminal.
 
-The fake (fakes/nomad/, fakes/create2/) is imported only when the command
-runs, so that no other ``odohil`` command loads it.
+Which fake, and its defaults (line rate, time scale), come from the robot
+backend's facts (``RobotFacts.fake``, read through odohil/session/robots.py);
+the fake (fakes/nomad/, fakes/create2/) is imported only when the command
+runs, through the emulator its backend names, so that no other ``odohil``
+command loads it.
 """
 
 from __future__ import annotations
@@ -28,6 +31,7 @@ from odohil.cli.options import (
 )
 from odohil.cli.robot_option import robot_protocol
 from odohil.errors import InitError, OdohilError
+from odohil.science.robot_description import DEFAULT_PROTOCOL
 from odohil.science.robot_facts import RobotFacts
 from odohil.session.robots import backend_names, fake_hooks, robot_facts
 
@@ -64,7 +68,7 @@ def _default_help(what: str, value: Callable[[RobotFacts], float]) -> str:
 
 
 def emulate(
-    robot: str = typer.Option("nomad150", "--robot", help=_robot_help()),
+    robot: str = typer.Option(DEFAULT_PROTOCOL, "--robot", help=_robot_help()),
     seed: int | None = typer.Option(
         None, "--seed", callback=bounded("seed"), help="Seed of the odometry noise."
     ),
@@ -98,7 +102,7 @@ def emulate(
     verbose: bool = typer.Option(False, "--verbose", help="Log protocol events to stderr."),
 ) -> None:
     """Serve a fake robot on a pseudo-terminal until Ctrl-C: the one --robot
-    names (the Nomad 150 by default, or the Create 2).
+    names (its backend's fake, odohil/session/robots.py ``fake_hooks``).
 
     Prints the device path (first line) and the truth socket path (second line).
     """
