@@ -115,7 +115,10 @@ class Create2Config:
 
     errors: DiffDriveErrors = field(
         default_factory=lambda: DiffDriveErrors.from_parameters(
-            CREATE2_TRUTH, turn_scale=DEFAULT_TURN_SCALE, k_spin=DEFAULT_SPIN_K
+            CREATE2_TRUTH,
+            turn_scale=DEFAULT_TURN_SCALE,
+            k_spin=DEFAULT_SPIN_K,
+            wheel_base_m=CREATE2_GEOMETRY.wheel_base_m,
         )
     )
     geometry: DiffDriveGeometry = CREATE2_GEOMETRY
