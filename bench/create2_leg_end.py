@@ -26,7 +26,7 @@ from odohil.driver.create2.link import SAMPLINGS, Sampling
 from odohil.driver.create2.robot import Create2Robot
 from odohil.driver.odometry import DriveSettings
 from odohil.errors import MotionError
-from odohil.science.diff_drive import DiffDriveGeometry
+from odohil.protocol.create2.geometry import CREATE2_GEOMETRY
 from odohil.science.paths import Design
 
 LEG_M = 0.5
@@ -37,7 +37,7 @@ def measure(
 ) -> tuple[list[float], float]:
     """Overshoot of each leg, mm, and the mean number of readings per second;
     ``flagged[0]`` counts the legs the driver refused (MotionError)."""
-    geometry = DiffDriveGeometry()
+    geometry = CREATE2_GEOMETRY
     mm_per_count = geometry.metres_per_count * 1000.0
     settings = DriveSettings(speed_m_s=speed, step_timeout_s=30.0)
     overshoot: list[float] = []

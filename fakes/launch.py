@@ -12,6 +12,7 @@ import logging
 import shutil
 import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TextIO
 
@@ -19,6 +20,30 @@ from odohil.science.parameters import ErrorParameters
 
 OnReady = Callable[[str, str], None]
 """Called once with (pty device path, truth socket path) when the fake is open."""
+
+
+@dataclass(frozen=True)
+class EmulateOptions:
+    """What ``odohil emulate`` hands a fake's ``emulate`` hook (the function a
+    backend names in its ``FakeFacts.emulator``; e.g. fakes/nomad/run.py).
+
+    Attributes:
+        seed: seed of the odometry noise (None: fresh).
+        paper: the true E_R deg/m, E_T, K_theta deg^2/m, K_rho m.
+        time_scale: simulated seconds per wall second.
+        baud: line rate, bit/s (pacing and the pty speed).
+        pacing: carry bytes at the line rate.
+        faults: fault strings as the fake parses them.
+        truth_socket: the truth socket's path (None: a temporary one).
+    """
+
+    seed: int | None
+    paper: tuple[float, float, float, float]
+    time_scale: float
+    baud: int
+    pacing: bool
+    faults: tuple[str, ...]
+    truth_socket: str | None
 
 
 def run_announced(

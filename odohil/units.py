@@ -6,19 +6,14 @@ systems exist only at the edges:
 - the paper's: E_R in deg/m, K_theta in deg^2/m (E_T and K_rho are already SI);
   :func:`parameter_to_paper` and :func:`parameter_from_paper` convert one
   parameter's value or standard error by its name;
-- the Nomad wire's: lengths in 0.1 inch, angles in 0.1 degree (and their
-  per-second and per-second-squared rates).
+- a robot's wire units, which belong to its protocol (the Nomad's 0.1 inch
+  and 0.1 degree: odohil/protocol/nomad/wire_units.py).
 
 Angles. A heading, or a difference of headings, is reduced to (-pi, pi]
 radians by :func:`wrap_angle` (a float) and :func:`wrap_angles` (an array),
 both exact (``fmod`` by the float 2 pi, then one exact shift). To compare
 headings known only modulo 2 pi with a reference (a model mean, a group's
-circular mean), :func:`angle_near` moves them to within pi of it. The one
-other range is the wire's: the Nomad reports and accepts absolute angles as
-whole tenths of a degree in [0, 3600) (:func:`wire_angle_in_turn`), because
-that is what its protocol carries; a difference of two wire angles is again
-reduced to (-1800, 1800] (:func:`wire_angle_difference`), the same convention
-as :func:`wrap_angle`.
+circular mean), :func:`angle_near` moves them to within pi of it.
 """
 
 from __future__ import annotations
@@ -30,11 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 METRES_PER_INCH = 0.0254
-METRES_PER_WIRE_LENGTH = METRES_PER_INCH / 10.0
-"""One wire length unit, 0.1 inch, in metres (2.54 mm)."""
-RADIANS_PER_WIRE_ANGLE = math.radians(0.1)
-"""One wire angle unit, 0.1 degree, in radians."""
-WIRE_ANGLES_PER_TURN = 3600
+"""One inch in metres."""
 
 
 def deg_per_m_to_rad_per_m(value: float) -> float:
@@ -75,26 +66,6 @@ def to_metres(length: float, unit: str) -> float:
     """A length typed in ``unit`` (m, cm or mm) in metres; metres are returned
     unchanged (the same float)."""
     return length if unit == "m" else length * METRES_PER_LENGTH_UNIT[unit]
-
-
-def metres_to_wire(length_m: float) -> int:
-    """A length in metres to the nearest whole number of wire units (0.1 inch)."""
-    return round(length_m / METRES_PER_WIRE_LENGTH)
-
-
-def wire_to_metres(length_wire: float) -> float:
-    """A length in wire units (0.1 inch) to metres."""
-    return length_wire * METRES_PER_WIRE_LENGTH
-
-
-def radians_to_wire(angle_rad: float) -> int:
-    """An angle in radians to the nearest whole number of wire units (0.1 degree)."""
-    return round(angle_rad / RADIANS_PER_WIRE_ANGLE)
-
-
-def wire_to_radians(angle_wire: float) -> float:
-    """An angle in wire units (0.1 degree) to radians."""
-    return angle_wire * RADIANS_PER_WIRE_ANGLE
 
 
 def parameter_kind(name: str) -> str:
@@ -242,14 +213,3 @@ def circular_mean(angles_rad: npt.ArrayLike) -> float:
     headings known modulo 2 pi near (:func:`angle_near`)."""
     angles = np.asarray(angles_rad, dtype=np.float64)
     return math.atan2(float(np.sin(angles).mean()), float(np.cos(angles).mean()))
-
-
-def wire_angle_in_turn(angle_wire: int) -> int:
-    """An absolute wire angle (0.1 degree) as the wire carries it, in [0, 3600)."""
-    return angle_wire % WIRE_ANGLES_PER_TURN
-
-
-def wire_angle_difference(a_wire: int, b_wire: int) -> int:
-    """``a - b`` of two wire angles (0.1 degree), reduced to (-1800, 1800]."""
-    d = (a_wire - b_wire) % WIRE_ANGLES_PER_TURN
-    return d - WIRE_ANGLES_PER_TURN if d > WIRE_ANGLES_PER_TURN // 2 else d

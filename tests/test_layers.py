@@ -67,9 +67,10 @@ def _subpackages(layer: str) -> set[str]:
     return {p.parent.name for p in (ROOT / "odohil" / layer).glob("*/__init__.py")}
 
 
-SHARED_DRIVER_MODULES = {"__init__", "odometry", "port", "guardian", "step_limit"}
+SHARED_DRIVER_MODULES = {"__init__", "odometry", "port", "guardian", "step_limit", "stopping"}
 """What the driver layer shares between its backends (guardian: the stop if odohil dies;
-step_limit: the time limit of a leg or a turn)."""
+step_limit: the time limit of a leg or a turn; stopping: stop-and-confirm, settle and
+the stop on any failure)."""
 
 SHARED_PROTOCOL_MODULES = {"__init__", "numbers"}
 """What the protocol layer shares between its robot protocols (wire integers)."""

@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass, field
 
 from odohil.errors import ParameterError
+from odohil.protocol.create2.geometry import CREATE2_GEOMETRY
 from odohil.protocol.create2.opcodes import BAUD_RATES, DEFAULT_BAUD
 from odohil.science.diff_drive import DiffDriveErrors, DiffDriveGeometry
 from odohil.science.parameters import ErrorParameters
@@ -114,10 +115,13 @@ class Create2Config:
 
     errors: DiffDriveErrors = field(
         default_factory=lambda: DiffDriveErrors.from_parameters(
-            CREATE2_TRUTH, turn_scale=DEFAULT_TURN_SCALE, k_spin=DEFAULT_SPIN_K
+            CREATE2_TRUTH,
+            turn_scale=DEFAULT_TURN_SCALE,
+            k_spin=DEFAULT_SPIN_K,
+            wheel_base_m=CREATE2_GEOMETRY.wheel_base_m,
         )
     )
-    geometry: DiffDriveGeometry = field(default_factory=DiffDriveGeometry)
+    geometry: DiffDriveGeometry = CREATE2_GEOMETRY
     seed: int | None = None
     time_scale: float = 1.0
     baud: int = DEFAULT_BAUD
@@ -164,7 +168,7 @@ def build_config(
     passive_sleep_s: float | None = PASSIVE_SLEEP_S,
 ) -> Create2Config:
     """A :class:`Create2Config` from command-line style values."""
-    geometry = DiffDriveGeometry()
+    geometry = CREATE2_GEOMETRY
     return Create2Config(
         errors=DiffDriveErrors.from_parameters(
             params, turn_scale=turn_scale, k_spin=spin_k, wheel_base_m=geometry.wheel_base_m

@@ -7,10 +7,11 @@ import sys
 from pathlib import Path
 from typing import TextIO
 
-from fakes.create2.config import Create2Config
+from fakes.create2.config import Create2Config, build_config
 from fakes.create2.engine import Create2Engine
 from fakes.create2.server import serve
-from fakes.launch import OnReady, run_announced
+from fakes.launch import EmulateOptions, OnReady, run_announced
+from odohil.science.parameters import ErrorParameters
 
 
 def run_emulator(
@@ -29,3 +30,17 @@ def run_emulator(
         )
 
     run_announced(serve_create2, truth_socket=truth_socket, tmp_prefix="odohil-create2-", out=out)
+
+
+def emulate(options: EmulateOptions) -> None:
+    """``odohil emulate --robot create2`` (the hook in the backend's
+    ``FakeFacts.emulator``): build the fake Create 2 from ``options`` and
+    serve it. OdohilError for a bad option (a fault string, a parameter)."""
+    config = build_config(
+        seed=options.seed,
+        params=ErrorParameters.from_paper_units(*options.paper),
+        time_scale=options.time_scale,
+        baud=options.baud,
+        faults=list(options.faults),
+    )
+    run_emulator(config, pacing=options.pacing, truth_socket=options.truth_socket)

@@ -29,7 +29,7 @@ import numpy as np
 
 from fakes.nomad.profile import Profile, plan_move, plan_velocity
 from fakes.nomad.segment import drive_segment
-from odohil import units
+from odohil.protocol.nomad import wire_units
 from odohil.science.parameters import ErrorParameters
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 
@@ -138,7 +138,7 @@ class RobotBody:
         d_trans = trans.pos - trans0
         d_steer = steer.pos - steer0
         if d_trans != 0.0:
-            heading = units.wire_to_radians(steer0 + 0.5 * d_steer)
+            heading = wire_units.wire_to_radians(steer0 + 0.5 * d_steer)
             self._set_encoder_xy(
                 self.enc_x + d_trans * math.cos(heading),
                 self.enc_y + d_trans * math.sin(heading),
@@ -147,12 +147,12 @@ class RobotBody:
                 self._drive_leg(trans0, end_leg=True)  # reversed: the leg ended at trans0
         self._drive_leg(trans.pos, end_leg=d_steer != 0.0 or not trans.moving)
         if d_steer != 0.0:
-            self.true_theta += units.wire_to_radians(d_steer)
+            self.true_theta += wire_units.wire_to_radians(d_steer)
 
     def _drive_leg(self, position: float, end_leg: bool) -> None:
         """Drive the true pose along the current leg up to translation ``position`` (wire)."""
         seg = self.segment_m
-        travelled_m = units.wire_to_metres(position - self.leg_origin)
+        travelled_m = wire_units.wire_to_metres(position - self.leg_origin)
         due = int(abs(travelled_m) / seg)
         if due > self.leg_segments:
             self._drive(math.copysign(seg, travelled_m), due - self.leg_segments)
@@ -276,8 +276,8 @@ class RobotBody:
         return (
             round(self.enc_x),
             round(self.enc_y),
-            units.wire_angle_in_turn(round(self.axes[STEER].pos)),
-            units.wire_angle_in_turn(round(self.axes[TURRET].pos)),
+            wire_units.wire_angle_in_turn(round(self.axes[STEER].pos)),
+            wire_units.wire_angle_in_turn(round(self.axes[TURRET].pos)),
         )
 
     def velocities_wire(self) -> tuple[int, int, int]:

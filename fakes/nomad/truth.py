@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from fakes.truth_channel import TruthChannelClient
-from odohil import units
+from odohil.protocol.nomad import wire_units
 
 
 @dataclass(frozen=True)
@@ -66,17 +66,17 @@ class TruthSnapshot:
     @property
     def encoder_x_m(self) -> float:
         """Encoder x, m."""
-        return units.wire_to_metres(self.encoder_x)
+        return wire_units.wire_to_metres(self.encoder_x)
 
     @property
     def encoder_y_m(self) -> float:
         """Encoder y, m."""
-        return units.wire_to_metres(self.encoder_y)
+        return wire_units.wire_to_metres(self.encoder_y)
 
     @property
     def encoder_steer_rad(self) -> float:
         """Encoder steering angle, rad (0..2 pi)."""
-        return units.wire_to_radians(self.encoder_steer)
+        return wire_units.wire_to_radians(self.encoder_steer)
 
     def to_json(self) -> str:
         """One JSON line (no newline)."""

@@ -29,12 +29,14 @@ from odohil.cli.run import (
     session_input,
 )
 from odohil.science.parameters import SI_UNITS, ErrorParameters
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.session.engine import start_session
 from odohil.session.journal import Journal
 from odohil.session.plan import parse_plan
 from odohil.session.pose_kinds import SnapshotTruth
 from odohil.session.robot import Robot
+from odohil.session.robots import parse_description as parse_robot_description
+from odohil.session.robots import robot_facts
 from odohil.session.sources import FakeTruthSource, TapeSource
 from odohil.session.state import SessionState
 
@@ -118,9 +120,10 @@ def demo(
                     highlight=False,
                 )
                 description = parse_robot_description(DEMO_ROBOT_TOML, "demo robot")
+                baud = robot_facts(description.robot.protocol).default_baud
                 settings = {
                     "port": emulator.device,
-                    "baud": 38400,
+                    "baud": baud,
                     "truth_socket": emulator.truth_socket,
                     "seed": seed,
                     "truth": truth,
@@ -133,7 +136,7 @@ def demo(
                         measure="fake",
                         settings=settings,
                     )
-                line = resolve_line(description, emulator.device, 38400)
+                line = resolve_line(description, emulator.device, baud)
                 with journal, connect(line, emulator.truth_socket) as (robot, reader):
                     outcome = _calibrate(
                         journal, state, robot, reader, description, seed, settings, console, system

@@ -1,14 +1,18 @@
 """``odohil emulate``: serve a fake robot (the Nomad 150 or the Create 2) on a
 pseudo-terminal.
 
-The fake (fakes/nomad/, fakes/create2/) is imported only when the command
-runs, so that no other ``odohil`` command loads it.
+Which fake, and its defaults (line rate, time scale), come from the robot
+backend's facts (``RobotFacts.fake``, read through odohil/session/robots.py);
+the fake (fakes/nomad/, fakes/create2/) is imported only when the command
+runs, through the emulator its backend names, so that no other ``odohil``
+command loads it.
 """
 
 from __future__ import annotations
 
 import logging
 import os
+from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
@@ -26,8 +30,10 @@ from odohil.cli.options import (
     bounded,
 )
 from odohil.cli.robot_option import robot_protocol
-from odohil.errors import OdohilError
-from odohil.session.robots import find_backend
+from odohil.errors import InitError, OdohilError
+from odohil.science.robot_description import DEFAULT_PROTOCOL
+from odohil.science.robot_facts import RobotFacts
+from odohil.session.robots import backend_names, fake_hooks, robot_facts
 
 _FAULT_HELP = (
     "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
@@ -35,13 +41,34 @@ _FAULT_HELP = (
 )
 
 
+def _with_fakes() -> list[RobotFacts]:
+    """The facts of every registered backend that declares a fake to emulate."""
+    found = []
+    for name in backend_names():
+        try:
+            facts = robot_facts(name)
+        except OdohilError:
+            continue
+        if facts.fake is not None and facts.fake.emulator:
+            found.append(facts)
+    return found
+
+
+def _robot_help() -> str:
+    names = ", ".join(f"{f.name} (the {f.label})" for f in _with_fakes()) or "none installed"
+    return (
+        f"Which fake robot: {names}, or a robot description file whose "
+        "\\[robot] protocol is one of them."
+    )
+
+
+def _default_help(what: str, value: Callable[[RobotFacts], float]) -> str:
+    per_robot = ", ".join(f"{f.name} {value(f):g}" for f in _with_fakes())
+    return f"default: the robot's own {what} ({per_robot})"
+
+
 def emulate(
-    robot: str = typer.Option(
-        "nomad150",
-        "--robot",
-        help="Which fake: nomad150 or create2 (docs/create2.md), "
-        "or a robot description file whose \\[robot] protocol is one of them.",
-    ),
+    robot: str = typer.Option(DEFAULT_PROTOCOL, "--robot", help=_robot_help()),
     seed: int | None = typer.Option(
         None, "--seed", callback=bounded("seed"), help="Seed of the odometry noise."
     ),
@@ -49,18 +76,21 @@ def emulate(
     e_t: ETOption = E_T_DEFAULT,
     k_theta: KThetaDeg2PerM = K_THETA_DEFAULT,
     k_rho: KRhoM = K_RHO_DEFAULT,
-    time_scale: float = typer.Option(
-        1.0,
+    time_scale: float | None = typer.Option(
+        None,
         "--time-scale",
         callback=bounded("time_scale"),
-        help="Simulated seconds per wall second (motion, zr, timestamp).",
+        help="Simulated seconds per wall second (motion, zr, timestamp); "
+        + _default_help("time scale", lambda f: f.fake.emulate_time_scale if f.fake else 1.0)
+        + ".",
     ),
     baud: int | None = typer.Option(
         None,
         "--baud",
         callback=bounded("baud"),
-        help="Line rate (pacing and the pty speed); default: the robot's own "
-        "(its backend's default baud).",
+        help="Line rate (pacing and the pty speed); "
+        + _default_help("line rate, its backend's default baud", lambda f: f.default_baud)
+        + ".",
     ),
     pacing: bool = typer.Option(
         True, "--pacing/--no-pacing", help="Carry bytes at the line rate in both directions."
@@ -71,68 +101,42 @@ def emulate(
     ),
     verbose: bool = typer.Option(False, "--verbose", help="Log protocol events to stderr."),
 ) -> None:
-    """Serve a fake robot on a pseudo-terminal until Ctrl-C: the Nomad 150, or
-    with --robot create2 the Create 2.
+    """Serve a fake robot on a pseudo-terminal until Ctrl-C: the one --robot
+    names (its backend's fake, odohil/session/robots.py ``fake_hooks``).
 
     Prints the device path (first line) and the truth socket path (second line).
     """
-    from fakes.nomad.config import build_config
-    from fakes.nomad.run import run_emulator
+    from fakes.launch import EmulateOptions
 
     if truth_socket is not None:
         _check_socket_path(truth_socket)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
-    robot = robot_protocol(robot)
-    if baud is None:
-        baud = find_backend(robot).default_baud
-    if robot == "create2":
-        _emulate_create2(
-            seed, (e_r, e_t, k_theta, k_rho), time_scale, baud, pacing, fault, truth_socket
-        )
-        return
-    if robot != "nomad150":
-        raise typer.BadParameter(f"one of nomad150, create2; got {robot!r}", param_hint="--robot")
+    protocol = robot_protocol(robot)
     try:
-        config = build_config(
-            seed=seed,
-            e_r_deg_per_m=e_r,
-            e_t=e_t,
-            k_theta_deg2_per_m=k_theta,
-            k_rho_m=k_rho,
-            time_scale=time_scale,
-            faults=fault or [],
+        facts = robot_facts(protocol)
+        hooks = fake_hooks(protocol)
+        if hooks is None or not hooks.emulator:
+            raise InitError(f"the {protocol} backend declares no fake robot to emulate")
+        serve = hooks.emulator_function()
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--robot") from exc
+    if baud is not None and not facts.speaks(baud):
+        raise typer.BadParameter(
+            f"the {facts.label} speaks {facts.rates_text()} baud, got {baud}", param_hint="--baud"
         )
+    options = EmulateOptions(
+        seed=seed,
+        paper=(e_r, e_t, k_theta, k_rho),
+        time_scale=hooks.emulate_time_scale if time_scale is None else time_scale,
+        baud=facts.default_baud if baud is None else baud,
+        pacing=pacing,
+        faults=tuple(fault or ()),
+        truth_socket=truth_socket,
+    )
+    try:
+        serve(options)
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
-    run_emulator(config, baud=baud, pacing=pacing, truth_socket=truth_socket)
-
-
-def _emulate_create2(
-    seed: int | None,
-    paper: tuple[float, float, float, float],
-    time_scale: float,
-    baud: int,
-    pacing: bool,
-    fault: list[str] | None,
-    truth_socket: str | None,
-) -> None:
-    """``--robot create2``: the fake Create 2 (fakes/create2/), same two lines
-    and truth socket."""
-    from fakes.create2.config import build_config as build_create2
-    from fakes.create2.run import run_emulator as run_create2
-    from odohil.science.parameters import ErrorParameters
-
-    try:
-        config = build_create2(
-            seed=seed,
-            params=ErrorParameters.from_paper_units(*paper),
-            time_scale=time_scale,
-            baud=baud,
-            faults=fault or [],
-        )
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc)) from exc
-    run_create2(config, pacing=pacing, truth_socket=truth_socket)
 
 
 SOCKET_PATH_MAX = 107

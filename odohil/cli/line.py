@@ -14,7 +14,7 @@ from typing import Any
 
 from odohil.errors import InitError, ParameterError
 from odohil.science.robot_description import RobotDescription, RobotSettings
-from odohil.session.robots import fake_hooks, fake_url_schemes, find_backend
+from odohil.session.robots import check_baud, fake_hooks, fake_url_schemes, robot_facts
 
 
 @dataclass(frozen=True)
@@ -66,8 +66,7 @@ def resolve_line(
 
     Raises:
         ParameterError: no port anywhere (names --port and ``[serial] port``),
-            or a baud the backend does not speak (its ``baud_rates``, when it
-            lists them).
+            or a baud the backend does not speak (its facts' ``baud_rates``).
         RobotDescriptionError: the robot description names no installed backend.
     """
     serial = description.serial
@@ -87,24 +86,19 @@ def resolve_line(
             f"no port: give --port (a device, pty or pyserial URL) or set port in the "
             f"[serial] table of {robot_path}"
         )
-    backend = find_backend(description.robot.protocol)
+    facts = robot_facts(description.robot.protocol)
     found_baud = _first(
         iter(
             [
                 (baud, "--baud"),
                 (old.get("baud"), "the session's journal"),
                 (serial.baud if "baud" in serial.given else None, where),
-                (backend.default_baud, f"{description.robot.protocol} default"),
+                (facts.default_baud, f"{description.robot.protocol} default"),
             ]
         )
     )
     assert found_baud is not None
-    rates = getattr(backend, "baud_rates", None)  # checked before anything is sent
-    if rates is not None and int(found_baud[0]) not in rates:
-        raise ParameterError(
-            f"baud {found_baud[0]} ({found_baud[1]}) is not one {description.robot.protocol} "
-            f"speaks: give one of {', '.join(map(str, rates))}"
-        )
+    check_baud(description.robot.protocol, int(found_baud[0]), found_baud[1])  # before sending
     return Line(
         description.robot.protocol,
         str(found_port[0]),

@@ -1,7 +1,7 @@
 """``--robot``: a robot description file, or the name of a built-in one.
 
 The built-in descriptions are the TOML files shipped in the ``odohil.robots``
-package (``nomad150``, ``create2``). A file of that name wins over a built-in
+package (one per robot backend: ``nomad150``, ``create2``). A file of that name wins over a built-in
 one; anything else is a usage error (exit 2) naming the option and the names.
 """
 
@@ -16,18 +16,21 @@ from odohil.errors import OdohilError
 from odohil.session.robot_file import load_robot_description
 
 BUILTIN_PACKAGE = "odohil.robots"
-ROBOT_HELP = "Robot description (TOML file), or a built-in one: nomad150, create2."
 
 
 def builtin_names() -> tuple[str, ...]:
-    """The built-in descriptions' names, sorted."""
+    """The built-in descriptions' names, sorted (the package's top-level
+    ``*.toml`` files; data sets' robots in its ``datasets/`` are not ``--robot``s)."""
     return tuple(
         sorted(
             entry.name.removesuffix(".toml")
             for entry in files(BUILTIN_PACKAGE).iterdir()
-            if entry.name.endswith(".toml")
+            if entry.name.endswith(".toml") and entry.is_file()
         )
     )
+
+
+ROBOT_HELP = f"Robot description (TOML file), or a built-in one: {', '.join(builtin_names())}."
 
 
 def builtin_path(name: str) -> Path:

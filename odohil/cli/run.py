@@ -112,7 +112,7 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     """
     register_fake_urls(line.port)
     robot = open_robot(line.protocol, line.port, line.baud, line.robot)
-    transport = getattr(robot, "transport", None)
+    transport = robot.transport
     truth: Any = None
     try:
         if truth_socket:

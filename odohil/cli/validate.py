@@ -227,7 +227,7 @@ def _drive_or_reload(
         raise ParameterError(
             "--measure is needed to drive: `fake`, `tcp://HOST:PORT` or a trial file (CSV)"
         )
-    plan = check_session_plan(Plan.of([(vpath.design, trials)]))
+    plan = check_session_plan(Plan.of([(vpath.design, trials)]), description.robot.protocol)
     option = parse_measure(measure)
     if option.floor_marks:  # the tape's cross distances must tell the designs apart
         refuse_unredundant(description, plan, console)

@@ -61,7 +61,7 @@ from odohil.errors import (
 from odohil.science.estimators import EstimateResult
 from odohil.science.planner import DEFAULT_MAX_LEG_M
 from odohil.science.pose_selection import check_redundancy
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     SessionEngine,
@@ -87,6 +87,7 @@ from odohil.session.preflight import (
 from odohil.session.robot import Robot
 from odohil.session.robot_file import load_robot_description, read_robot_toml
 from odohil.session.robots import open_robot
+from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext
 from odohil.session.start_pose import StartPose, pose_text, sample_pose
@@ -359,8 +360,9 @@ def _prepare(
         _fail(console, Check("robot description", False, str(exc)))
     console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))
     try:
-        plan = check_session_plan(  # wire range, caps; the robot's default variant
-            parse_plan(plan_text or DEFAULT_PLAN, default_variant(description))
+        plan = check_session_plan(  # the robot's leg limits, caps; its default variant
+            parse_plan(plan_text or DEFAULT_PLAN, default_variant(description)),
+            description.robot.protocol,
         )
         check_turns(plan, description, allow_turns)
     except OdohilError as exc:

@@ -60,6 +60,9 @@ from odohil.science.simulator import (
 
 TURN_FREE_VARIANT: Variant = "reverse"
 """The design variant for robots whose in-place turns carry error."""
+NOMINAL_WHEEL_BASE_M = 0.235
+"""The wheel base :class:`DiffDriveErrors` assumes when given none, m (a
+small indoor robot's; simulations of a particular robot pass its own)."""
 
 
 @dataclass(frozen=True)
@@ -75,12 +78,14 @@ class DiffDriveGeometry:
             constants give the two wheels apart (``wheel_diameter_m = [left,
             right]`` in a robot description), m; None: the same as the left.
 
-    Defaults: the iRobot Create 2 (OI specification p.5, p.31).
+    No defaults: a robot's nominal constants are its backend's
+    (``RobotFacts.drive``, e.g. odohil/driver/create2/facts.py) or its
+    description's.
     """
 
-    counts_per_rev: float = 508.8
-    wheel_diameter_m: float = 0.072
-    wheel_base_m: float = 0.235
+    counts_per_rev: float
+    wheel_diameter_m: float
+    wheel_base_m: float
     right_wheel_diameter_m: float | None = None
 
     def __post_init__(self) -> None:
@@ -160,7 +165,7 @@ class DiffDriveErrors:
     k_theta: float = 0.0
     k_rho: float = 0.0
     k_spin: float = 0.0
-    wheel_base_m: float = DiffDriveGeometry().wheel_base_m
+    wheel_base_m: float = NOMINAL_WHEEL_BASE_M
 
     def __post_init__(self) -> None:
         for name in ("left_scale", "right_scale", "base_scale"):
@@ -200,7 +205,7 @@ class DiffDriveErrors:
         *,
         turn_scale: float = 0.0,
         k_spin: float = 0.0,
-        wheel_base_m: float = DiffDriveGeometry().wheel_base_m,
+        wheel_base_m: float = NOMINAL_WHEEL_BASE_M,
     ) -> DiffDriveErrors:
         """The wheel errors that give ``params`` on straight legs and
         ``turn_scale`` (e_turn) on spins (the inverse of the mapping above)."""

@@ -16,16 +16,6 @@ from dataclasses import dataclass
 from odohil import units
 from odohil.errors import ParameterError
 
-WIRE_METRES_PER_UNIT = 0.00254
-"""One wire unit of ``pr``: 0.1 inch, metres."""
-S16_WIRE_MAX = 0x7FFF
-"""Largest magnitude of a signed 16-bit wire value."""
-WIRE_MAX_LEG_M = S16_WIRE_MAX * WIRE_METRES_PER_UNIT
-"""Longest leg one ``pr`` can carry: 32767 x 0.1 in = 83.228 m."""
-MIN_LEG_M = 0.05
-"""Shortest leg a session drives, m: 20 wire units, so that the wire's 2.54 mm
-resolution is at most 5 % of the leg."""
-
 K_MAX = 500.0
 """Most forth-and-back pairs of one design (1000 legs)."""
 L_MAX_M = 100.0
@@ -89,7 +79,7 @@ RANGES: dict[str, Range] = {
     "budget_m": Range(0.01, 100_000.0, "m"),
     "max_trials": Range(1, 10_000, "trials", integer=True),
     "max_designs": Range(1, 3, "designs", integer=True),
-    "max_leg_m": Range(MIN_LEG_M, WIRE_MAX_LEG_M, "m"),
+    "max_leg_m": Range(1e-3, L_MAX_M, "m"),
     "sigma_m": Range(1e-6, 1.0, "m"),
     "pose_sigma_m": Range(1e-6, 1.0, "m"),
     "pose_sigma_rad": Range(1e-6, 1.0, "rad"),
@@ -110,8 +100,7 @@ RANGES: dict[str, Range] = {
     # the link and the fake robot
     "baud": Range(50, 4_000_000, "bit/s", integer=True),
     "time_scale": Range(0.01, 1e6),
-    # a session plan (what one pr can carry)
-    "plan_l": Range(MIN_LEG_M, WIRE_MAX_LEG_M, "m"),
+    # a session plan (its legs: the robot's own limits, RobotFacts.check_leg)
     "plan_n": Range(1, 10_000, "trials", integer=True),
 }
 """Every numeric input's accepted range, by name (see docs/limits.md)."""
@@ -125,15 +114,6 @@ def check(name: str, value: float, label: str | None = None) -> float:
     """``value`` checked against ``RANGES[name]``; the message names ``label``
     (default ``name``). Raises ParameterError."""
     return RANGES[name].check(label or name, value)
-
-
-def check_wire_leg(l_m: float, label: str = "l") -> float:
-    """A leg length one ``pr`` carries with enough resolution: within
-    [MIN_LEG_M, WIRE_MAX_LEG_M]. Raises ParameterError naming ``label``.
-
-    (The driver's own wire-range check, when it exists, is the final word;
-    this is the pre-flight check made before any session or port.)"""
-    return RANGES["plan_l"].check(label, l_m)
 
 
 def check_simulation_work(n_trials: int, segments_per_trial: float) -> None:

@@ -14,17 +14,16 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
                              # standard deviations (x m, y m, theta rad), world axes
     [robot]                  # optional: which driver backend speaks to it
     protocol = "nomad150"    # an odohil.robots entry point (default nomad150)
-    # differential drives (the create2 backend, logs with wheel counts; defaults: the
-    # Create 2's, docs/create2.md):
-    # counts_per_rev = 508.8, wheel_diameter_m = 0.072 (or [left, right]),
-    # wheel_base_m = 0.235,
-    # full_mode = false
+    # differential drives (the create2 backend, logs with wheel counts; defaults:
+    # the backend's nominal constants, docs/create2.md): counts_per_rev,
+    # wheel_diameter_m (or [left, right]), wheel_base_m; full_mode (create2)
     # turns_exact: whether in-place turns carry no error (a synchronous drive);
-    # default true for nomad150, false for any other protocol (a differential
-    # drive's spins do): the planner, wizard and run then use turn-free designs
+    # default: the backend's (false for a protocol with no installed backend:
+    # a differential drive's spins carry error), so that the planner, wizard
+    # and run use turn-free designs
     [serial]                 # optional, for the driver
     port = "/dev/ttyUSB0"    # or any pyserial URL
-    baud = 38400             # nomad150: 4800, 9600, 19200 or 38400
+    baud = 9600              # one of the backend's line speeds (default: its own)
     timeout_s = 1.0
     [priors]                 # optional: belief in the four parameters before any trial
     E_R_deg_per_m = -0.202   # (paper units; defaults: the paper's Nomad 150 values)
@@ -39,12 +38,19 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
 The priors only steer the choice among the poses the floor marks allow and the
 operator-slip check (odohil/science/pose_selection.py); they never enter the
 estimate.
+
+What depends on the robot (its line speeds, its ``[robot]`` keys, its nominal
+constants, whether its turns are exact) comes from its backend's
+:class:`~odohil.science.robot_facts.RobotFacts`, handed to the parser as a
+value (``facts``; the session's ``parse_description`` hands the registry's,
+odohil/session/robots.py); this module names no robot.
 """
 
 from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -56,11 +62,10 @@ from odohil.errors import ParameterError, RobotDescriptionError
 from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, PARAMETER_NAMES, ErrorParameters
+from odohil.science.robot_facts import DRIVE_KEYS, RobotFacts
 
 FloatArray = npt.NDArray[np.float64]
 
-BAUD_RATES: tuple[int, ...] = (4800, 9600, 19200, 38400)
-DEFAULT_BAUD = 38400
 DEFAULT_TIMEOUT_S = 1.0
 MAX_CROSS_PAIRS = 2
 MIN_SCREW_SEPARATION_M = 0.01
@@ -75,27 +80,18 @@ values of the centred positions); the pose from such marks is ill-conditioned.""
 _TOP_KEYS = ("robot", "screws", "measurement", "serial", "priors", "floor")
 DEFAULT_PROTOCOL = "nomad150"
 """The robot protocol (driver backend) when ``[robot] protocol`` is absent."""
-_ROBOT_KEYS = (
-    "protocol",
-    "counts_per_rev",
-    "wheel_diameter_m",
-    "wheel_base_m",
-    "full_mode",
-    "turns_exact",
-)
-EXACT_TURN_PROTOCOLS: tuple[str, ...] = ("nomad150",)
-"""Protocols whose robots turn in place without error (synchronous drives): the
-default of ``[robot] turns_exact``. Any other protocol defaults to turns that
-carry error, so that an unknown robot is calibrated with turn-free designs."""
+_COMMON_ROBOT_KEYS = ("protocol", "turns_exact")
+"""``[robot]`` keys of every description; the others are the backend's
+(``RobotFacts.robot_keys``), or, with no installed backend, these:"""
+_ANY_ROBOT_KEYS = (*_COMMON_ROBOT_KEYS, *DRIVE_KEYS, "full_mode")
+FactsLookup = Callable[[str], RobotFacts | None]
+"""The facts of the backend of a protocol name (None: no such backend installed)."""
 _DRIVE_RANGES = {
     "counts_per_rev": (1.0, 1e6),
     "wheel_diameter_m": (0.005, 2.0),
     "wheel_base_m": (0.02, 5.0),
 }
 """Accepted ranges of a differential drive's kinematic constants (``[robot]``)."""
-PROTOCOL_BAUD_RATES: dict[str, tuple[int, ...]] = {"nomad150": BAUD_RATES}
-"""Line speeds a protocol accepts, checked when the description is read; a
-protocol not listed takes any positive integer (its backend checks it)."""
 _FLOOR_KEYS = ("length_m",)
 _PRIOR_KEYS = (
     "E_R_deg_per_m",
@@ -140,10 +136,11 @@ class RobotSettings:
     """
 
     protocol: str = DEFAULT_PROTOCOL
-    drive: DiffDriveGeometry = field(default_factory=DiffDriveGeometry)
+    drive: DiffDriveGeometry | None = None
     """A differential drive's counts per revolution, wheel diameter and wheel
     base (``counts_per_rev``, ``wheel_diameter_m``, ``wheel_base_m``; defaults:
-    the iRobot Create 2's); backends of other drives ignore them."""
+    the backend's nominal constants, ``RobotFacts.drive``); None when neither
+    the description nor the backend gives them (not a differential drive)."""
     full_mode: bool = False
     """``full_mode``: the Create 2 drives in the OI's Full mode (no safety stops)."""
     turns_exact: bool = True
@@ -158,14 +155,15 @@ class SerialSettings:
 
     Attributes:
         port: device path or any pyserial URL; None when not configured.
-        baud: line speed in baud (for nomad150 one of :data:`BAUD_RATES`).
+        baud: line speed in baud (one of the backend's ``baud_rates``); None:
+            the backend's default.
         timeout_s: reply timeout in seconds.
         given: the keys the file gave (the others are defaults), so that a
             command can say where each value in force came from.
     """
 
     port: str | None = None
-    baud: int = DEFAULT_BAUD
+    baud: int | None = None
     timeout_s: float = DEFAULT_TIMEOUT_S
     given: frozenset[str] = field(default=frozenset(), compare=False)
 
@@ -239,7 +237,7 @@ class RobotDescription:
             )
         _in_range("sigma_m", "measurement.sigma_m", self.sigma_m)
         _check_cross_pairs(self.cross_pairs, tuple(s.name for s in self.screws))
-        _check_serial(self.serial, self.robot.protocol)
+        _check_serial(self.serial)
         if self.pose_sigma is not None:
             _check_pose_sigma(self.pose_sigma)
         floor = self.floor_length_m
@@ -263,8 +261,18 @@ class RobotDescription:
         return tuple((names.index(i), names.index(j)) for i, j in self.cross_pairs)
 
 
-def parse_robot_description(text: str, source: str = "robot description") -> RobotDescription:
+def parse_robot_description(
+    text: str, source: str = "robot description", facts: FactsLookup | None = None
+) -> RobotDescription:
     """Parse and validate a robot description from TOML text.
+
+    ``facts`` gives the backend's facts of the description's protocol
+    (odohil/session/robots.py ``parse_description`` passes the registry's);
+    with them the description is checked against the robot: ``[serial] baud``
+    one of its line speeds, only its ``[robot]`` keys, its nominal constants
+    and ``turns_exact`` as defaults. Without (None, or no such backend): any
+    positive baud, every ``[robot]`` key, no nominal constants, turns that
+    carry error.
 
     Raises:
         RobotDescriptionError: the text is not TOML, or a key is unknown,
@@ -276,14 +284,14 @@ def parse_robot_description(text: str, source: str = "robot description") -> Rob
     except tomllib.TOMLDecodeError as exc:
         raise RobotDescriptionError(f"{source}: not valid TOML: {exc}") from exc
     try:
-        return _from_mapping(data)
+        return _from_mapping(data, facts)
     except RobotDescriptionError as exc:
         raise RobotDescriptionError(f"{source}: {exc}") from None
 
 
-def _from_mapping(data: dict[str, Any]) -> RobotDescription:
+def _from_mapping(data: dict[str, Any], lookup: FactsLookup | None) -> RobotDescription:
     _reject_unknown(data, _TOP_KEYS, "")
-    robot = _robot(_table(data, "robot", required=False))
+    robot, facts = _robot(_table(data, "robot", required=False), lookup)
     screws_table = _table(data, "screws", required=True)
     screws = tuple(_screw(name, value, f"screws.{name}") for name, value in screws_table.items())
     measurement = _table(data, "measurement", required=True)
@@ -295,7 +303,7 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
     pose_sigma = _pose_sigma(measurement["pose_sigma"]) if "pose_sigma" in measurement else None
     serial_table = _table(data, "serial", required=False)
     _reject_unknown(serial_table, _SERIAL_KEYS, "serial.")
-    serial = _serial(serial_table)
+    serial = _serial(serial_table, facts)
     floor_table = _table(data, "floor", required=False)
     _reject_unknown(floor_table, _FLOOR_KEYS, "floor.")
     floor = floor_table.get("length_m")
@@ -312,17 +320,28 @@ def _from_mapping(data: dict[str, Any]) -> RobotDescription:
     )
 
 
-def _robot(table: dict[str, Any]) -> RobotSettings:
-    _reject_unknown(table, _ROBOT_KEYS, "robot.")
+def _robot(
+    table: dict[str, Any], lookup: FactsLookup | None
+) -> tuple[RobotSettings, RobotFacts | None]:
     protocol = table.get("protocol", DEFAULT_PROTOCOL)
     if not isinstance(protocol, str) or not protocol.strip():
         raise RobotDescriptionError(
             f"robot.protocol must be a backend name like {DEFAULT_PROTOCOL!r}, got {protocol!r}"
         )
-    nominal = DiffDriveGeometry()
+    protocol = protocol.strip()
+    facts = None if lookup is None else lookup(protocol)
+    known = _ANY_ROBOT_KEYS if facts is None else (*_COMMON_ROBOT_KEYS, *facts.robot_keys)
+    _reject_unknown(table, known, "robot.")
+    nominal = None if facts is None else facts.drive
     constants: dict[str, float] = {}
     for key, (low, high) in _DRIVE_RANGES.items():
-        given = table.get(key, getattr(nominal, key))
+        if key not in table:
+            if nominal is not None:
+                constants[key] = getattr(nominal, key)
+                if key == "wheel_diameter_m" and nominal.right_wheel_diameter_m is not None:
+                    constants["right_wheel_diameter_m"] = nominal.right_wheel_diameter_m
+            continue
+        given = table[key]
         values = [given]
         if key == "wheel_diameter_m" and isinstance(given, list):
             if len(given) != 2:
@@ -339,18 +358,26 @@ def _robot(table: dict[str, Any]) -> RobotSettings:
                 constants[key] = value
             else:
                 constants["right_wheel_diameter_m"] = value
+    drive = None
+    if constants:
+        missing = [key for key in DRIVE_KEYS if key not in constants]
+        if missing:
+            raise RobotDescriptionError(
+                f"robot.{missing[0]} is missing: a differential drive needs "
+                f"{', '.join('robot.' + k for k in DRIVE_KEYS)} (the {protocol} backend "
+                "gives no nominal value)"
+            )
+        drive = DiffDriveGeometry(**constants)
     full_mode = table.get("full_mode", False)
     if not isinstance(full_mode, bool):
         raise RobotDescriptionError(f"robot.full_mode must be true or false, got {full_mode!r}")
-    turns_exact = table.get("turns_exact", protocol.strip() in EXACT_TURN_PROTOCOLS)
+    turns_exact = table.get("turns_exact", False if facts is None else facts.turns_exact)
     if not isinstance(turns_exact, bool):
         raise RobotDescriptionError(f"robot.turns_exact must be true or false, got {turns_exact!r}")
-    return RobotSettings(
-        protocol=protocol.strip(),
-        drive=DiffDriveGeometry(**constants),
-        full_mode=full_mode,
-        turns_exact=turns_exact,
+    settings = RobotSettings(
+        protocol=protocol, drive=drive, full_mode=full_mode, turns_exact=turns_exact
     )
+    return settings, facts
 
 
 def _priors(table: dict[str, Any]) -> ParameterPriors:
@@ -445,13 +472,18 @@ def _check_pose_sigma(sigma: tuple[float, float, float]) -> None:
     _in_range("pose_sigma_rad", f"{key}[2] (sigma_theta_rad)", sigma[2])
 
 
-def _serial(table: dict[str, Any]) -> SerialSettings:
+def _serial(table: dict[str, Any], facts: RobotFacts | None) -> SerialSettings:
     port = table.get("port")
     if port is not None and (not isinstance(port, str) or not port):
         raise RobotDescriptionError(f"serial.port must be a non-empty string, got {port!r}")
-    baud_value = table.get("baud", DEFAULT_BAUD)
-    if isinstance(baud_value, bool) or not isinstance(baud_value, int):
+    baud_value = table.get("baud", None if facts is None else facts.default_baud)
+    if baud_value is not None and (isinstance(baud_value, bool) or not isinstance(baud_value, int)):
         raise RobotDescriptionError(f"serial.baud must be an integer, got {baud_value!r}")
+    if facts is not None and baud_value is not None and not facts.speaks(baud_value):
+        raise RobotDescriptionError(
+            f"serial.baud must be one of {list(facts.baud_rates)} for {facts.name}, "
+            f"got {baud_value!r}"
+        )
     timeout_s = _number(table.get("timeout_s", DEFAULT_TIMEOUT_S), "serial.timeout_s")
     return SerialSettings(port=port, baud=baud_value, timeout_s=timeout_s, given=frozenset(table))
 
@@ -510,13 +542,8 @@ def _check_cross_pairs(pairs: tuple[tuple[str, str], ...], names: tuple[str, ...
         raise RobotDescriptionError(f"{key}: the same pair is listed twice: {list(pairs)}")
 
 
-def _check_serial(serial: SerialSettings, protocol: str) -> None:
-    rates = PROTOCOL_BAUD_RATES.get(protocol)
-    if rates is not None and serial.baud not in rates:
-        raise RobotDescriptionError(
-            f"serial.baud must be one of {list(rates)} for {protocol}, got {serial.baud!r}"
-        )
-    if serial.baud <= 0:
+def _check_serial(serial: SerialSettings) -> None:
+    if serial.baud is not None and serial.baud <= 0:
         raise RobotDescriptionError(f"serial.baud must be a positive integer, got {serial.baud!r}")
     if not math.isfinite(serial.timeout_s) or serial.timeout_s <= 0:
         raise RobotDescriptionError(

@@ -64,7 +64,7 @@ from odohil.errors import (
 from odohil.science.estimators import EstimateResult, IncrementalEstimator, Observation
 from odohil.science.floor_marks import PosePrior
 from odohil.science.pose_selection import ParameterBelief, predictive_pose
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.session.events import (
     Estimate,
     Event,
@@ -88,6 +88,7 @@ from odohil.session.plan import Plan
 from odohil.session.plausibility import far_window, judge
 from odohil.session.pose_source import MeasuredPose, PoseSource, TrialContext
 from odohil.session.robot import Robot, SampleCallback
+from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.signals import (
     SignalReceived,
     motion_signals_raise,

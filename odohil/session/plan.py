@@ -29,8 +29,9 @@ from typing import Any
 
 from odohil import units
 from odohil.errors import ParameterError
-from odohil.science.limits import RANGES, check_wire_leg
+from odohil.science.limits import RANGES
 from odohil.science.paths import VARIANTS, Design, FloorChoreography, floor_choreography
+from odohil.session.robots import check_leg
 
 _KEYS = ("k", "l", "n", "variant")
 
@@ -162,17 +163,19 @@ class Plan:
         return cls(tuple(PlanItem(design, n) for design, n in designs))
 
 
-def check_session_plan(plan: Plan) -> Plan:
-    """``plan`` if a session can drive it: every leg within what one ``pr``
-    carries with enough resolution (:func:`odohil.science.limits.check_wire_leg`,
-    [0.05, 83.2] m) and every design's trial count within
-    ``RANGES["plan_n"]``; else ParameterError naming the design and the range.
+def check_session_plan(plan: Plan, protocol: str | None) -> Plan:
+    """``plan`` if a session can drive it on the robot of ``protocol``: every
+    leg within the legs its backend drives (its facts' ``min_leg_m`` and
+    ``max_leg_m``, odohil/session/robots.py ``check_leg``; None, or a protocol
+    with no installed backend: the science caps) and every design's trial
+    count within ``RANGES["plan_n"]``; else ParameterError naming the design
+    and the range.
 
     Made before any session is created or any port opened.
     """
     for number, item in enumerate(plan.items, start=1):
         try:
-            check_wire_leg(item.design.l_m, "l")
+            check_leg(protocol, item.design.l_m, "l")
             RANGES["plan_n"].check("n", item.n_trials)
         except ParameterError as exc:
             raise ParameterError(f"plan design {number} ({item.to_text()}): {exc}") from None

@@ -16,10 +16,11 @@ from odohil import units
 from odohil.errors import OdohilError, ParameterError, TrialFileError
 from odohil.science.estimators.checks import plan_problems
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.session.floor_space import check_floor
 from odohil.session.plan import Plan, check_session_plan, parse_plan
 from odohil.session.robot_file import read_robot_toml
+from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.trial_files import read_trials
 
 
@@ -53,7 +54,9 @@ def check_new_session(
     toml = read_robot_toml(robot_file, what="--robot: robot description")
     description = parse_robot_description(toml, source=str(robot_file))
     try:
-        plan = check_session_plan(parse_plan(plan_text, default_variant(description)))
+        plan = check_session_plan(
+            parse_plan(plan_text, default_variant(description)), description.robot.protocol
+        )
     except ParameterError as exc:
         raise ParameterError(f"--plan: {exc}") from None
     check_turns(plan, description, allow_turns)

@@ -30,6 +30,12 @@ class Robot(Protocol):
         """The port URL it is connected through."""
         ...
 
+    @property
+    def transport(self) -> object:
+        """The open pyserial port it talks through (a backend's in-process
+        fake port carries the fake's true pose: ``truth()``)."""
+        ...
+
     def __enter__(self) -> Self: ...
 
     def __exit__(

@@ -5,8 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from odohil.errors import OdohilError, RobotDescriptionError
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.session.bounded_io import MIB, read_file_text
+from odohil.session.robots import parse_description as parse_robot_description
 
 MAX_DESCRIPTION_BYTES = 1 * MIB
 """Largest robot description file, bytes (a real one is about 1 KiB)."""

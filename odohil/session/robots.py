@@ -3,30 +3,39 @@
 The robot description's ``[robot] protocol`` names the backend (its default
 is :data:`odohil.science.robot_description.DEFAULT_PROTOCOL`), the way
 python-can picks a bus by its interface name; the port URL says where it is.
-A backend is a class (or any object) with a ``default_baud`` (int), optionally
-``baud_rates`` (the line speeds it accepts, checked before anything is sent),
-and an ``open(url, baud, robot)`` that returns a connected ``Robot``
-(odohil/session/robot.py); ``robot`` is the description's ``[robot]`` table
-(:class:`RobotSettings`: its constants), which a backend uses or ignores.
+A backend is a class (or any object) with ``facts`` (its
+:class:`~odohil.science.robot_facts.RobotFacts`: line speeds and default,
+leg limits, whether its turns are exact, its ``[robot]`` keys and nominal
+constants, its fake robot) and an ``open(url, baud, robot)`` that returns a
+connected ``Robot`` (odohil/session/robot.py); ``robot`` is the description's
+``[robot]`` table (:class:`RobotSettings`), which a backend uses or ignores.
 Another package adds a robot by declaring an entry point in the group;
-nothing here names one.
+nothing here names one, and nothing outside the backend knows its numbers:
+the session and the CLI read them here (:func:`robot_facts`).
 
-A backend with a fake robot for tests and demos declares it (optional):
-``fake_url_scheme`` (the pyserial URL scheme its in-process fake serves,
-whose open port carries the true pose) and ``fake_truth_client``
-(``"module:Class"`` of the client that reads a fake process's truth socket).
-:func:`fake_hooks` is the one place that reads them.
+A backend with a fake robot for tests and demos declares it in
+``facts.fake`` (:class:`~odohil.science.robot_facts.FakeFacts`): the pyserial
+URL scheme its in-process fake serves (whose open port carries the true pose),
+the client of a fake process's truth socket, and the emulator's and demo's
+time scales. :func:`fake_hooks` is the one place that reads them.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import Any, Protocol, cast
 
-from odohil.errors import InitError, RobotDescriptionError
-from odohil.science.robot_description import RobotSettings
+from odohil.errors import InitError, ParameterError, RobotDescriptionError
+from odohil.science.limits import RANGES
+from odohil.science.robot_description import (
+    RobotDescription,
+    RobotSettings,
+    parse_robot_description,
+)
+from odohil.science.robot_facts import FakeFacts, RobotFacts
 from odohil.session.robot import Robot
 
 ENTRY_POINT_GROUP = "odohil.robots"
@@ -35,8 +44,9 @@ ENTRY_POINT_GROUP = "odohil.robots"
 class RobotBackend(Protocol):
     """What an ``odohil.robots`` entry point loads."""
 
-    default_baud: int
-    """The line speed used when neither the command line nor the file gives one."""
+    facts: RobotFacts
+    """What the rest of odohil may know about the robot (line speeds, leg
+    limits, turns, ``[robot]`` keys, its fake)."""
 
     def open(self, url: str, baud: int | None = None, robot: RobotSettings | None = None) -> Robot:
         """Connect to the robot at ``url`` and check that it answers; ``robot``:
@@ -80,48 +90,105 @@ def open_robot(
     return find_backend(protocol).open(url, baud, robot)
 
 
-@dataclass(frozen=True)
-class FakeHooks:
-    """What a backend declares about its fake robot.
+def robot_facts(protocol: str) -> RobotFacts:
+    """The facts the backend registered as ``protocol`` declares.
 
-    Attributes:
-        url_scheme: the pyserial URL scheme of its in-process fake (e.g.
-            ``fakerobot:``); a port of that scheme carries its own truth.
-        truth_client: ``"module:Class"`` of the client of a fake process's
-            truth socket (constructed with the socket path; ``open()``,
-            ``close()`` and ``true_pose()``).
+    Raises:
+        RobotDescriptionError, InitError: as :func:`find_backend`; InitError
+            also when what it declares is not a RobotFacts.
     """
+    facts = find_backend(protocol).facts
+    if not isinstance(facts, RobotFacts):
+        raise InitError(f"robot backend {protocol!r} declares no RobotFacts (got {facts!r})")
+    return facts
 
-    url_scheme: str
-    truth_client: str
+
+def known_facts(protocol: str) -> RobotFacts | None:
+    """The facts of the backend ``protocol``; None when no backend of that
+    name is installed (a recorded robot: a description read for its
+    constants only). InitError when it is installed but cannot load."""
+    if not entry_points(group=ENTRY_POINT_GROUP, name=protocol):
+        return None
+    return robot_facts(protocol)
+
+
+def parse_description(text: str, source: str = "robot description") -> RobotDescription:
+    """A robot description parsed and checked against its backend's facts
+    (:func:`odohil.science.robot_description.parse_robot_description` with
+    :func:`known_facts`): ``[serial] baud`` one of its line speeds, only the
+    ``[robot]`` keys it reads, its nominal constants and its ``turns_exact``
+    as the defaults. RobotDescriptionError naming the key otherwise."""
+    return parse_robot_description(text, source, facts=known_facts)
+
+
+def check_leg(protocol: str | None, l_m: float, label: str = "l") -> float:
+    """``l_m`` if the robot of ``protocol`` drives a leg that long (its
+    facts' limits; with no installed backend, or None, the science caps:
+    ``RANGES["l"]``); else ParameterError naming ``label`` and the range."""
+    facts = None if protocol is None else known_facts(protocol)
+    if facts is None:
+        return RANGES["l"].check(label, l_m)
+    return facts.check_leg(l_m, label)
+
+
+def check_baud(protocol: str, baud: int, origin: str) -> int:
+    """``baud`` if the backend ``protocol`` speaks it (checked before
+    anything is sent), else ParameterError naming where it came from and the
+    line speeds it speaks."""
+    facts = robot_facts(protocol)
+    if not facts.speaks(baud):
+        raise ParameterError(
+            f"baud {baud} ({origin}) is not one {protocol} speaks: give one of {facts.rates_text()}"
+        )
+    return baud
+
+
+def _load(reference: str, what: str) -> Any:
+    """The object ``"module:name"`` names (imported now); InitError if it cannot load."""
+    module, _, name = reference.partition(":")
+    try:
+        return getattr(importlib.import_module(module), name)
+    except (ImportError, AttributeError, ValueError) as exc:
+        raise InitError(f"the fake's {what} {reference} cannot load: {exc}") from exc
+
+
+@dataclass(frozen=True)
+class FakeHooks(FakeFacts):
+    """What a backend declares about its fake robot (its
+    :class:`~odohil.science.robot_facts.FakeFacts`), with the loaders of the
+    code it names (the fakes are imported only when asked for)."""
 
     def truth_client_class(self) -> Any:
-        """The truth client's class (imported now).
+        """The truth client's class (constructed with the socket path;
+        ``open()``, ``close()`` and ``true_pose()``).
 
         Raises:
             InitError: it cannot be imported.
         """
-        module, _, name = self.truth_client.partition(":")
-        try:
-            return getattr(importlib.import_module(module), name)
-        except (ImportError, AttributeError) as exc:
-            raise InitError(
-                f"the fake's truth client {self.truth_client} cannot load: {exc}"
-            ) from exc
+        return _load(self.truth_client, "truth client")
+
+    def emulator_function(self) -> Any:
+        """The function ``odohil emulate`` calls with a
+        ``fakes.launch.EmulateOptions`` to serve the fake on a pty.
+
+        Raises:
+            InitError: the backend names none, or it cannot be imported.
+        """
+        if not self.emulator:
+            raise InitError(f"the fake of {self.url_scheme} declares no emulator")
+        return _load(self.emulator, "emulator")
 
 
 def fake_hooks(protocol: str) -> FakeHooks | None:
     """The fake robot the backend ``protocol`` declares (None: it has none).
 
     Raises:
-        RobotDescriptionError, InitError: as :func:`find_backend`.
+        RobotDescriptionError, InitError: as :func:`robot_facts`.
     """
-    backend = find_backend(protocol)
-    scheme = getattr(backend, "fake_url_scheme", None)
-    client = getattr(backend, "fake_truth_client", None)
-    if not isinstance(scheme, str) or not isinstance(client, str):
+    fake = robot_facts(protocol).fake
+    if fake is None:
         return None
-    return FakeHooks(scheme, client)
+    return FakeHooks(**dataclasses.asdict(fake))
 
 
 def fake_url_schemes() -> tuple[str, ...]:

@@ -26,7 +26,7 @@ from odohil.errors import JournalError, OdohilError, ParameterError
 from odohil.science.estimators import Observation
 from odohil.science.limits import RANGES
 from odohil.science.paths import Design
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.session.events import (
     Estimate,
     Event,
@@ -52,6 +52,7 @@ from odohil.session.journal import Record, TornRecord, read_journal
 from odohil.session.mocap.stream import parse_tcp_url
 from odohil.session.plan import Plan, check_session_plan
 from odohil.session.pose_sources import OPERATOR, kind_names
+from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.trial_files import Trial, TrialSet
 
 FORMAT = 1
@@ -280,12 +281,13 @@ def validate_header(data: Mapping[str, Any], where: str = "session record") -> N
     def bad(member: str, what: str, value: Any) -> JournalError:
         return JournalError(f"{where}: {member} must be {what}, got {value!r}"[:500])
 
+    protocol = None
     if "robot_toml" in data:
         toml = data["robot_toml"]
         if not isinstance(toml, str):
             raise bad("robot_toml", "the robot description's TOML text", toml)
         try:
-            parse_robot_description(toml, "robot_toml")
+            protocol = parse_robot_description(toml, "robot_toml").robot.protocol
         except OdohilError as exc:
             raise JournalError(f"{where}: {exc}") from None
     robot_path = data.get("robot_path")
@@ -299,7 +301,7 @@ def validate_header(data: Mapping[str, Any], where: str = "session record") -> N
         if not isinstance(plan, dict):
             raise bad("plan", 'an object {"designs": [...]}', plan)
         try:
-            check_session_plan(Plan.from_json(plan))
+            check_session_plan(Plan.from_json(plan), protocol)
         except ParameterError as exc:
             raise JournalError(f"{where}: bad plan: {exc}") from None
     settings = data.get("settings", {})

@@ -11,12 +11,13 @@ from pathlib import Path
 from typing import Any
 
 from odohil.errors import ParameterError
-from odohil.science.robot_description import RobotDescription, parse_robot_description
+from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import ValidationResult
 from odohil.session.logs import ImportOptions
 from odohil.session.pose_kinds import TrialFileSettings
 from odohil.session.pose_sources import parse_measure
 from odohil.session.robot_file import read_robot_toml
+from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.state import description_of_header
 from odohil.session.validation import (
     Calibration,

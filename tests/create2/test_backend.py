@@ -11,8 +11,9 @@ from odohil.driver.odometry import DriveSettings
 from odohil.errors import RobotDescriptionError
 from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.paths import Design
-from odohil.science.robot_description import RobotSettings, parse_robot_description
+from odohil.science.robot_description import RobotSettings
 from odohil.session.robots import find_backend, open_robot
+from odohil.session.robots import parse_description as parse_robot_description
 
 fakes.register_url_handlers()
 
@@ -43,11 +44,11 @@ def test_robot_keys_default_to_the_create2_and_are_checked() -> None:
     assert given.drive == DiffDriveGeometry(512.0, 0.0725, 0.2351)
     assert given.full_mode is True
     with pytest.raises(RobotDescriptionError, match=r"robot\.wheel_base_m must be in \[0.02, 5\]"):
-        parse_robot_description(BASE + "[robot]\nwheel_base_m = 0\n")
+        parse_robot_description(BASE + "[robot]\nprotocol = 'create2'\nwheel_base_m = 0\n")
     with pytest.raises(RobotDescriptionError, match=r"robot\.full_mode must be true or false"):
-        parse_robot_description(BASE + "[robot]\nfull_mode = 1\n")
+        parse_robot_description(BASE + "[robot]\nprotocol = 'create2'\nfull_mode = 1\n")
     with pytest.raises(RobotDescriptionError, match=r"robot\.counts_per_rev"):
-        parse_robot_description(BASE + "[robot]\ncounts_per_rev = 'many'\n")
+        parse_robot_description(BASE + "[robot]\nprotocol = 'create2'\ncounts_per_rev = 'many'\n")
 
 
 def test_open_by_name_on_the_in_process_fake_drives_a_trial() -> None:
@@ -65,7 +66,7 @@ def test_open_by_name_on_the_in_process_fake_drives_a_trial() -> None:
 
 
 def test_open_with_the_description_settings() -> None:
-    settings = RobotSettings("create2", DiffDriveGeometry(wheel_diameter_m=0.0728), True)
+    settings = RobotSettings("create2", DiffDriveGeometry(508.8, 0.0728, 0.235), True)
     with Create2Robot.open("fakecreate2://?seed=2&time_scale=4", 115200, settings) as robot:
         assert robot.full_mode
         assert robot.geometry.wheel_diameter_m == 0.0728

@@ -129,7 +129,7 @@ def test_legs_through_the_encoder_wrap(connect: Connect, origin: str, backward: 
 
 
 def test_odometry_uses_the_description_constants(connect: Connect) -> None:
-    geometry = DiffDriveGeometry(wheel_diameter_m=0.0720 * 1.01)
+    geometry = DiffDriveGeometry(508.8, 0.0720 * 1.01, 0.235)
     process, robot = connect(geometry=geometry)
     robot.arm(SETTINGS)
     robot.zero()

@@ -17,9 +17,9 @@ from odohil.cli.robot_option import builtin_names, builtin_path
 from odohil.driver.create2.robot import Create2Robot
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.diff_drive import DiffDriveGeometry
-from odohil.science.robot_description import parse_robot_description
 from odohil.session.robot_file import load_robot_description
 from odohil.session.robots import open_robot
+from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.state import load_session
 
 fakes.register_url_handlers()

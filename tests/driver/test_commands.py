@@ -12,7 +12,7 @@ from odohil.driver.nomad.link import open_port
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.driver.nomad.sample import EncoderSample
 from odohil.errors import ConnectionFailedError, ParameterError
-from odohil.units import metres_to_wire
+from odohil.protocol.nomad.wire_units import metres_to_wire
 
 from .helpers import fake_robot
 

@@ -126,7 +126,7 @@ def test_legs_below_the_wire_resolution_are_refused_before_anything_moves(
     design: Design,
 ) -> None:
     with fake_robot("seed=1&time_scale=50") as fake:
-        with pytest.raises(ParameterError, match=r"25\.4 mm"):
+        with pytest.raises(ParameterError, match=r"50\.0 mm"):
             forth_and_back(fake.robot, design)
         with pytest.raises(ParameterError, match="rounds to 0"):
             fake.robot.move_relative(0.001, 0.0)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from fakes.nomad.process import EmulatorProcess
-from odohil import units
 from odohil.driver.nomad.motion import forth_and_back
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import DisconnectedError, OdohilTimeoutError
+from odohil.protocol.nomad import wire_units
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design
@@ -91,7 +91,7 @@ def test_repeated_forth_and_back_runs_drift_as_the_parameters_say() -> None:
             changes.append((c * dx + s * dy, -s * dx + c * dy, math.remainder(turned, math.tau)))
         assert not emu.truth().moving
     # the legs are realised in whole wire units: 394 x 0.1 in
-    commanded = Design(2, units.wire_to_metres(units.metres_to_wire(1.0)))
+    commanded = Design(2, wire_units.wire_to_metres(wire_units.metres_to_wire(1.0)))
     model = pose_moments(commanded.path(), params)
     data = np.array(changes)
     standard_errors = np.sqrt(np.diag(model.cov) / runs)

@@ -12,9 +12,9 @@ from odohil.science.robot_description import (
     RobotDescription,
     Screw,
     SerialSettings,
-    parse_robot_description,
 )
 from odohil.session.robot_file import load_robot_description
+from odohil.session.robots import parse_description as parse_robot_description
 
 EXAMPLE = """
 [screws]                 # positions in the robot frame (x forward, y left), metres

@@ -8,8 +8,8 @@ from typing import Any
 import numpy as np
 
 from fakes.nomad.body import RobotBody
-from odohil import units
 from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad import wire_units
 from odohil.science.parameters import ErrorParameters
 
 from .link import RawLink
@@ -53,7 +53,7 @@ def _runs(fake_port: Any, steer: int) -> tuple[np.ndarray, np.ndarray, float]:
 
 
 def test_heading_and_distance_drift_match_the_parameters(fake_port: Any) -> None:
-    d = units.wire_to_metres(WIRE)
+    d = wire_units.wire_to_metres(WIRE)
     turns, chords, _ = _runs(fake_port, steer=0)
     n = len(turns)
 
@@ -76,8 +76,8 @@ def test_steering_turns_are_error_free_and_drive_follows_them(fake_port: Any) ->
     turns, _, heading0 = _runs(fake_port, steer=900)
     assert abs(heading0 - math.pi / 2) < 1e-12  # in-place turns are error free
     # the 90 deg turn happened before the runs: each run drifts as on the x axis
-    se_mean = math.sqrt(PARAMS.k_theta * units.wire_to_metres(WIRE) / len(turns))
-    assert abs(turns.mean() - PARAMS.e_r * units.wire_to_metres(WIRE)) < 4 * se_mean
+    se_mean = math.sqrt(PARAMS.k_theta * wire_units.wire_to_metres(WIRE) / len(turns))
+    assert abs(turns.mean() - PARAMS.e_r * wire_units.wire_to_metres(WIRE)) < 4 * se_mean
 
 
 def test_a_seed_fixes_the_true_pose_whatever_the_clock(fake_port: Any) -> None:

@@ -9,8 +9,8 @@ from typing import Any
 
 import pytest
 
-from odohil import units
 from odohil.protocol.nomad import messages as m
+from odohil.protocol.nomad import wire_units
 from odohil.protocol.nomad.codes import Code
 from odohil.protocol.nomad.numbers import decode_s16, decode_u16
 from odohil.protocol.nomad.replies import decode_reply
@@ -154,7 +154,7 @@ def test_zr_turns_back_zeroes_everything_and_replies_when_done(pty_robot: Any) -
     assert truth.true_theta_rad == pytest.approx(0.0, abs=0.02)  # the wheels really turned back
     # but the robot stays where it drove: 200 wire units at the default 1 + E_T,
     # within 4 standard deviations of the distance noise (K_rho per metre)
-    encoder_m = units.wire_to_metres(200)
+    encoder_m = wire_units.wire_to_metres(200)
     spread = 4.0 * math.sqrt(NOMAD150.k_rho * encoder_m)
     assert truth.true_y_m == pytest.approx((1.0 + NOMAD150.e_t) * encoder_m, abs=spread)
 

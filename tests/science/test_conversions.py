@@ -15,6 +15,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from odohil import units
+from odohil.protocol.nomad import wire_units
 from odohil.science import frames
 from odohil.science.grouping import by_design
 from odohil.science.parameters import NOMAD150, PARAMETER_NAMES
@@ -59,11 +60,11 @@ def test_circular_mean_across_the_cut() -> None:
 
 
 def test_wire_angles_keep_the_wire_range() -> None:
-    assert units.wire_angle_in_turn(-1) == 3599
-    assert units.wire_angle_in_turn(3600) == 0
-    assert units.wire_angle_difference(10, 3590) == 20
-    assert units.wire_angle_difference(0, 1800) == 1800  # (-1800, 1800], as wrap_angle
-    assert units.wire_angle_difference(1800, 0) == 1800
+    assert wire_units.wire_angle_in_turn(-1) == 3599
+    assert wire_units.wire_angle_in_turn(3600) == 0
+    assert wire_units.wire_angle_difference(10, 3590) == 20
+    assert wire_units.wire_angle_difference(0, 1800) == 1800  # (-1800, 1800], as wrap_angle
+    assert wire_units.wire_angle_difference(1800, 0) == 1800
 
 
 def test_paper_units_round_trip_and_match_the_parameters() -> None:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from odohil.errors import ParameterError
+from odohil.protocol.create2.geometry import CREATE2_GEOMETRY
 from odohil.science.diff_drive import (
     DiffDriveErrors,
     DiffDriveGeometry,
@@ -125,7 +126,7 @@ def test_wheel_slip_maps_onto_k_theta_and_k_rho_monte_carlo(design: Design) -> N
 
 
 def test_odometry_step_is_the_facts_documents_worked_example() -> None:
-    geometry = DiffDriveGeometry()
+    geometry = CREATE2_GEOMETRY  # the Create 2's nominal constants
     left, right = geometry.wheel_travel(1000, 1010)
     assert left * 1000 == pytest.approx(444.565, abs=1e-3)
     assert right * 1000 == pytest.approx(449.011, abs=1e-3)
@@ -151,5 +152,5 @@ def test_bad_values_are_refused() -> None:
     with pytest.raises(ParameterError, match="k_spin"):
         DiffDriveErrors(k_spin=-1.0)
     with pytest.raises(ParameterError, match="wheel_base_m"):
-        DiffDriveGeometry(wheel_base_m=0.0)
+        DiffDriveGeometry(508.8, 0.072, wheel_base_m=0.0)
     assert isinstance(DiffDriveErrors().straight_parameters(), ErrorParameters)

@@ -8,8 +8,8 @@ import math
 import pytest
 
 from odohil.errors import RobotDescriptionError
-from odohil.science.diff_drive import DiffDriveGeometry
-from odohil.science.robot_description import parse_robot_description
+from odohil.protocol.create2.geometry import CREATE2_GEOMETRY
+from odohil.session.robots import parse_description as parse_robot_description
 
 BASE = """
 [screws]
@@ -35,7 +35,7 @@ def test_two_diameters_are_the_left_and_the_right_wheel() -> None:
 
 def test_one_diameter_serves_both_wheels_as_before() -> None:
     drive = parse_robot_description(BASE + "wheel_diameter_m = 0.072\n").robot.drive
-    assert drive == DiffDriveGeometry()
+    assert drive == CREATE2_GEOMETRY  # the backend's nominal constants, one diameter given
     assert drive.wheel_diameters_m == (0.072, 0.072)
 
 

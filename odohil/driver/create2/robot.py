@@ -44,11 +44,13 @@ from __future__ import annotations
 import contextlib
 import math
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass
 from types import TracebackType
 from typing import NoReturn
 
+from odohil.driver import stopping
+from odohil.driver.create2.facts import CREATE2_FACTS, CREATE2_GEOMETRY, STEP_TOLERANCE_M
 from odohil.driver.create2.link import (
     Create2Link,
     Reading,
@@ -71,7 +73,7 @@ from odohil.errors import (
 from odohil.protocol.create2 import commands
 from odohil.protocol.create2.commands import MAX_SPEED_MM_S
 from odohil.protocol.create2.numbers import encoder_delta
-from odohil.protocol.create2.opcodes import BAUD_RATES, DEFAULT_BAUD, Mode
+from odohil.protocol.create2.opcodes import Mode
 from odohil.science import frames
 from odohil.science.diff_drive import DiffDriveGeometry, odometry_step
 from odohil.science.paths import Design, Leg, Turn
@@ -107,11 +109,9 @@ STALL_S = 0.6
 MAX_ATTEMPTS = 3
 """A step that stopped short (a reading came late) is finished at the crawl, at most
 this many drives in all."""
-STEP_TOLERANCE_M = 0.01
-"""Largest distance (per wheel) a step may end from its target, m, ...
-"""
 STEP_TOLERANCE_FRACTION = 0.01
-"""...or this fraction of the step's wheel travel, when larger (a late stop on a
+"""...or this fraction of the step's wheel travel (beyond :data:`STEP_TOLERANCE_M`,
+odohil/driver/create2/facts.py), when larger (a late stop on a
 busy host; the next step's target makes up for it)."""
 MIN_STEP_COUNTS = 10
 """Shortest step the backend drives, counts (4.4 mm at the Create 2's constants)."""
@@ -151,7 +151,7 @@ class Create2Robot:
 
     Also the ``create2`` backend of the ``odohil.robots`` entry-point group
     (pyproject.toml; odohil/session/robots.py): :meth:`open` and
-    :attr:`default_baud`.
+    :attr:`facts`.
 
     Args:
         link: the open link.
@@ -160,11 +160,9 @@ class Create2Robot:
         full_mode: drive in Full (no OI safety stops) instead of Safe.
     """
 
-    name = "create2"
-    default_baud = DEFAULT_BAUD
-    baud_rates = BAUD_RATES
-    fake_url_scheme = "fakecreate2:"
-    fake_truth_client = "fakes.create2.truth:Create2TruthClient"
+    facts = CREATE2_FACTS
+    name = CREATE2_FACTS.name
+    default_baud = CREATE2_FACTS.default_baud
 
     def __init__(
         self,
@@ -174,7 +172,7 @@ class Create2Robot:
         full_mode: bool = False,
     ) -> None:
         self._link = link
-        self.geometry = geometry or DiffDriveGeometry()
+        self.geometry = geometry or CREATE2_GEOMETRY
         self.full_mode = full_mode
         self.mode_offset = 0
         self._armed = False
@@ -192,7 +190,7 @@ class Create2Robot:
         cls,
         url: str,
         *,
-        baud: int = DEFAULT_BAUD,
+        baud: int = CREATE2_FACTS.default_baud,
         geometry: DiffDriveGeometry | None = None,
         full_mode: bool = False,
         sampling: Sampling = "stream",
@@ -232,13 +230,13 @@ class Create2Robot:
     def open(
         cls, url: str, baud: int | None = None, robot: RobotSettings | None = None
     ) -> Create2Robot:
-        """The backend entry: connect at ``baud`` (115200 when None) with the
+        """The backend entry: connect at ``baud`` (its default when None) with the
         description's ``[robot]`` constants and mode (defaults: the Create 2's)."""
-        settings = robot or RobotSettings(protocol="create2")
+        settings = robot or RobotSettings(protocol=CREATE2_FACTS.name)
         return cls.connect(
             url,
             baud=cls.default_baud if baud is None else baud,
-            geometry=settings.drive,
+            geometry=settings.drive or CREATE2_GEOMETRY,
             full_mode=settings.full_mode,
         )
 
@@ -396,48 +394,38 @@ class Create2Robot:
         with contextlib.suppress(OdohilError):
             self._link.send(commands.drive_direct(0, 0))
 
-    def _wait_still(self, timeout_s: float) -> OdometrySample:
-        deadline = time.monotonic() + timeout_s
-        still = 0
-        problem = "no reading"
-        while True:
-            try:
-                sample = self._reading_sample()[1]
-            except OdohilError as exc:
-                problem = str(exc)
-                if self._link.closed or time.monotonic() >= deadline:
-                    break
-                continue
-            still = 0 if sample.moving else still + 1
-            if still >= STILL_READINGS - 1 and not sample.moving:
-                return sample
-            problem = f"still moving at {sample.pose_text()}"
-            if time.monotonic() >= deadline:
-                break
-        raise StopUnconfirmedError(
-            f"the robot did not report that it stopped within {timeout_s:g} s: {problem}"
-        )
+    def _stop_then_read(self, left_s: float) -> OdometrySample:
+        """Drive Direct 0, 0, then one reading (``left_s``: unused, a reading
+        takes one frame)."""
+        self.stop()
+        return self._reading_sample()[1]
 
     def stop_and_confirm(self, timeout_s: float = STOP_CONFIRM_TIMEOUT_S) -> OdometrySample:
-        """Stop, then read until the counts stand still; StopUnconfirmedError if not."""
-        if not math.isfinite(timeout_s) or timeout_s < 0:
-            raise ParameterError(f"timeout must be finite and >= 0 s, got {timeout_s!r}")
-        if self._link.closed:
-            raise StopUnconfirmedError("the robot did not report that it stopped: line closed")
-        self.stop()
-        return self._wait_still(timeout_s)
+        """Stop, then read until the counts stand still; StopUnconfirmedError if
+        not (odohil/driver/stopping.py ``stop_and_confirm``)."""
+        return stopping.stop_and_confirm(
+            timeout_s,
+            stop=self._stop_then_read,
+            read=lambda _left_s: self._reading_sample()[1],
+            moving=lambda sample: sample.moving,
+            where=lambda sample: sample.pose_text(),
+            closed=lambda: self._link.closed,
+            still_readings=STILL_READINGS - 1,  # a sample's "moving" compares two readings
+        )
 
     def settle(self, timeout_s: float) -> OdometrySample:
-        """Stop and wait until the encoders stand still, within ``timeout_s``."""
-        return self.stop_and_confirm(timeout_s)
+        """Stop if the encoders move and wait until they stand still, within
+        ``timeout_s`` (odohil/driver/stopping.py ``settle``)."""
+        return stopping.settle(
+            timeout_s,
+            read=self.odometry,
+            moving=lambda sample: sample.moving,
+            confirm=self.stop_and_confirm,
+        )
 
     def _guarded(self, action: Callable[[], OdometrySample]) -> OdometrySample:
-        try:
+        with stopping.stop_on_failure(self.stop, when=lambda: self._commanded):
             return action()
-        except BaseException:
-            if self._commanded:
-                self.stop()
-            raise
 
     # ---- driving -------------------------------------------------------------------------------
     def _speeds(self, settings: DriveSettings) -> tuple[int, int]:
@@ -541,13 +529,8 @@ class Create2Robot:
             ended_s=time.monotonic(),
         )
 
-    @contextlib.contextmanager
-    def _motion(self) -> Iterator[None]:
-        try:
-            yield
-        except BaseException:
-            self.stop()
-            raise
+    def _motion(self) -> contextlib.AbstractContextManager[None]:
+        return stopping.stop_on_failure(self.stop)
 
     def _drive_step(
         self,
@@ -683,9 +666,8 @@ class Create2Robot:
     def _end_step(self, message: str) -> NoReturn:
         """Stop, confirm the stop, and raise OdohilTimeoutError with ``message``
         (StopUnconfirmedError, with it, when the robot does not report still)."""
-        self.stop()
         try:
-            self._wait_still(STOP_CONFIRM_TIMEOUT_S)
+            self.stop_and_confirm(STOP_CONFIRM_TIMEOUT_S)
         except StopUnconfirmedError as exc:
             raise StopUnconfirmedError(f"{message}; {exc}") from exc
         raise OdohilTimeoutError(f"{message}; stop confirmed")

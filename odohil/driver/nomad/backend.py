@@ -11,8 +11,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from types import TracebackType
 
+from odohil.driver import stopping
 from odohil.driver.guardian import Guardian, start_guardian
-from odohil.driver.nomad.link import BAUD_RATES, DEFAULT_BAUD, open_port
+from odohil.driver.nomad.facts import NOMAD150_FACTS
+from odohil.driver.nomad.link import open_port
 from odohil.driver.nomad.motion import DEFAULT_TOLERANCE_WIRE, MotionRecord, forth_and_back
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.driver.nomad.sample import EncoderSample
@@ -66,11 +68,9 @@ class NomadBackend:
         tolerance_wire: how far (0.1 in / 0.1 deg) a step may end off its command.
     """
 
-    name = "nomad150"
-    default_baud = DEFAULT_BAUD
-    baud_rates = BAUD_RATES
-    fake_url_scheme = "fakerobot:"
-    fake_truth_client = "fakes.nomad.truth:TruthClient"
+    facts = NOMAD150_FACTS
+    name = NOMAD150_FACTS.name
+    default_baud = NOMAD150_FACTS.default_baud
 
     def __init__(
         self,
@@ -136,12 +136,14 @@ class NomadBackend:
         return self.odometry()
 
     def settle(self, timeout_s: float) -> OdometrySample:
-        """Stop the robot if it moves and wait (``gs`` polls) until it stands still."""
-        sample = self.nomad.state()
-        if sample.moving:
-            self.nomad.stop()
-            sample = self.nomad.poll_until_stopped(timeout_s)
-        return odometry_sample(sample)
+        """Stop the robot if it moves and wait (``gs`` polls) until it stands
+        still (odohil/driver/stopping.py ``settle``)."""
+        return stopping.settle(
+            timeout_s,
+            read=self.odometry,
+            moving=lambda sample: sample.moving,
+            confirm=self.stop_and_confirm,
+        )
 
     def zero(self, pose: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> OdometrySample:
         """``dp`` and ``da``: the encoders read ``pose`` (x m, y m, heading rad) here."""

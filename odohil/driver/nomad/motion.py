@@ -25,15 +25,15 @@ from odohil.errors import (
 from odohil.protocol.nomad.limits import leg_to_wire
 from odohil.protocol.nomad.messages import Pr
 from odohil.protocol.nomad.numbers import S16_MAX
-from odohil.science import frames
-from odohil.science.paths import Design, Leg
-from odohil.units import (
+from odohil.protocol.nomad.wire_units import (
     radians_to_wire,
     wire_angle_difference,
     wire_angle_in_turn,
     wire_to_radians,
-    wrap_angle,
 )
+from odohil.science import frames
+from odohil.science.paths import Design, Leg
+from odohil.units import wrap_angle
 
 DEFAULT_TOLERANCE_WIRE = 2
 DEFAULT_STEP_TIMEOUT_S = 120.0
@@ -181,7 +181,7 @@ def forth_and_back(
 
     Raises ParameterError before anything is sent when a leg is outside the
     wire's range (:func:`odohil.protocol.nomad.limits.check_leg_length_m`: at least
-    25.4 mm, at most 83.2 m) or a turn rounds to no wire units; MotionError if
+    50 mm, at most 83.2 m) or a turn rounds to no wire units; MotionError if
     a step ends off its commanded encoder pose, and whatever the robot raises
     (after ``st``) on protocol errors or timeouts, OdohilTimeoutError (the stop
     confirmed) when a step outlasts its time limit (its length at ``speeds``,

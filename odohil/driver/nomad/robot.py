@@ -20,6 +20,7 @@ import time
 from collections.abc import Callable, Iterator
 from types import TracebackType
 
+from odohil.driver import stopping
 from odohil.driver.nomad.link import (
     DEFAULT_BAUD,
     NORMAL_TIMEOUT_S,
@@ -36,7 +37,6 @@ from odohil.errors import (
     OdohilTimeoutError,
     ParameterError,
     ProtocolError,
-    StopUnconfirmedError,
 )
 from odohil.protocol.nomad import messages as m
 from odohil.protocol.nomad.codes import MOTION_CODES, STATE_REPLY_CODES
@@ -44,7 +44,7 @@ from odohil.protocol.nomad.framing import Packet
 from odohil.protocol.nomad.numbers import S16_MAX, U16_MAX
 from odohil.protocol.nomad.replies import decode_reply
 from odohil.protocol.nomad.state import N150_MASK, RobotState, StateMask, decode_state_payload
-from odohil.units import metres_to_wire, radians_to_wire, wire_angle_in_turn
+from odohil.protocol.nomad.wire_units import metres_to_wire, radians_to_wire, wire_angle_in_turn
 
 WS_MAX_S = 255
 _U32_WRAP = 1 << 32
@@ -197,13 +197,12 @@ class NomadRobot:
 
     @contextlib.contextmanager
     def _motion(self) -> Iterator[None]:
-        """Within: any exception (and Ctrl-C) sends ``st`` before propagating."""
+        """Within: any exception (and Ctrl-C) sends ``st`` before propagating
+        (odohil/driver/stopping.py ``stop_on_failure``)."""
         self._in_motion = True
         try:
-            yield
-        except BaseException:
-            self._emergency_stop()
-            raise
+            with stopping.stop_on_failure(self._emergency_stop):
+                yield
         finally:
             self._in_motion = False
 
@@ -336,7 +335,8 @@ class NomadRobot:
         return self._call(m.St())
 
     def stop_and_confirm(self, timeout_s: float = STOP_CONFIRM_TIMEOUT_S) -> EncoderSample:
-        """Send ``st``, then poll ``gs`` until the robot reports no axis active.
+        """Send ``st``, then poll ``gs`` until the robot reports no axis active
+        (odohil/driver/stopping.py ``stop_and_confirm``).
 
         A failed ``st`` is sent again while time is left (never after the line
         is gone). Returns the first sample that shows the robot standing still.
@@ -348,34 +348,23 @@ class NomadRobot:
             StopUnconfirmedError: the robot did not report that it stopped within
                 ``timeout_s`` (line closed or cut, no or bad replies, still moving).
         """
-        if not math.isfinite(timeout_s) or timeout_s < 0:
-            raise ParameterError(f"timeout must be finite and >= 0 s, got {timeout_s!r}")
-        deadline = time.monotonic() + timeout_s
-        request: m.Request = m.St()
-        problem = "no time to ask"
-        while not self._link.closed:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                break
-            try:
-                state = self._request(request, first_byte_s=min(NORMAL_TIMEOUT_S, left))
-            except DisconnectedError as exc:
-                problem = f"the line is cut ({exc})"
-                break
-            except OdohilError as exc:
-                problem = f"{type(request).__name__} failed: {exc}"
-                time.sleep(min(_STOP_POLL_S, max(0.0, deadline - time.monotonic())))
-                continue
-            sample = EncoderSample.from_state(state, time.monotonic())
-            if not sample.moving:
-                return sample
-            request = m.Gs()
-            problem = f"still moving at {sample.pose_text()}"
-            time.sleep(min(_STOP_POLL_S, max(0.0, deadline - time.monotonic())))
-        if self._link.closed and problem == "no time to ask":
-            problem = "the line is closed"
-        raise StopUnconfirmedError(
-            f"the robot did not report that it stopped within {timeout_s:g} s: {problem}"
+
+        def ask(request: m.Request) -> Callable[[float], EncoderSample]:
+            def send(left_s: float) -> EncoderSample:
+                state = self._request(request, first_byte_s=min(NORMAL_TIMEOUT_S, left_s))
+                return EncoderSample.from_state(state, time.monotonic())
+
+            return send
+
+        return stopping.stop_and_confirm(
+            timeout_s,
+            stop=ask(m.St()),
+            read=ask(m.Gs()),
+            moving=lambda sample: sample.moving,
+            where=lambda sample: sample.pose_text(),
+            closed=lambda: self._link.closed,
+            poll_s=_STOP_POLL_S,
+            names=("St", "Gs"),
         )
 
     def limp(self) -> EncoderSample:

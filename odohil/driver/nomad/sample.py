@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from odohil.protocol.nomad.state import RobotState
-from odohil.units import wire_angle_in_turn, wire_to_metres, wire_to_radians
+from odohil.protocol.nomad.wire_units import wire_angle_in_turn, wire_to_metres, wire_to_radians
 
 MOTOR_TRANS = 0b001
 MOTOR_STEER = 0b010

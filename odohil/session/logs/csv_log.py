@@ -134,6 +134,11 @@ def read_csv_log(path: Path, description: RobotDescription) -> Recording:
     odo = np.array(odometry, dtype=np.float64)
     if odo.shape[1] == 2:
         drive = description.robot.drive
+        if drive is None:
+            raise RecordingError(
+                f"{path}: wheel counts need the robot's counts_per_rev, wheel_diameter_m and "
+                "wheel_base_m in the robot description's [robot] table"
+            )
         left, right = drive.wheel_metres_per_count
         odo = integrate_ticks(odo[:, 0], odo[:, 1], left, right, drive.wheel_base_m)
     return Recording(

@@ -10,9 +10,9 @@ odohil/science/rest_cutting.py).
 
 Geometry: the raw counts do not depend on the nominal constants each session
 was configured with (some were deliberately wrong: ``Li`` 0.205 m, ``Di``
-0.085 m), so every run is read with one nominal geometry, the data set's
-:data:`OPTIODOM_GEOMETRY` (0.084 m wheels, 0.20 m wheel base, 64 counts x
-43.7 gear = 2796.8 counts per wheel turn), and the pooled trials share it.
+0.085 m), so every run is read with one nominal geometry, the data set's robot
+(:func:`optiodom_geometry`: odohil/robots/datasets/optiodom.toml, from its
+README), and the pooled trials share it.
 The metadata is read to check the run count ``N`` and the encoder
 (``encRes`` x ``ngear``) against the files.
 
@@ -22,8 +22,11 @@ A path may be a run file, a session folder, or any folder above them (every
 
 from __future__ import annotations
 
+import functools
 import math
 import re
+import tomllib
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
@@ -33,13 +36,23 @@ from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.odometry_paths import integrate_ticks
 from odohil.science.path_trials import PathTrial
 from odohil.science.robot_description import RobotDescription
+from odohil.science.robot_facts import DRIVE_KEYS
 from odohil.session.logs.files import finite_number, read_text
 from odohil.session.logs.recording import ImportOptions, Recording, check_increasing, trials_of
 
-OPTIODOM_GEOMETRY = DiffDriveGeometry(
-    counts_per_rev=2796.8, wheel_diameter_m=0.084, wheel_base_m=0.20
-)
-"""The data set's nominal robot (its README): one geometry for all sessions."""
+GEOMETRY_FILE = "datasets/optiodom.toml"
+"""The data set's robot, in the ``odohil.robots`` package (data, not a built-in ``--robot``)."""
+
+
+@functools.cache
+def optiodom_geometry() -> DiffDriveGeometry:
+    """The data set's nominal robot (its README): one geometry for all
+    sessions, from :data:`GEOMETRY_FILE`'s ``[robot]`` table."""
+    text = files("odohil.robots").joinpath(GEOMETRY_FILE).read_text(encoding="utf-8")
+    table = tomllib.loads(text)["robot"]
+    return DiffDriveGeometry(**{key: float(table[key]) for key in DRIVE_KEYS})
+
+
 RUN_COLUMNS = ("t_s", "true_x_m", "true_y_m", "true_theta_rad", "right_counts", "left_counts")
 """What the six columns of a run file hold (the names messages use)."""
 MAX_RUNS = 10_000
@@ -70,10 +83,11 @@ def _check_metadata(path: Path, runs: list[Path]) -> None:
     if table.get("type", [""])[0:1] != ["diff"]:
         raise RecordingError(f"{path}: type: a differential drive (diff) is expected")
     counts = number("encRes") * number("ngear")
-    if abs(counts - OPTIODOM_GEOMETRY.counts_per_rev) > _COUNTS_TOLERANCE * counts:
+    nominal = optiodom_geometry().counts_per_rev
+    if abs(counts - nominal) > _COUNTS_TOLERANCE * counts:
         raise RecordingError(
             f"{path}: encRes x ngear: {counts:g} counts per wheel turn; the data set's "
-            f"robot has {OPTIODOM_GEOMETRY.counts_per_rev:g}"
+            f"robot has {nominal:g}"
         )
     expected = number("N")
     if expected != len(runs):
@@ -146,13 +160,14 @@ def read_run(path: Path) -> Recording:
     data = np.array(rows, dtype=np.float64)
     lines = np.array(where, dtype=np.int64)
     check_increasing(data[:, 0], lines, str(path), "t_s", "line")
-    per_count = OPTIODOM_GEOMETRY.metres_per_count
+    geometry = optiodom_geometry()
+    per_count = geometry.metres_per_count
     odometry = integrate_ticks(
         np.cumsum(data[:, 5]),
         np.cumsum(data[:, 4]),
         per_count,
         per_count,
-        OPTIODOM_GEOMETRY.wheel_base_m,
+        geometry.wheel_base_m,
     )
     label = _RUN_NAME.match(path.name)
     run = f"run-{label['run']}" if label else path.stem
