@@ -13,11 +13,17 @@ which the truth counts as "confidently wrong" (bench/operator_faults.py).
   stays below the chi^2(1) quantile of the level (1.96^2 at 95 %, 16 at the
   4-sigma level), where NLL_CR is the Cox-Reid adjusted likelihood
   (odohil/science/estimators/likelihood.py) and lambda_psi the other three
-  parameters re-fitted with psi held. The end points are found by a secant
-  search on the signed root r(psi) = sign(psi - psi_hat) sqrt(D), nearly
-  linear in psi. The nuisance re-fit is Fisher scoring with the model's
-  derivatives taken at the estimate (the moments, hence the likelihood, are
-  exact at every point). A bound the deviance never reaches within the
+  parameters re-fitted with psi held. The end points are found by a
+  safeguarded secant search on the signed root
+  r(psi) = sign(psi - psi_hat) sqrt(D), nearly linear in psi, from the Wald
+  guess; above an estimate on the floor of log K (or with a very wide Wald
+  interval) the search runs in sqrt(K), where r is nearly linear instead,
+  from where the score and curvature in K at the estimate put the level.
+  The nuisance re-fit is Newton's method with the model's derivatives taken
+  at the estimate (the moments, hence the likelihood, are exact at every
+  point), warm-started along the profile's tangent, a nuisance rate on the
+  floor held there, run until its Newton decrement is below 1e-3 (see
+  :class:`_Profile`). A bound the deviance never reaches within the
   estimator's range of log K is open: 0 below, inf above.
   When the trials spread more than the Gaussian likelihood says (heavy-tailed
   tape errors), the threshold is multiplied by the sandwich ratio
@@ -40,13 +46,13 @@ interval is the profile one above.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
 
-from odohil.science.estimators.joint import JointFit, designs_of, held_at_floor
+from odohil.science.estimators.joint import JointFit, designs_of
 from odohil.science.estimators.likelihood import (
     GroupStats,
     LikelihoodValue,
@@ -65,12 +71,7 @@ _INNER_STEPS = 15
 _INNER_TOLERANCE = 1e-3
 """The nuisance re-fit has converged when its Newton decrement (about twice
 the NLL still to gain) is below this: the deviance is then exact to about
-1e-3, its signed root to about 2.5e-4 at the 95 % level (the score is that
-of the model's derivatives held at the estimate, off the NLL's own gradient
-by a decrement of the order of 1e-4, so a tighter rule would not be met)."""
-_STALLED_TOLERANCE = 1e-2
-"""A re-fit whose step cannot lower the NLL has converged too when its
-decrement is below this (the deviance exact to about 1e-2)."""
+1e-3, its signed root to about 2.5e-4 at the 95 % level."""
 _MAX_LOG_STEP = 2.0
 """Largest change of a nuisance log K in one re-fit step (a factor e^2)."""
 _SMALLEST_STEP = 0.05
@@ -164,6 +165,18 @@ def satterthwaite_dofs(
     return out
 
 
+def _with_derivatives(point: ModelPoint, keys: Sequence[Hashable]) -> ModelPoint:
+    """``point`` itself when it carries its own derivatives for every key (a
+    fit's optimum does), else the model at its phi with derivatives."""
+    own = (
+        point.d_means is not None
+        and point.d_covs is not None
+        and np.array_equal(point.anchor, point.phi)
+        and all(k in point.d_means and k in point.d_covs for k in keys)
+    )
+    return point if own else point.model.point(point.phi, keys, derivatives=True)
+
+
 @dataclass(frozen=True)
 class _Solved:
     """One point of the profile: log K, its signed root, the parameters the
@@ -200,7 +213,7 @@ class _Profile:
         self.rates = list(self.layout.log_rates)
         self.cox_reid = cox_reid
         self.model = fit.point.model
-        self.anchor: ModelPoint = self.model.point(fit.point.phi, self.designs, derivatives=True)
+        self.anchor = _with_derivatives(fit.point, self.designs)
         self.psi_hat = float(fit.point.phi[index])
         self.evaluations = 0
         self.reference = 0.0
@@ -221,26 +234,50 @@ class _Profile:
         point = ModelPoint(phi, moved.means, moved.covs, d_means, d_covs, anchor.phi, self.model)
         return evaluate(self.groups, point, self.cox_reid)
 
-    def _nuisance(self, phi: FloatArray, value: LikelihoodValue) -> list[int]:
-        """The free parameters not held on the floor."""
-        held = held_at_floor(phi, value, self.layout)
-        return [i for i in self.free if i not in held]
+    def _nuisance(self, phi: FloatArray, gradient: FloatArray) -> list[int]:
+        """The free parameters not held on the floor (a rate there whose
+        score pushes it down)."""
+        floor = _LOG_K_RANGE[0] + 1e-9
+        return [
+            i for i in self.free if not (i in self.rates and phi[i] <= floor and gradient[i] > 0)
+        ]
+
+    def _numeric_gradient(self, phi: FloatArray, value: LikelihoodValue) -> FloatArray:
+        """The NLL's own gradient in the free parameters, by forward
+        differences of 1e-4 standard errors (at most 1e-3 in log K)."""
+        assert value.information is not None
+        out = np.zeros(self.layout.size)
+        for i in self.free:
+            curvature = float(value.information[i, i])
+            h = 1e-4 / math.sqrt(curvature) if curvature > 0 else 1e-6
+            if i in self.rates:
+                h = min(h, 1e-3)
+            moved = phi.copy()
+            moved[i] += h
+            out[i] = (self._value(moved).nll - value.nll) / h
+        return out
 
     def refit(
         self, psi: float, start: FloatArray
     ) -> tuple[float, FloatArray, LikelihoodValue, bool]:
         """(profile NLL, the phi reached, the likelihood there, whether the
-        re-fit converged) at log K = psi, from ``start``."""
+        re-fit converged) at log K = psi, from ``start``.
+
+        Newton steps on the model's score; once a step cannot lower the NLL
+        (that score, with the derivatives held at the estimate, can be off
+        far from it), on the NLL's own gradient (:meth:`_numeric_gradient`)."""
         phi = start.copy()
         phi[self.index] = psi
         phi = self.layout.bounded(phi, *_LOG_K_RANGE)
         value = self._value(phi)
+        numeric = False
         for _ in range(_INNER_STEPS):
             if not math.isfinite(value.nll) or value.gradient is None:
                 break
             assert value.information is not None
-            free = self._nuisance(phi, value)
-            g = value.gradient[free]
+            gradient = self._numeric_gradient(phi, value) if numeric else value.gradient
+            free = self._nuisance(phi, gradient)
+            g = gradient[free]
             try:
                 step = np.linalg.solve(value.information[np.ix_(free, free)], -g)
             except np.linalg.LinAlgError:
@@ -261,7 +298,10 @@ class _Profile:
                     break
                 t /= 2.0
             else:
-                return value.nll, phi, value, float(-g @ step) < _STALLED_TOLERANCE
+                if numeric:
+                    break
+                numeric = True
+                continue
             phi, value = new, trial
         return value.nll, phi, value, False
 
@@ -272,7 +312,8 @@ class _Profile:
         info = solved.value.information
         if info is None:
             return out
-        free = self._nuisance(solved.phi, solved.value)
+        assert solved.value.gradient is not None
+        free = self._nuisance(solved.phi, solved.value.gradient)
         try:
             slope = np.linalg.solve(info[np.ix_(free, free)], -info[free, self.index])
         except np.linalg.LinAlgError:
@@ -307,7 +348,7 @@ class _Profile:
         if not root_k or info is None or gradient is None:
             return wald
         k = self.index
-        free = self._nuisance(first.phi, first.value)
+        free = self._nuisance(first.phi, gradient)
         try:
             cross = info[k, free] @ np.linalg.solve(info[np.ix_(free, free)], info[free, k])
         except np.linalg.LinAlgError:
