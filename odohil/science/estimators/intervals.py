@@ -197,7 +197,9 @@ class _Profile:
     (the derivatives of the log rates rescaled to the point: d/d log K =
     K d/dK), a rate on the floor of log K whose score pushes it down held
     there (as the fit holds it), each step halved until the NLL does not
-    rise, until the Newton decrement is below _INNER_TOLERANCE. Each re-fit
+    rise, until the Newton decrement is below _INNER_TOLERANCE (on the NLL's
+    own gradient once a step on the model's score cannot lower it, see
+    :meth:`refit`). Each re-fit
     starts from the nearest point of the profile already found, moved along
     the profile's tangent d lambda / d psi = -I_ll^-1 I_l psi; one that does
     not converge is re-fitted from the estimate too and the lower NLL kept."""
