@@ -9,15 +9,19 @@ odohil/science/estimators/paths.py estimate_paths with turns_exact=False.
 Reported: CPU time (time.process_time: the machine is shared, wall time
 would count the others) of the Gaussian maximum-likelihood fit alone (point
 estimate and standard errors) and of the whole estimate (the split-by-direction
-test, robust fit, intervals, checks).
+test, robust fit, intervals, checks); with ``--breakdown``, where one more
+whole estimate spends its time (cProfile, cumulative CPU per stage; the
+profiler adds its own overhead).
 
-    taskset -c 0 python bench/path_fit_speed.py [--repeat 3]
+    taskset -c 0 python bench/path_fit_speed.py [--repeat 3] [--breakdown]
 """
 
 from __future__ import annotations
 
 import argparse
+import cProfile
 import math
+import pstats
 import statistics
 import time
 
@@ -61,11 +65,40 @@ def trials(n: int, seed: int) -> list[PathTrial]:
     return out
 
 
+STAGES = (
+    ("maximum-likelihood fits (one e_turn, and split by direction)", "paths.py", "_fit"),
+    ("robust EM", "robust.py", "robust_em"),
+    ("profile intervals (K_theta, K_rho, K_spin)", "intervals.py", "profile_interval"),
+    ("Satterthwaite degrees of freedom", "intervals.py", "satterthwaite_dofs"),
+    ("misfit checks", "paths.py", "_misfit"),
+)
+
+
+def breakdown(data: list[PathTrial]) -> None:
+    """Print the cumulative CPU time of each stage of one whole estimate."""
+    profiler = cProfile.Profile(time.process_time)
+    profiler.enable()
+    estimate_paths(data, turns_exact=False)
+    profiler.disable()
+    stats = pstats.Stats(profiler)
+    table = stats.stats  # type: ignore[attr-defined]
+    total = max(entry[3] for entry in table.values())
+    print(f"where one estimate spends its time (cProfile, {total:.2f} s CPU):")
+    for label, module, name in STAGES:
+        spent = sum(
+            entry[3]
+            for (path, _, function), entry in table.items()
+            if function == name and path.endswith(module)
+        )
+        print(f"  {label}: {spent:.2f} s")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=100)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--breakdown", action="store_true", help="profile one more estimate")
     args = parser.parse_args()
     data = trials(args.trials, args.seed)
     fit_times, full_times = [], []
@@ -88,6 +121,8 @@ def main() -> None:
         f"whole estimate (robust fit, intervals, checks): median "
         f"{statistics.median(full_times):.2f} s (runs {', '.join(f'{t:.2f}' for t in full_times)})"
     )
+    if args.breakdown:
+        breakdown(data)
 
 
 if __name__ == "__main__":

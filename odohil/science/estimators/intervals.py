@@ -13,11 +13,17 @@ which the truth counts as "confidently wrong" (bench/operator_faults.py).
   stays below the chi^2(1) quantile of the level (1.96^2 at 95 %, 16 at the
   4-sigma level), where NLL_CR is the Cox-Reid adjusted likelihood
   (odohil/science/estimators/likelihood.py) and lambda_psi the other three
-  parameters re-fitted with psi held. The end points are found by a secant
-  search on the signed root r(psi) = sign(psi - psi_hat) sqrt(D), nearly
-  linear in psi. The nuisance re-fit is Fisher scoring with the model's
-  derivatives taken at the estimate (the moments, hence the likelihood, are
-  exact at every point). A bound the deviance never reaches within the
+  parameters re-fitted with psi held. The end points are found by a
+  safeguarded secant search on the signed root
+  r(psi) = sign(psi - psi_hat) sqrt(D), nearly linear in psi, from the Wald
+  guess; above an estimate on the floor of log K (or with a very wide Wald
+  interval) the search runs in sqrt(K), where r is nearly linear instead,
+  from where the score and curvature in K at the estimate put the level.
+  The nuisance re-fit is Newton's method with the model's derivatives taken
+  at the estimate (the moments, hence the likelihood, are exact at every
+  point), warm-started along the profile's tangent, a nuisance rate on the
+  floor held there, run until its Newton decrement is below 1e-3 (see
+  :class:`_Profile`). A bound the deviance never reaches within the
   estimator's range of log K is open: 0 below, inf above.
   When the trials spread more than the Gaussian likelihood says (heavy-tailed
   tape errors), the threshold is multiplied by the sandwich ratio
@@ -40,7 +46,7 @@ interval is the profile one above.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,7 +58,6 @@ from odohil.science.estimators.likelihood import (
     LikelihoodValue,
     ModelPoint,
     evaluate,
-    with_moments,
 )
 from odohil.science.paths import FloatArray
 
@@ -62,16 +67,23 @@ LEVEL_95 = 0.95
 LEVEL_4SIGMA = 1.0 - 2.0 * float(stats.norm.sf(FOUR_SIGMA))
 """0.999937: the two-sided level of +- 4 sigma."""
 _LOG_K_RANGE = (math.log(1e-14), math.log(1e2))
-_INNER_STEPS = 8
-_INNER_TOLERANCE = 1e-6
-"""The nuisance re-fit stops when its Newton decrement (about twice the NLL
-still to gain) is below this."""
-_SECANT_STEPS = 8
-_BISECTION_STEPS = 40
+_INNER_STEPS = 15
+_INNER_TOLERANCE = 1e-3
+"""The nuisance re-fit has converged when its Newton decrement (about twice
+the NLL still to gain) is below this: the deviance is then exact to about
+1e-3, its signed root to about 2.5e-4 at the 95 % level."""
+_MAX_LOG_STEP = 2.0
+"""Largest change of a nuisance log K in one re-fit step (a factor e^2)."""
+_SMALLEST_STEP = 0.05
+"""A re-fit step is halved until the NLL does not rise, down to this fraction."""
+_SEARCH_STEPS = 40
 _BRACKET_TOLERANCE = 1e-3
-"""Bisection stops when the bracket in log K is this narrow."""
+"""The search stops when its bracket in log K is this narrow."""
 _ROOT_TOLERANCE = 0.01
 """A bound is accepted when |r(psi) - q| is below this (in units of the root)."""
+_ROOT_K_SE = 1.0
+"""Above an estimate whose Wald standard error of log K exceeds this, the
+bound is searched in sqrt(K) (see :meth:`_Profile.bound`)."""
 
 
 @dataclass(frozen=True)
@@ -153,8 +165,44 @@ def satterthwaite_dofs(
     return out
 
 
+def _with_derivatives(point: ModelPoint, keys: Sequence[Hashable]) -> ModelPoint:
+    """``point`` itself when it carries its own derivatives for every key (a
+    fit's optimum does), else the model at its phi with derivatives."""
+    own = (
+        point.d_means is not None
+        and point.d_covs is not None
+        and np.array_equal(point.anchor, point.phi)
+        and all(k in point.d_means and k in point.d_covs for k in keys)
+    )
+    return point if own else point.model.point(point.phi, keys, derivatives=True)
+
+
+@dataclass(frozen=True)
+class _Solved:
+    """One point of the profile: log K, its signed root, the parameters the
+    re-fit reached and the likelihood there (for the next warm start)."""
+
+    psi: float
+    root: float
+    phi: FloatArray
+    value: LikelihoodValue
+
+
 class _Profile:
-    """The Cox-Reid adjusted profile NLL of one log K, with warm starts."""
+    """The Cox-Reid adjusted profile NLL of one log K, with warm starts.
+
+    The NLL is that of the model at each point with its derivatives held at
+    the estimate (so the Cox-Reid term is the one the fit solved). The
+    nuisance re-fit is Newton's method on it with the expected information
+    (the derivatives of the log rates rescaled to the point: d/d log K =
+    K d/dK), a rate on the floor of log K whose score pushes it down held
+    there (as the fit holds it), each step halved until the NLL does not
+    rise, until the Newton decrement is below _INNER_TOLERANCE (on the NLL's
+    own gradient once a step on the model's score cannot lower it, see
+    :meth:`refit`). Each re-fit
+    starts from the nearest point of the profile already found, moved along
+    the profile's tangent d lambda / d psi = -I_ll^-1 I_l psi; one that does
+    not converge is re-fitted from the estimate too and the lower NLL kept."""
 
     def __init__(
         self, groups: Sequence[GroupStats], fit: JointFit, index: int, cox_reid: bool
@@ -164,120 +212,240 @@ class _Profile:
         self.index = index
         self.layout = fit.point.layout
         self.free = [i for i in range(self.layout.size) if i != index]
+        self.rates = list(self.layout.log_rates)
         self.cox_reid = cox_reid
         self.model = fit.point.model
-        self.anchor: ModelPoint = self.model.point(fit.point.phi, self.designs, derivatives=True)
+        self.anchor = _with_derivatives(fit.point, self.designs)
         self.psi_hat = float(fit.point.phi[index])
         self.evaluations = 0
-        base = self.refit(self.psi_hat, fit.point.phi)
-        self.reference = base[0]
-        self.last = fit.point.phi.copy()
+        self.reference = 0.0
+        nll, phi, value, _ = self.refit(self.psi_hat, fit.point.phi)
+        self.reference = nll
+        self.solved = [_Solved(self.psi_hat, 0.0, phi, value)]
 
     def _value(self, phi: FloatArray) -> LikelihoodValue:
-        point = with_moments(self.anchor, self.model.point(phi, self.designs, derivatives=False))
+        self.evaluations += 1
+        moved = self.model.point(phi, self.designs, derivatives=False)
+        anchor = self.anchor
+        assert anchor.d_means is not None
+        assert anchor.d_covs is not None
+        scale = np.ones(self.layout.size)
+        scale[self.rates] = np.exp(phi[self.rates] - anchor.phi[self.rates])
+        d_means = {k: v * scale[:, None] for k, v in anchor.d_means.items()}
+        d_covs = {k: v * scale[:, None, None] for k, v in anchor.d_covs.items()}
+        point = ModelPoint(phi, moved.means, moved.covs, d_means, d_covs, anchor.phi, self.model)
         return evaluate(self.groups, point, self.cox_reid)
 
-    def refit(self, psi: float, start: FloatArray) -> tuple[float, FloatArray]:
-        """(profile NLL, the phi reached) at log K = psi, from ``start``."""
+    def _nuisance(self, phi: FloatArray, gradient: FloatArray) -> list[int]:
+        """The free parameters not held on the floor (a rate there whose
+        score pushes it down)."""
+        floor = _LOG_K_RANGE[0] + 1e-9
+        return [
+            i for i in self.free if not (i in self.rates and phi[i] <= floor and gradient[i] > 0)
+        ]
+
+    def _numeric_gradient(self, phi: FloatArray, value: LikelihoodValue) -> FloatArray:
+        """The NLL's own gradient in the free parameters, by forward
+        differences of 1e-4 standard errors (at most 1e-3 in log K)."""
+        assert value.information is not None
+        out = np.zeros(self.layout.size)
+        for i in self.free:
+            curvature = float(value.information[i, i])
+            h = 1e-4 / math.sqrt(curvature) if curvature > 0 else 1e-6
+            if i in self.rates:
+                h = min(h, 1e-3)
+            moved = phi.copy()
+            moved[i] += h
+            out[i] = (self._value(moved).nll - value.nll) / h
+        return out
+
+    def refit(
+        self, psi: float, start: FloatArray
+    ) -> tuple[float, FloatArray, LikelihoodValue, bool]:
+        """(profile NLL, the phi reached, the likelihood there, whether the
+        re-fit converged) at log K = psi, from ``start``.
+
+        Newton steps on the model's score; once a step cannot lower the NLL
+        (that score, with the derivatives held at the estimate, can be off
+        far from it), on the NLL's own gradient (:meth:`_numeric_gradient`)."""
         phi = start.copy()
         phi[self.index] = psi
+        phi = self.layout.bounded(phi, *_LOG_K_RANGE)
         value = self._value(phi)
-        if not math.isfinite(value.nll):
-            return math.inf, phi
-        free = self.free
+        numeric = False
         for _ in range(_INNER_STEPS):
-            self.evaluations += 1
-            if value.gradient is None or value.information is None:
+            if not math.isfinite(value.nll) or value.gradient is None:
                 break
-            g = value.gradient[free]
-            info = value.information[np.ix_(free, free)]
+            assert value.information is not None
+            gradient = self._numeric_gradient(phi, value) if numeric else value.gradient
+            free = self._nuisance(phi, gradient)
+            g = gradient[free]
             try:
-                step = np.linalg.solve(info, -g)
+                step = np.linalg.solve(value.information[np.ix_(free, free)], -g)
             except np.linalg.LinAlgError:
                 break
             if float(-g @ step) < _INNER_TOLERANCE:
-                break
+                return value.nll, phi, value, True
+            rates = [k for k, i in enumerate(free) if i in self.rates]
+            largest = float(np.max(np.abs(step[rates]))) if rates else 0.0
+            if largest > _MAX_LOG_STEP:
+                step *= _MAX_LOG_STEP / largest
             t = 1.0
-            while t > 0.05:
+            while t > _SMALLEST_STEP:
                 new = phi.copy()
                 new[free] += t * step
-                new[free] = self.layout.bounded(new, *_LOG_K_RANGE)[free]
+                new = self.layout.bounded(new, *_LOG_K_RANGE)
                 trial = self._value(new)
                 if trial.nll <= value.nll + 1e-9:
                     break
                 t /= 2.0
             else:
-                break
+                if numeric:
+                    break
+                numeric = True
+                continue
             phi, value = new, trial
-        return value.nll, phi
+        return value.nll, phi, value, False
+
+    def _tangent(self, solved: _Solved) -> FloatArray:
+        """d phi / d psi along the profile at a solved point (0 where singular)."""
+        out = np.zeros(self.layout.size)
+        out[self.index] = 1.0
+        info = solved.value.information
+        if info is None:
+            return out
+        assert solved.value.gradient is not None
+        free = self._nuisance(solved.phi, solved.value.gradient)
+        try:
+            slope = np.linalg.solve(info[np.ix_(free, free)], -info[free, self.index])
+        except np.linalg.LinAlgError:
+            return out
+        if np.all(np.isfinite(slope)):
+            out[free] = slope
+        return out
 
     def root(self, psi: float) -> float:
-        """Signed root of the deviance at psi. The re-fit starts from the last
-        point; when that gives a deviance above 1 it is re-fitted from the
-        estimate too and the lower one kept (a warm start far from psi's own
-        optimum can stop, after its few steps, well above it: the deviance
-        then jumps about and the bound lands almost on the estimate)."""
-        nll, phi = self.refit(psi, self.last)
-        if not (math.isfinite(nll) and 2.0 * (nll - self.reference) <= 1.0):
-            again, other = self.refit(psi, self.anchor.phi)
-            if again < nll or not math.isfinite(nll):
-                nll, phi = again, other
+        """Signed root of the deviance at psi."""
+        near = min(self.solved, key=lambda s: abs(s.psi - psi))
+        start = near.phi + (psi - near.psi) * self._tangent(near)
+        nll, phi, value, converged = self.refit(psi, start)
+        if not converged:
+            again = self.refit(psi, self.anchor.phi)
+            if again[0] < nll or not math.isfinite(nll):
+                nll, phi, value, converged = again
         if not math.isfinite(nll):
             return math.copysign(math.inf, psi - self.psi_hat)
-        self.last = phi
         deviance = max(0.0, 2.0 * (nll - self.reference))
-        return math.copysign(math.sqrt(deviance), psi - self.psi_hat)
+        r = math.copysign(math.sqrt(deviance), psi - self.psi_hat)
+        self.solved.append(_Solved(psi, r, phi, value))
+        return r
 
-    def bound(self, q: float, side: float, guess: float) -> float:
+    def _guess(self, q: float, side: float, se_psi: float, root_k: bool) -> float:
+        """A first psi for the bound at q on ``side``: the Wald one, or where
+        2 g dK + I dK^2 reaches q^2 (score g and efficient information I in K
+        at the estimate) for a bound searched in sqrt(K)."""
+        wald = self.psi_hat + side * q * se_psi
+        first = self.solved[0]
+        info, gradient = first.value.information, first.value.gradient
+        if not root_k or info is None or gradient is None:
+            return wald
+        k = self.index
+        free = self._nuisance(first.phi, gradient)
+        try:
+            cross = info[k, free] @ np.linalg.solve(info[np.ix_(free, free)], info[free, k])
+        except np.linalg.LinAlgError:
+            return wald
+        k_hat = math.exp(self.psi_hat)
+        i_k = float(info[k, k] - cross) / k_hat**2
+        g_k = float(gradient[k]) / k_hat
+        if i_k > 0 and math.isfinite(i_k) and math.isfinite(g_k):
+            dk = (-g_k + math.sqrt(g_k**2 + i_k * q * q)) / i_k
+        elif g_k > 0 and math.isfinite(g_k):
+            dk = q * q / (2.0 * g_k)
+        else:
+            return wald
+        return math.log(k_hat + dk) if dk > 0 else wald
+
+    def bound(self, q: float, side: float, se_psi: float) -> float:
         """The psi on ``side`` (+1 or -1) where the signed root is side x q;
-        inf (open) when it is not reached within the range of log K."""
-        limit = _LOG_K_RANGE[1] if side > 0 else _LOG_K_RANGE[0]
-        self.last = self.anchor.phi.copy()
-        target = side * q
-        a, ra = self.psi_hat, 0.0
-        b = self.psi_hat + side * max(abs(guess), 1e-6)
-        inner, outer = self.psi_hat, math.nan  # the bracket: short of the target, past it
-        for _ in range(_SECANT_STEPS):
-            b = float(np.clip(b, *_LOG_K_RANGE))
-            rb = self.root(b)
-            if abs(rb - target) < _ROOT_TOLERANCE:
-                return b
-            if b == limit and (rb - target) * side < 0:
-                return side * math.inf
-            if math.isfinite(rb):
-                if (rb - target) * side < 0:
-                    inner = b if (b - inner) * side > 0 else inner
-                elif math.isnan(outer) or (outer - b) * side > 0:
-                    outer = b
-            if not math.isfinite(rb) or (rb - ra) * (b - a) <= 0:
-                # r must rise with psi: step half-way back toward the last good point
-                b = 0.5 * (a + b)
-                continue
-            slope = (rb - ra) / (b - a)
-            a, ra, b = b, rb, b + (target - rb) / slope
-        return self._bisect(target, side, inner, outer, limit)
+        inf (open) when it is not reached within the range of log K.
 
-    def _bisect(
-        self, target: float, side: float, inner: float, outer: float, limit: float
-    ) -> float:
-        """Bisection on the bracket [inner, outer] when the secant did not
-        converge (r far from linear in psi: an estimate at the floor of log K,
-        where the deviance grows like K = e^psi)."""
-        if math.isnan(outer):
-            if (self.root(limit) - target) * side < 0:
+        A safeguarded secant search on r in x = psi or, above an estimate on
+        the floor or with a Wald interval wider than a factor
+        e^(2 _ROOT_K_SE) (where the deviance grows like K, not like log K),
+        in x = sqrt(K) = exp(psi / 2). The first x comes from
+        :meth:`_guess` (or, for the second level, from the points the first
+        found); then the secant through the two points nearest the level,
+        kept inside the bracket of the points short of it and past it
+        (bisection when it leaves it; doubling the distance from the estimate
+        while nothing is past it)."""
+        limit = _LOG_K_RANGE[1] if side > 0 else _LOG_K_RANGE[0]
+        if (limit - self.psi_hat) * side <= 1e-9:
+            return side * math.inf
+        root_k = side > 0 and (self.psi_hat <= _LOG_K_RANGE[0] + 1e-9 or se_psi > _ROOT_K_SE)
+
+        def to_x(psi: float) -> float:
+            return math.exp(0.5 * psi) if root_k else psi
+
+        def to_psi(x: float) -> float:
+            return 2.0 * math.log(x) if root_k else x
+
+        target = side * q
+        x_hat, x_limit = to_x(self.psi_hat), to_x(limit)
+        points = [(to_x(s.psi), s.root) for s in self.solved if (s.psi - self.psi_hat) * side >= 0]
+        x = to_x(float(np.clip(self._guess(q, side, se_psi, root_k), *_LOG_K_RANGE)))
+        for step in range(_SEARCH_STEPS):
+            short = [p for p in points if (p[1] - target) * side < 0]
+            past = [p for p in points if not (p[1] - target) * side < 0]
+            inner = max(short, key=lambda p: side * p[0])[0]
+            outer = min(past, key=lambda p: side * p[0])[0] if past else None
+            if outer is not None and abs(to_psi(outer) - to_psi(inner)) < _BRACKET_TOLERANCE:
+                return to_psi(0.5 * (inner + outer))
+            if step > 0 or len(points) > 1:
+                x = _next_x(points, target, side, inner, outer, x_hat, x_limit)
+            r = self.root(to_psi(x))
+            if abs(r - target) < _ROOT_TOLERANCE:
+                return to_psi(x)
+            if x == x_limit and (r - target) * side < 0:
                 return side * math.inf
-            outer = limit
-        middle = 0.5 * (inner + outer)
-        for _ in range(_BISECTION_STEPS):
-            middle = 0.5 * (inner + outer)
-            r = self.root(middle)
-            if abs(r - target) < _ROOT_TOLERANCE or abs(outer - inner) < _BRACKET_TOLERANCE:
-                return middle
-            if math.isfinite(r) and (r - target) * side < 0:
-                inner = middle
-            else:
-                outer = middle
-        return middle
+            points.append((x, r if math.isfinite(r) else side * math.inf))
+        short = [p for p in points if (p[1] - target) * side < 0]
+        past = [p for p in points if not (p[1] - target) * side < 0]
+        if not past:
+            return side * math.inf
+        return to_psi(min(past, key=lambda p: side * p[0])[0])
+
+
+def _next_x(
+    points: list[tuple[float, float]],
+    target: float,
+    side: float,
+    inner: float,
+    outer: float | None,
+    x_hat: float,
+    x_limit: float,
+) -> float:
+    """The next x of :meth:`_Profile.bound`'s search: the secant through the
+    two finite points nearest the level when it rises toward ``side`` and
+    falls strictly inside the bracket (inner, outer), else the bracket's
+    middle, else (nothing past the level yet) twice inner's distance from
+    the estimate, at most the end of the range."""
+    high = outer if outer is not None else x_limit
+    finite = [p for p in points if math.isfinite(p[1])]
+    near = sorted(finite, key=lambda p: abs(p[1] - target))[:2]
+    if len(near) == 2 and near[0][0] != near[1][0]:
+        (xa, ra), (xb, rb) = near
+        slope = (rb - ra) / (xb - xa)
+        if slope > 0:
+            x = xb + (target - rb) / slope
+            if (x - inner) * side > 0 and (high - x) * side > 0:
+                return x
+            if outer is None and (x - inner) * side > 0:
+                return x_limit
+    if outer is not None:
+        return 0.5 * (inner + outer)
+    x = inner + 2.0 * (inner - x_hat)
+    return x if (x_limit - x) * side > 0 else x_limit
 
 
 def profile_interval(
@@ -306,8 +474,8 @@ def profile_interval(
     ends: list[tuple[float, float]] = []
     for level_q in (float(stats.norm.isf((1 - LEVEL_95) / 2)), FOUR_SIGMA):
         q = level_q * math.sqrt(widen)
-        low = profile.bound(q, -1.0, q * se_psi)
-        high = profile.bound(q, 1.0, q * se_psi)
+        low = profile.bound(q, -1.0, se_psi)
+        high = profile.bound(q, 1.0, se_psi)
         ends.append((_exp(low), _exp(high)))
     rule = "profile likelihood (Cox-Reid adjusted)"
     if widen > 1.0:

@@ -271,6 +271,12 @@ def _groups(trials: Sequence[PathTrial], weights: FloatArray) -> list[GroupStats
     return out
 
 
+def path_groups(trials: Sequence[PathTrial], weights: FloatArray | None = None) -> list[GroupStats]:
+    """The trials as likelihood groups (one each, keyed by its index), with
+    ``weights`` (1 each when None): what the fit and its intervals use."""
+    return _groups(trials, np.ones(len(trials)) if weights is None else weights)
+
+
 def _distances(trials: Sequence[PathTrial], point: ModelPoint) -> tuple[FloatArray, FloatArray]:
     """(squared Mahalanobis distance, log det of the total covariance) per trial."""
     d2 = np.empty(len(trials))
