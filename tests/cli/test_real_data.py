@@ -71,7 +71,7 @@ def _paper(data: dict[str, Any], name: str) -> tuple[float, float, float]:
 
 def _check_straight(result: Result) -> None:
     assert result.exit_code == 0, result.output
-    data = json.loads(result.output)
+    data = json.loads(result.stdout)
     assert data["verdict"]["status"] == "trusted", data["verdict"]
     assert data["n_trials"] == 14
     e_r = _paper(data, "E_R")[0]
@@ -108,7 +108,7 @@ def test_june_circles_with_exact_turns_are_not_trusted_and_the_reason_names_the_
 ) -> None:
     result = invoke("estimate", OPTIODOM / "circular", "--robot", _exact_robot(tmp_path), "--json")
     assert result.exit_code == 3, result.output
-    data = json.loads(result.output)
+    data = json.loads(result.stdout)
     assert data["verdict"]["status"] != "trusted"
     reasons = " ".join(data["verdict"]["reasons"])
     assert re.search(r"heading residual [+-][\d.]+ deg on the \d+ (cw|ccw) arc trials", reasons), (
@@ -120,7 +120,7 @@ def test_june_circles_with_exact_turns_are_not_trusted_and_the_reason_names_the_
 def test_june_circles_with_turn_errors_report_e_turn_excluding_zero() -> None:
     result = invoke("estimate", OPTIODOM / "circular", "--robot", OPTIODOM_ROBOT, "--json")
     assert result.exit_code == 0, result.output
-    data = json.loads(result.output)
+    data = json.loads(result.stdout)
     assert data["verdict"]["status"] == "trusted"
     # the data ask for one turn scale per direction; the clockwise one excludes 0
     names = [n for n in data["parameters"] if n.startswith("e_turn")]
@@ -161,7 +161,7 @@ def test_validate_straight_and_cw_circles_against_ccw_circles_finds_the_heading_
     held = _trial_file(tmp_path / "held.jsonl", ccw)
     result = invoke("validate", cal, "--path", f"file:{held}", "--robot", OPTIODOM_ROBOT, "--json")
     assert result.exit_code == 3, result.output
-    data = json.loads(result.output)
+    data = json.loads(result.stdout)
     verdict = data["verdict"]
     assert "e_turn" in data["calibration"]["parameters"]
     assert data["calibration"]["verdict"]["status"] == "trusted"
@@ -182,7 +182,7 @@ def test_validate_cw_circles_against_ccw_circles_finds_a_bias(tmp_path: Path) ->
     )
     result = invoke("validate", cal, "--path", f"file:{held}", "--robot", OPTIODOM_ROBOT, "--json")
     assert result.exit_code == 3, result.output
-    verdict = json.loads(result.output)["verdict"]
+    verdict = json.loads(result.stdout)["verdict"]
     assert not verdict["bias"]["overall"]["passed"], verdict["failed"]
 
 
@@ -243,7 +243,7 @@ def test_direction_selection_keeps_one_direction() -> None:
         "estimate", OPTIODOM / "circular", "--direction", "cw", "--robot", OPTIODOM_ROBOT, "--json"
     )
     assert result.exit_code == 0, result.output  # cw circles alone: trusted
-    data = json.loads(result.output)
+    data = json.loads(result.stdout)
     assert [(g["family"], g["direction"], g["trials"]) for g in data["general_paths"]] == [
         ("arc", "cw", 16)
     ]
