@@ -10,23 +10,20 @@ from rich.console import Console
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
-from odohil.cli.line import resolve_line
-from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
-from odohil.cli.run import (
-    Outcome,
-    connect,
-    execute,
+from odohil.cli.options import UNITS_DEFAULT, UnitsOption, unit_system
+from odohil.cli.session_view import (
+    BaudOption,
+    JsonOption,
+    PortOption,
+    ProgressObserver,
+    TruthSocketOption,
     finish,
-    make_source,
-    open_mocap,
-    parse_measure,
+    prepared_or_exit,
+    report_run,
+    say_opened,
     session_exit_codes,
-    session_input,
 )
-from odohil.errors import InitError
-from odohil.session.engine import description_of, resume_session
-from odohil.session.floor_space import check_floor
-from odohil.session.preflight import check_session_folder, check_trial_file
+from odohil.session.lifecycle import SessionSpec, open_session, preflight, run_session
 from odohil.session.start_pose import (
     HEADING_TOLERANCE_DEG,
     POSITION_TOLERANCE_M,
@@ -37,19 +34,9 @@ from odohil.session.start_pose import (
 
 def resume(
     session: Annotated[Path, typer.Argument(help="The session folder to continue.")],
-    port: Annotated[
-        str | None, typer.Option("--port", help="Serial port (default: the session's).")
-    ] = None,
-    truth_socket: Annotated[
-        str | None,
-        typer.Option("--truth-socket", help="Fake robot truth socket (default: the session's)."),
-    ] = None,
-    baud: Annotated[
-        int | None,
-        typer.Option(
-            "--baud", callback=bounded("baud"), help="Line speed (default: the session's)."
-        ),
-    ] = None,
+    port: PortOption = None,
+    truth_socket: TruthSocketOption = None,
+    baud: BaudOption = None,
     measure: Annotated[
         str | None,
         typer.Option(
@@ -58,14 +45,7 @@ def resume(
             "remaining trials (default: the session's).",
         ),
     ] = None,
-    json_out: Annotated[
-        bool,
-        typer.Option(
-            "--json",
-            help="Print one JSON object (SI), as run --json: the final estimate, or the "
-            "status and partial estimate of a run that did not finish.",
-        ),
-    ] = False,
+    json_out: JsonOption = False,
     units_choice: UnitsOption = UNITS_DEFAULT,
     from_here: Annotated[
         bool,
@@ -86,74 +66,37 @@ def resume(
     """
     console = Console(stderr=True)
     system = unit_system(units_choice)
+    spec = SessionSpec(
+        session, "resume", measure=measure, port=port, baud=baud, truth_socket=truth_socket
+    )
     with session_exit_codes(console, json_out):
-        with session_input(console):
-            check_session_folder(session)
-            resumed = resume_session(session)
-        with resumed.journal:
-            if resumed.torn is not None:
-                console.print(f"[yellow]warning[/]: {resumed.torn.describe()}")
-            state = resumed.state
-            if state.header.get("measure") == "operator":
-                raise InitError(
-                    f"{session} is a wizard session (the operator measures): continue it "
-                    f"with `odohil wizard --port PORT --session {session}`"
-                )
-            settings = dict(state.header.get("settings", {}))
-            description = description_of(state)  # before the port opens
-            robot_path = str(state.header.get("robot_path") or "robot.toml")
-            line = resolve_line(description, port, baud, robot_path, journaled=settings)
-            socket_path = truth_socket or settings.get("truth_socket")
-            kind = str(state.header.get("measure"))
-            trial_file = settings.get("trial_file")
-            mocap_url = settings.get("mocap_url") if kind == "tcp" else None
-            if measure is not None:
-                option = parse_measure(measure)
-                kind, trial_file, mocap_url = option.kind, option.trial_file, option.mocap_url
-                settings["trial_file"] = str(Path(measure).resolve()) if trial_file else None
-                settings["mocap_url"] = mocap_url
-            done = len(state.completed)
+        prepared = prepared_or_exit(preflight(spec), console)
+        with open_session(prepared, say_opened(console)) as opened:
+            if opened.torn is not None:
+                console.print(f"[yellow]warning[/]: {opened.torn.describe()}")
+            state = opened.state
             assert state.plan is not None
-            check_floor(state.plan, description_of(state))
-            if kind == "file" and trial_file:  # before the port opens
-                check_trial_file(trial_file, description, state.plan)
             console.print(
-                f"resuming {session}: {done} of "
+                f"resuming {session}: {len(state.completed)} of "
                 f"{units.plural(state.plan.n_trials, 'trial')} done"
                 + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
             )
-            console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
-            with (
-                open_mocap(mocap_url, description, console) as mocap,  # before the port opens
-                connect(line, socket_path) as (robot, truth),
-            ):
-                source = make_source(
-                    kind,
-                    description,
-                    truth,
-                    int(settings.get("seed") or 0),
-                    trial_file,
-                    mocap,
-                )
-                connection = {**settings, **line.to_json()}
-                connection["truth_socket"] = socket_path
-                refused: list[StartPose] = []
+            console.print(f"robot: {prepared.line.describe()}", soft_wrap=True, markup=False)
+            refused: list[StartPose] = []
 
-                def start_check(start: StartPose) -> None:
-                    console.print(f"robot: {start.describe()}")
-                    if not start.ok and from_here:
-                        console.print("[yellow]--from-here[/]: the trial starts where it stands")
-                    elif not start.ok:
-                        refused.append(start)
-                        refuse_off_start(start)
+            def start_check(start: StartPose) -> None:
+                console.print(f"robot: {start.describe()}")
+                if not start.ok and from_here:
+                    console.print("[yellow]--from-here[/]: the trial starts where it stands")
+                elif not start.ok:
+                    refused.append(start)
+                    refuse_off_start(start)
 
-                outcome = execute(
-                    resumed.journal, state, robot, source, connection, console,
-                    start_check=start_check, system=system,
-                )  # fmt: skip
-                if refused:
-                    outcome = Outcome(EXIT_BAD_INPUT, None)
-    finish(outcome, json_out, console, system=system)
+            observer = ProgressObserver(console, state, system)
+            with observer.shown():
+                outcome = run_session(opened, observer, start_check=start_check)
+            report_run(console, outcome)
+    finish(outcome, json_out, console, system=system, code=EXIT_BAD_INPUT if refused else None)
 
 
 def register(app: typer.Typer) -> None:

@@ -4,7 +4,6 @@ odohil/science/validation.py)."""
 
 from __future__ import annotations
 
-import contextlib
 import json
 import math
 from pathlib import Path
@@ -23,8 +22,8 @@ from odohil.cli.exit_codes import (
     EXIT_OK,
     EXIT_UNTRUSTED,
     exit_for_outcome,
+    exit_for_run,
 )
-from odohil.cli.line import resolve_line, truth_available
 from odohil.cli.options import bounded
 from odohil.cli.recording_options import (
     MAX_TIME_DIFF_DEFAULT,
@@ -44,14 +43,11 @@ from odohil.cli.recording_options import (
     import_options,
 )
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.run import (
-    Outcome,
-    connect,
-    make_source,
-    open_mocap,
-    parse_measure,
-    refuse_unredundant,
-    run_engine,
+from odohil.cli.session_view import (
+    ProgressObserver,
+    prepared_or_exit,
+    report_run,
+    say_opened,
     session_exit_codes,
 )
 from odohil.cli.verdict import outcome_line
@@ -64,10 +60,8 @@ from odohil.errors import (
 )
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
-from odohil.session.engine import start_session
-from odohil.session.floor_space import check_floor
-from odohil.session.plan import Plan, check_session_plan
-from odohil.session.preflight import check_trial_file
+from odohil.session.lifecycle import SessionSpec, open_session, preflight, run_session
+from odohil.session.plan import Plan
 from odohil.session.robot_file import load_robot_description, read_robot_toml
 from odohil.session.state import description_of_header, load_session
 from odohil.session.validation import (
@@ -342,42 +336,24 @@ def _drive_or_reload(
         raise ParameterError(
             "--measure is needed to drive: `fake`, `tcp://HOST:PORT` or a trial file (CSV)"
         )
-    plan = check_session_plan(Plan.of([(vpath.design, trials)]))
-    option = parse_measure(measure)
-    kind, trial_file = option.kind, option.trial_file
-    if kind != "tcp":  # the tape's cross distances must tell the designs apart
-        refuse_unredundant(description, plan, console)
-    check_floor(plan, description)
-    line = resolve_line(description, port, baud, robot_path or "the session's robot description")
-    if trial_file:
-        check_trial_file(trial_file, description, plan)
-    if kind == "fake" and not truth_available(line, truth_socket):
-        make_source(kind, description, None, seed, trial_file)  # says what is missing
-    settings = {
-        **line.to_json(),
-        "truth_socket": truth_socket,
-        "seed": seed,
-        "trial_file": str(Path(trial_file).resolve()) if trial_file else None,
-        "validation_of": str(session.resolve()),
-        "validation_path": vpath.text,
-    }
-    if option.mocap_url:
-        settings["mocap_url"] = option.mocap_url
-    with contextlib.ExitStack() as stack:
-        mocap = stack.enter_context(open_mocap(option.mocap_url, description, console))
-        journal, state = start_session(
-            folder, toml, plan, measure=kind, settings=settings, robot_path=robot_path
-        )
-        console.print(f"validation session {folder}")
-        console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
-        stack.enter_context(session_exit_codes(console))
-        stack.enter_context(journal)
-        robot, truth = stack.enter_context(connect(line, truth_socket))
-        source = make_source(kind, description, truth, seed, trial_file, mocap)
-        ran = run_engine(journal, state, robot, source, settings, console)
-        if isinstance(ran, Outcome):
-            raise typer.Exit(ran.exit_code)
-    return trials_of_session(ran, source=str(folder))
+    spec = SessionSpec(
+        folder, "new", Path(robot_path) if robot_path else None, robot_toml=toml,
+        plan=Plan.of([(vpath.design, trials)]), measure=measure, port=port, baud=baud,
+        truth_socket=truth_socket, seed=seed, purpose="validate",
+        settings={"validation_of": str(session.resolve()), "validation_path": vpath.text},
+    )  # fmt: skip
+    with session_exit_codes(console):
+        prepared = prepared_or_exit(preflight(spec), console)
+        with open_session(prepared, say_opened(console)) as opened:
+            console.print(f"validation session {folder}")
+            console.print(f"robot: {prepared.line.describe()}", soft_wrap=True, markup=False)
+            observer = ProgressObserver(console, opened.state)
+            with observer.shown():
+                outcome = run_session(opened, observer, start_check=observer.show_start)
+    if outcome.status != "finished":
+        report_run(console, outcome)
+        raise typer.Exit(exit_for_run(outcome))
+    return trials_of_session(outcome.state, source=str(folder))
 
 
 def _json(
