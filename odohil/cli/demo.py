@@ -21,14 +21,14 @@ from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import parameters_line
 from odohil.cli.robot_option import robot_protocol
 from odohil.cli.session_view import (
-    ProgressObserver,
     finish,
     prepared_or_exit,
     report_run,
+    run_with_progress,
     session_exit_codes,
 )
 from odohil.science.parameters import SI_UNITS, ErrorParameters
-from odohil.session.lifecycle import SessionSpec, open_session, preflight, run_session
+from odohil.session.lifecycle import SessionSpec, open_session, preflight
 from odohil.session.robots import fake_hooks
 
 DEMO_TRUTH = ErrorParameters.from_paper_units(-1.0, -0.05, 0.3, 9e-4)
@@ -119,9 +119,7 @@ def demo(
             highlight=False,
         )
         with open_session(prepared) as opened:
-            observer = ProgressObserver(console, opened.state, system)
-            with observer.shown():
-                outcome = run_session(opened, observer, start_check=observer.show_start)
+            outcome = run_with_progress(console, opened, system)
             report_run(console, outcome)
     extra = {"truth": {name: {"value": v, "unit": SI_UNITS[name]} for name, v in truth.items()}}
     finish(outcome, json_out, console, extra=extra, truth=truth, system=system)

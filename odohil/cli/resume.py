@@ -15,15 +15,15 @@ from odohil.cli.session_view import (
     BaudOption,
     JsonOption,
     PortOption,
-    ProgressObserver,
     TruthSocketOption,
     finish,
     prepared_or_exit,
     report_run,
+    run_with_progress,
     say_opened,
     session_exit_codes,
 )
-from odohil.session.lifecycle import SessionSpec, open_session, preflight, run_session
+from odohil.session.lifecycle import SessionSpec, open_session, preflight
 from odohil.session.start_pose import (
     HEADING_TOLERANCE_DEG,
     POSITION_TOLERANCE_M,
@@ -92,9 +92,7 @@ def resume(
                     refused.append(start)
                     refuse_off_start(start)
 
-            observer = ProgressObserver(console, state, system)
-            with observer.shown():
-                outcome = run_session(opened, observer, start_check=start_check)
+            outcome = run_with_progress(console, opened, system, start_check)
             report_run(console, outcome)
     finish(outcome, json_out, console, system=system, code=EXIT_BAD_INPUT if refused else None)
 

@@ -22,17 +22,17 @@ from odohil.cli.session_view import (
     BaudOption,
     JsonOption,
     PortOption,
-    ProgressObserver,
     TruthSocketOption,
     default_session_folder,
     finish,
     prepared_or_exit,
     report_run,
+    run_with_progress,
     say_opened,
     session_exit_codes,
 )
 from odohil.cli.session_view import warn_turns as warn_turns
-from odohil.session.lifecycle import SessionSpec, open_session, preflight, run_session
+from odohil.session.lifecycle import SessionSpec, open_session, preflight
 
 _PLAN_HELP = (
     'Designs and trial counts, e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30" '
@@ -96,9 +96,7 @@ def run(
         with open_session(prepared, say_opened(console)) as opened:
             console.print(f"session {spec.folder}")
             console.print(f"robot: {prepared.line.describe()}", soft_wrap=True, markup=False)
-            observer = ProgressObserver(console, opened.state, system)
-            with observer.shown():
-                outcome = run_session(opened, observer, start_check=observer.show_start)
+            outcome = run_with_progress(console, opened, system)
             report_run(console, outcome)
     finish(outcome, json_out, console, system=system)
 

@@ -44,9 +44,9 @@ from odohil.cli.recording_options import (
 )
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.session_view import (
-    ProgressObserver,
     prepared_or_exit,
     report_run,
+    run_with_progress,
     say_opened,
     session_exit_codes,
 )
@@ -60,7 +60,7 @@ from odohil.errors import (
 )
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
-from odohil.session.lifecycle import SessionSpec, open_session, preflight, run_session
+from odohil.session.lifecycle import SessionSpec, open_session, preflight
 from odohil.session.plan import Plan
 from odohil.session.robot_file import load_robot_description, read_robot_toml
 from odohil.session.state import description_of_header, load_session
@@ -347,9 +347,7 @@ def _drive_or_reload(
         with open_session(prepared, say_opened(console)) as opened:
             console.print(f"validation session {folder}")
             console.print(f"robot: {prepared.line.describe()}", soft_wrap=True, markup=False)
-            observer = ProgressObserver(console, opened.state)
-            with observer.shown():
-                outcome = run_session(opened, observer, start_check=observer.show_start)
+            outcome = run_with_progress(console, opened)
     if outcome.status != "finished":
         report_run(console, outcome)
         raise typer.Exit(exit_for_run(outcome))

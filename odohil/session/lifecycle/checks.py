@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, Literal, TypeVar
 
 from odohil import units
-from odohil.errors import InitError, JournalError, OdohilError, ParameterError
+from odohil.errors import InitError, JournalError, OdohilError, ParameterError, TrialFileError
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.floor_space import check_floor
@@ -365,7 +365,12 @@ def _measurement(
     truth_socket: str | None,
 ) -> str:
     if option.kind == "file" and option.trial_file:
-        check_trial_file(option.trial_file, description, plan)
+        try:
+            check_trial_file(option.trial_file, description, plan)
+        except TrialFileError as exc:
+            if "--measure" in str(exc):
+                raise
+            raise TrialFileError(f"--measure {option.trial_file}: {exc}") from None
         return f"trial file {option.trial_file}"
     if option.kind == "fake":
         if not truth_available(line, truth_socket):
