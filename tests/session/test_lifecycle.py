@@ -10,14 +10,16 @@ from dataclasses import replace
 from pathlib import Path
 
 import pytest
+from typer.testing import CliRunner
 
 import fakes
+from odohil.cli.app import app
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, exit_for_check, exit_for_run
 from odohil.errors import JournalError
 from odohil.robots import __file__ as robots_init
 from odohil.science.estimators import EstimateResult
 from odohil.session import state as ev
-from odohil.session.engine import IncrementalLiveEstimator
+from odohil.session.engine import IncrementalLiveEstimator, start_session
 from odohil.session.journal import Record, read_journal
 from odohil.session.lifecycle import (
     PreflightFailed,
@@ -29,6 +31,7 @@ from odohil.session.lifecycle import (
     require,
     run_session,
 )
+from odohil.session.plan import parse_plan
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState, load_session
 
@@ -280,3 +283,25 @@ def test_the_old_incremental_live_estimate_differs(tmp_path: Path) -> None:
     assert final is not None
     assert seen.live
     assert seen.live[-1].parameter("E_R").ci95 != final.parameter("E_R").ci95
+
+
+def test_resume_refuses_a_wizard_session_before_anything_is_written(tmp_path: Path) -> None:
+    """`odohil resume` refuses a session the operator measures (the wizard's)
+    as bad input, naming the command that continues it, and writes nothing
+    (it exited 1 after locking the session and journaling `resumed`)."""
+    folder = tmp_path / "hallway"
+    toml = (ROBOTS / "nomad150.toml").read_text(encoding="utf-8")
+    journal, _ = start_session(
+        folder, toml, parse_plan("k=1,l=6,n=30;k=20,l=0.5,n=30"), measure="operator",
+        settings={"port": "/dev/odohil-no-such-port"}, robot_path="robot.toml",
+    )  # fmt: skip
+    journal.close()
+    before = read_journal(folder).records
+    failure = preflight(SessionSpec(folder, "resume")).failure
+    assert failure is not None
+    assert failure.name == "session"
+    assert f"odohil wizard --port PORT --session {folder}" in failure.message
+    assert exit_for_check(failure) == EXIT_BAD_INPUT
+    result = CliRunner().invoke(app, ["resume", str(folder)])
+    assert result.exit_code == EXIT_BAD_INPUT, result.output
+    assert read_journal(folder).records == before

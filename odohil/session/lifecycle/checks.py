@@ -179,7 +179,7 @@ def _prepare(spec: SessionSpec, done: _List) -> Prepared:
     )
     old = dict(_header(state).get("settings", {}))
     option = _option(spec, state, old)
-    if state is not None and _header(state).get("measure") == OPERATOR and option.kind != OPERATOR:
+    if state is not None and _header(state).get("measure") == OPERATOR != spec.measure:
         done.fail(
             "session",
             f"{folder} is a wizard session (the operator measures): continue it with "
