@@ -172,7 +172,7 @@ def _prepare(spec: SessionSpec, done: _List) -> Prepared:
     folder = spec.folder
     exists = journal_path(folder).exists() or journal_path(folder).is_symlink()
     done.check("session folder", lambda: _folder(spec, exists), lambda _: str(folder))
-    resumed = exists and spec.mode != "new"
+    resumed = spec.mode == "resume" or (exists and spec.mode == "auto")
     state = done.check("session", lambda: _load(folder), _progress) if resumed else None
     description, toml, robot_path = done.check(
         "robot description", lambda: _description(spec, state), lambda d: d[2] or "the session's"
@@ -250,6 +250,12 @@ def _option(spec: SessionSpec, state: SessionState | None, old: Mapping[str, Any
 
 def _load(folder: Path) -> SessionState:
     """A session to resume, read (not locked): JournalError when it cannot be."""
+    path = journal_path(folder)
+    if not (path.exists() or path.is_symlink()):
+        raise JournalError(
+            f"cannot open the session journal in {folder}: it holds no journal.jsonl "
+            "(nothing to resume)"
+        )
     state = load_session(folder).state
     if state.finished:
         raise JournalError(f"the session in {folder} is finished; nothing to resume")
@@ -265,8 +271,6 @@ def _folder(spec: SessionSpec, exists: bool) -> None:
             f"--session {spec.folder} already holds a session journal; use "
             f"`odohil resume {spec.folder}` to continue it, or give another --session"
         )
-    if spec.mode == "resume" and not exists:
-        raise ParameterError(f"{spec.folder} holds no session journal: nothing to resume")
 
 
 def _progress(state: SessionState) -> str:
