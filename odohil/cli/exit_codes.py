@@ -24,9 +24,12 @@ that estimates maps its outcome through :func:`exit_for_outcome`.
 from __future__ import annotations
 
 import signal
+from typing import TYPE_CHECKING
 
-from odohil.session.lifecycle import PreflightCheck, RunOutcome
 from odohil.session.outcome import EstimateOutcome
+
+if TYPE_CHECKING:
+    from odohil.session.lifecycle import PreflightCheck, RunOutcome
 
 EXIT_OK = 0
 EXIT_ERROR = 1
