@@ -21,7 +21,7 @@ from odohil.errors import InitError, JournalError, OdohilError, ParameterError, 
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 from odohil.session.floor_space import check_floor
-from odohil.session.journal import journal_path
+from odohil.session.journal import Journal, journal_path
 from odohil.session.lifecycle.measure import (
     OPERATOR,
     MeasureOption,
@@ -256,6 +256,7 @@ def _load(folder: Path) -> SessionState:
             f"cannot open the session journal in {folder}: it holds no journal.jsonl "
             "(nothing to resume)"
         )
+    Journal._check_not_in_use(folder)  # a running odohil's: "session in use"
     state = load_session(folder).state
     if state.finished:
         raise JournalError(f"the session in {folder} is finished; nothing to resume")
@@ -267,6 +268,7 @@ def _load(folder: Path) -> SessionState:
 def _folder(spec: SessionSpec, exists: bool) -> None:
     check_session_folder(spec.folder)
     if spec.mode == "new" and exists:
+        Journal._check_not_in_use(spec.folder)  # a running odohil's: "session in use"
         raise ParameterError(
             f"--session {spec.folder} already holds a session journal; use "
             f"`odohil resume {spec.folder}` to continue it, or give another --session"
