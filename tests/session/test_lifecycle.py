@@ -305,3 +305,20 @@ def test_resume_refuses_a_wizard_session_before_anything_is_written(tmp_path: Pa
     result = CliRunner().invoke(app, ["resume", str(folder)])
     assert result.exit_code == EXIT_BAD_INPUT, result.output
     assert read_journal(folder).records == before
+
+
+def test_run_whose_port_does_not_answer_leaves_no_session_folder(tmp_path: Path) -> None:
+    """`odohil run` created the session (its journal and plan) before the robot
+    answered, so a wrong --port left a folder the next run refused."""
+    folder = tmp_path / "s"
+    result = CliRunner().invoke(
+        app,
+        [
+            "run", "--port", "/dev/odohil-no-such-port", "--robot", str(ROBOTS / "nomad150.toml"),
+            "--plan", "k=0.5,l=1,n=3", "--allow-few-trials", "--measure", "fake",
+            "--truth-socket", str(tmp_path / "truth.sock"), "--session", str(folder),
+        ],
+    )  # fmt: skip
+    assert result.exit_code == 1, result.output  # a port that does not answer: an error
+    assert "/dev/odohil-no-such-port" in result.output
+    assert not folder.exists()
