@@ -221,7 +221,7 @@ def _prepare(spec: SessionSpec, done: _List) -> Prepared:
         "truth_socket": socket,
         "seed": seed,
         "trial_file": str(Path(option.trial_file).resolve()) if option.trial_file else None,
-        **({"mocap_url": option.mocap_url} if option.mocap_url else {}),
+        **({"mocap_url": option.mocap_url} if option.mocap_url or "mocap_url" in old else {}),
         **spec.settings,
     }
     warning = turn_warning(plan, description) if spec.purpose == "calibrate" else None
