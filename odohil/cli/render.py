@@ -23,8 +23,8 @@ from odohil.science.estimators.verdict import Verdict
 from odohil.science.grouping import by_design
 from odohil.science.observables import observables
 from odohil.science.paths import Design, Leg, Turn
+from odohil.session.lifecycle import PreflightCheck
 from odohil.session.outcome import EstimateOutcome
-from odohil.session.preflight import Check
 from odohil.session.state import CompletedTrial
 
 
@@ -110,10 +110,10 @@ def print_outcome(
         out.print(line, highlight=False)
 
 
-def check_line(check: Check) -> Text:
+def check_line(check: PreflightCheck) -> Text:
     """``[ok] name: detail`` (or ``[FAIL]``), coloured."""
-    mark = Text("[ok]  ", style="green") if check.ok else Text("[FAIL] ", style="bold red")
-    return Text.assemble(mark, (check.name, "bold"), ": ", check.detail)
+    mark = Text("[ok]  ", style="green") if check.passed else Text("[FAIL] ", style="bold red")
+    return Text.assemble(mark, (check.name, "bold"), ": ", check.message)
 
 
 def observables_table(trials: Sequence[CompletedTrial]) -> Table:

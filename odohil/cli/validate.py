@@ -4,7 +4,6 @@ odohil/science/validation.py)."""
 
 from __future__ import annotations
 
-import contextlib
 import json
 from pathlib import Path
 from typing import Annotated, Any
@@ -14,17 +13,16 @@ from rich.console import Console
 from rich.markup import escape
 
 from odohil import units
-from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED
-from odohil.cli.line import resolve_line, truth_available
+from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED, exit_for_run
 from odohil.cli.options import JsonOption, option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_input, print_refusal, table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.run import (
-    Outcome,
-    connect,
-    refuse_unredundant,
-    run_engine,
+from odohil.cli.session_view import (
+    prepared_or_exit,
+    report_run,
+    run_with_progress,
+    say_opened,
     session_exit_codes,
 )
 from odohil.cli.verdict import outcome_line
@@ -37,17 +35,11 @@ from odohil.errors import (
 )
 from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
-from odohil.session.engine import start_session
-from odohil.session.floor_space import check_floor
+from odohil.session.lifecycle import SessionSpec, open_session, preflight
 from odohil.session.logs import ImportOptions
-from odohil.session.plan import Plan, check_session_plan
+from odohil.session.plan import Plan
 from odohil.session.pose_kinds import TrialFileSettings
 from odohil.session.pose_sources import (
-    Connection,
-    OpenContext,
-    Preflight,
-    check_measure,
-    open_measure,
     parse_measure,
 )
 from odohil.session.robot_file import load_robot_description
@@ -212,7 +204,7 @@ def _drive_or_reload(
     assert vpath.design is not None
     if (folder / "journal.jsonl").is_file():
         state = load_session(folder).state
-        settings = state.header.settings
+        settings = state.header.get("settings", {})
         if settings.get("validation_path") != vpath.text or not state.finished:
             raise JournalError(
                 f"{folder} holds {'another' if state.finished else 'an unfinished'} "
@@ -227,39 +219,22 @@ def _drive_or_reload(
         raise ParameterError(
             "--measure is needed to drive: `fake`, `tcp://HOST:PORT` or a trial file (CSV)"
         )
-    plan = check_session_plan(Plan.of([(vpath.design, trials)]), description.robot.protocol)
-    option = parse_measure(measure)
-    if option.floor_marks:  # the tape's cross distances must tell the designs apart
-        refuse_unredundant(description, plan, console)
-    check_floor(plan, description)
-    line = resolve_line(description, port, baud, robot_path or "the session's robot description")
-    check_measure(option, Preflight(description, plan, truth_available(line, truth_socket)))
-    settings = {
-        **line.to_json(),
-        "truth_socket": truth_socket,
-        "seed": seed,
-        "trial_file": None,
-        "validation_of": str(session.resolve()),
-        "validation_path": vpath.text,
-    }
-    settings.update(option.journal_settings())
-    with contextlib.ExitStack() as stack:
-        opened = stack.enter_context(open_measure(option, OpenContext(description, seed)))
-        if opened.note:
-            console.print(opened.note, soft_wrap=True)
-        journal, state = start_session(
-            folder, toml, plan, measure=option.kind, settings=settings, robot_path=robot_path
-        )
-        console.print(f"validation session {folder}")
-        console.print(f"robot: {line.describe()}", soft_wrap=True, markup=False)
-        stack.enter_context(session_exit_codes(console))
-        stack.enter_context(journal)
-        robot, truth = stack.enter_context(connect(line, truth_socket))
-        source = opened.make(Connection(robot, truth))
-        ran = run_engine(journal, state, robot, source, settings, console)
-        if isinstance(ran, Outcome):
-            raise typer.Exit(ran.exit_code)
-    return trials_of_session(ran, source=str(folder))
+    spec = SessionSpec(
+        folder, "new", Path(robot_path) if robot_path else None, robot_toml=toml,
+        plan=Plan.of([(vpath.design, trials)]), measure=measure, port=port, baud=baud,
+        truth_socket=truth_socket, seed=seed, purpose="validate",
+        settings={"validation_of": str(session.resolve()), "validation_path": vpath.text},
+    )  # fmt: skip
+    with session_exit_codes(console):
+        prepared = prepared_or_exit(preflight(spec), console)
+        with open_session(prepared, say_opened(console)) as opened:
+            console.print(f"validation session {folder}")
+            console.print(f"robot: {prepared.line.describe()}", soft_wrap=True, markup=False)
+            outcome = run_with_progress(console, opened)
+    if outcome.status != "finished":
+        report_run(console, outcome)
+        raise typer.Exit(exit_for_run(outcome))
+    return trials_of_session(outcome.state, source=str(folder))
 
 
 def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationTrials) -> None:

@@ -17,10 +17,9 @@ from __future__ import annotations
 import math
 import os
 import sys
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -29,69 +28,57 @@ from rich.markup import escape
 from odohil import units
 from odohil.cli.exit_codes import (
     EXIT_BAD_INPUT,
-    EXIT_ERROR,
     EXIT_INTERRUPTED,
     EXIT_OK,
     EXIT_STOP_UNCONFIRMED,
     EXIT_UNTRUSTED,
     exit_for_outcome,
+    exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.line import Line, register_fake_urls, resolve_line
+from odohil.cli.line import register_fake_urls
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
 from odohil.cli.render import MotionProgress, check_line, estimate_panel
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.run import (
-    ALLOW_TURNS_HELP,
+from odohil.cli.run import ALLOW_TURNS_HELP
+from odohil.cli.session_view import (
     MAY_STILL_MOVE,
+    BaudOption,
     default_session_folder,
-    final_estimate,
-    interrupt_text,
-    report_stop,
-    warn_turns,
+    report_run,
 )
 from odohil.cli.verdict import export_refusal_lines, outcome_line
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import (
     InconsistentMeasurementError,
     MeasurementError,
-    OdohilError,
-    StopUnconfirmedError,
 )
 from odohil.science.estimators import EstimateResult
 from odohil.science.planner import DEFAULT_MAX_LEG_M
-from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session.engine import (
-    IncrementalLiveEstimator,
-    SessionEngine,
     StartCheck,
-    description_of,
-    resume_session,
-    start_session,
 )
 from odohil.session.events import Finished, MotionStart, Solved, Void
 from odohil.session.interrupts import Interrupts, wait_readable
-from odohil.session.journal import Journal, Record, journal_path
-from odohil.session.plan import Plan, check_session_plan, parse_plan
-from odohil.session.pose_sources import OPERATOR
-from odohil.session.preflight import (
-    Check,
-    check_session_folder,
-    check_turns,
-    default_variant,
-    estimable_check,
-    floor_check,
-    leg_check,
+from odohil.session.journal import Record
+from odohil.session.lifecycle import (
+    Opened,
+    PreflightCheck,
+    PreflightFailed,
+    SessionSpec,
+    final_estimate,
+    open_session,
+    preflight,
+    require,
+    run_session,
 )
+from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
-from odohil.session.robot_file import load_robot_description, read_robot_toml
-from odohil.session.robots import open_robot
-from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TrialContext
-from odohil.session.start_pose import StartPose, pose_text, sample_pose
-from odohil.session.state import SessionState, load_session
+from odohil.session.start_pose import StartPose
+from odohil.session.state import SessionState
 from odohil.session.tape_entry import INSTRUCTIONS, TapeEntries, parse_optional_metres
 
 DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
@@ -279,174 +266,6 @@ class WizardObserver:
         """The engine's incremental estimate: not shown (the recipe's is, at ``solved``)."""
 
 
-def _fail(console: Console, check: Check) -> NoReturn:
-    console.print(check_line(check))
-    console.print("[red]Pre-flight failed: nothing was moved.[/]")
-    raise typer.Exit(EXIT_BAD_INPUT)
-
-
-@dataclass
-class Opened:
-    """The session the wizard works on."""
-
-    journal: Journal
-    state: SessionState
-
-
-def _resume(
-    console: Console,
-    folder: Path,
-    max_leg_m: float,
-    port: str | None,
-    plan_text: str | None = None,
-) -> Opened:
-    if plan_text is not None:
-        _same_plan(console, folder, plan_text)
-    try:
-        resumed = resume_session(folder, {"by": "wizard", "port": port})
-    except OdohilError as exc:
-        _fail(console, Check("session", False, str(exc)))
-    state = resumed.state
-    console.print(check_line(Check("robot description", True, "the session's journaled one")))
-    if resumed.torn is not None:
-        console.print(f"[yellow]warning:[/] {resumed.torn.describe()}")
-    assert state.plan is not None
-    console.print(check_line(leg_check(state.plan, max_leg_m)))
-    floor = floor_check(state.plan, description_of(state))
-    if not floor.ok:
-        _fail(console, floor)
-    console.print(check_line(floor))
-    done = len(state.completed)
-    detail = f"resuming {folder}: {done} of {units.plural(state.plan.n_trials, 'trial')} done"
-    console.print(check_line(Check("session", True, detail)))
-    return Opened(resumed.journal, state)
-
-
-def _same_plan(console: Console, folder: Path, plan_text: str) -> None:
-    """A resumed session keeps its plan: a --plan that differs is refused
-    (before anything is written), not silently replaced by the session's."""
-    try:
-        state = load_session(folder).state
-        assert state.plan is not None
-        given = parse_plan(plan_text, default_variant(description_of(state)))
-    except OdohilError as exc:
-        _fail(console, Check("session", False, str(exc)))
-    if given.to_text() != state.plan.to_text():
-        _fail(
-            console,
-            Check(
-                "session",
-                False,
-                f"--plan {plan_text} differs from the session's plan ({state.plan.to_text()}) "
-                f"in {folder}: give no --plan (or that one) to resume it, or another "
-                "--session for a new session",
-            ),
-        )
-
-
-def _prepare(
-    console: Console,
-    robot_file: Path | None,
-    plan_text: str | None,
-    max_leg_m: float,
-    allow_turns: bool = False,
-) -> tuple[str, Plan]:
-    if robot_file is None:
-        _fail(console, Check("robot description", False, "a new session needs --robot FILE"))
-    try:
-        text = read_robot_toml(robot_file)
-        description = parse_robot_description(text, source=str(robot_file))
-    except (OdohilError, OSError) as exc:
-        _fail(console, Check("robot description", False, str(exc)))
-    console.print(check_line(Check("robot description", True, f"{robot_file} is valid")))
-    try:
-        plan = check_session_plan(  # the robot's leg limits, caps; its default variant
-            parse_plan(plan_text or DEFAULT_PLAN, default_variant(description)),
-            description.robot.protocol,
-        )
-        check_turns(plan, description, allow_turns)
-    except OdohilError as exc:
-        _fail(console, Check("plan feasible", False, str(exc)))
-    warn_turns(console, plan, description)
-    checks = [
-        leg_check(plan, max_leg_m),
-        estimable_check(plan, description),
-        floor_check(plan, description),
-    ]
-    for check in checks:
-        if not check.ok:
-            _fail(console, check)
-        console.print(check_line(check))
-    _check_redundancy(console, robot_file, plan)
-    return text, plan
-
-
-def _check_redundancy(console: Console, robot_file: Path, plan: Plan) -> None:
-    """Refuse designs the description's cross distances cannot disambiguate."""
-    try:
-        check_redundancy(load_robot_description(robot_file), [i.design for i in plan.items])
-    except OdohilError as exc:
-        _fail(console, Check("cross distances", False, str(exc)))
-    console.print(check_line(Check("cross distances", True, "enough for every design")))
-
-
-def _start(
-    console: Console, folder: Path, text: str, plan: Plan, robot_file: Path, line: Line
-) -> Opened:
-    try:
-        journal, state = start_session(
-            folder,
-            text,
-            plan,
-            measure=OPERATOR,
-            settings=line.to_json(),
-            robot_path=str(robot_file),
-        )
-    except OdohilError as exc:
-        _fail(console, Check("session", False, str(exc)))
-    console.print(check_line(Check("session", True, f"new session in {folder}")))
-    return Opened(journal, state)
-
-
-def _line(
-    console: Console,
-    description: RobotDescription,
-    port: str | None,
-    baud: int | None,
-    robot_path: str,
-    journaled: Mapping[str, Any] | None = None,
-) -> Line:
-    """The connection in force (command line, journal, robot.toml [serial])."""
-    try:
-        return resolve_line(description, port, baud, robot_path, journaled)
-    except OdohilError as exc:
-        _fail(console, Check("port", False, str(exc)))
-
-
-def _connect(console: Console, line: Line) -> Robot:
-    try:
-        register_fake_urls(line.port)
-        robot = open_robot(line.protocol, line.port, line.baud, line.robot)
-    except OdohilError as exc:
-        _fail(console, Check("robot answers", False, f"{line.describe()}: {exc}"))
-    try:
-        sample = robot.odometry()
-    except BaseException:
-        robot.close()
-        raise
-    console.print(
-        check_line(
-            Check(
-                "robot answers",
-                True,
-                f"{line.describe()}; encoders {pose_text(sample_pose(sample))}, "
-                + ("MOVING (it will be stopped first)" if sample.moving else "standing still"),
-            )
-        )
-    )
-    return robot
-
-
 def wizard(
     port: Annotated[
         str | None,
@@ -468,15 +287,7 @@ def wizard(
         Path | None,
         typer.Option("--session", help="Session folder; an existing one is resumed."),
     ] = None,
-    baud: Annotated[
-        int | None,
-        typer.Option(
-            "--baud",
-            callback=bounded("baud"),
-            help="Line speed (default: the session's, else robot.toml \\[serial] baud, "
-            "else the robot's default).",
-        ),
-    ] = None,
+    baud: BaudOption = None,
     max_leg_m: Annotated[
         float,
         typer.Option(
@@ -498,25 +309,15 @@ def wizard(
     )
     interrupts.install()
     folder = session or default_session_folder()
+    spec = SessionSpec(
+        folder, "auto", robot_file, plan=plan_text, default_plan=DEFAULT_PLAN,
+        measure=OPERATOR, port=port, baud=baud, max_leg_m=max_leg_m, allow_turns=allow_turns,
+        allow_few_trials=True, note={"by": "wizard", "port": port},
+    )  # fmt: skip
     console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
-    try:
-        check_session_folder(folder)
-    except OdohilError as exc:
-        _fail(console, Check("session folder", False, str(exc)))
     with signals_raise():
-        code = _guided(
-            console,
-            folder,
-            interrupts,
-            port,
-            baud,
-            robot_file,
-            plan_text,
-            max_leg_m,
-            unit_system(units_choice),
-            allow_turns,
-        )
-    if code not in (EXIT_OK, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
+        code = _guided(console, spec, interrupts, unit_system(units_choice))
+    if code not in (EXIT_OK, EXIT_BAD_INPUT, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
         console.print(
             f"Stopped. The journal is in {folder}; run the wizard again with "
             f"--session {folder} to continue."
@@ -524,100 +325,53 @@ def wizard(
     raise typer.Exit(code)
 
 
+def _tick(console: Console, check: PreflightCheck) -> None:
+    console.print(check_line(check))
+
+
 def _guided(
-    console: Console,
-    folder: Path,
-    interrupts: Interrupts,
-    port: str | None,
-    baud: int | None,
-    robot_file: Path | None,
-    plan_text: str | None,
-    max_leg_m: float,
-    system: units.UnitSystem,
-    allow_turns: bool = False,
+    console: Console, spec: SessionSpec, interrupts: Interrupts, system: units.UnitSystem
 ) -> int:
-    """Lock the session (resume or start it), then connect, then run."""
-    robot: Robot | None = None
+    """Pre-flight (each check a tick), open the session (resume or start it:
+    locked, connected), then run; any pre-flight failure exits 2."""
+    checked = preflight(spec)
+    for check in checked.checks:
+        _tick(console, check)
     try:
-        if journal_path(folder).exists():
-            opened = _resume(console, folder, max_leg_m, port, plan_text)
-            header = opened.state.header
-            try:
-                line = _line(
-                    console,
-                    description_of(opened.state),
-                    port,
-                    baud,
-                    header.robot_path or "robot.toml",
-                    header.settings,
-                )
-            except BaseException:
-                opened.journal.close()
-                raise
-        else:
-            text, plan = _prepare(console, robot_file, plan_text, max_leg_m, allow_turns)
-            assert robot_file is not None
-            description = load_robot_description(robot_file)
-            line = _line(console, description, port, baud, str(robot_file))
-            robot = _connect(console, line)  # pre-flight ends here: nothing written before
-            try:
-                opened = _start(console, folder, text, plan, robot_file, line)
-            except BaseException:
-                robot.close()
-                raise
-        with opened.journal:
-            if robot is None:
-                robot = _connect(console, line)
-            interrupts.robot = robot
-            with robot:
-                return _run(console, opened, robot, interrupts, line, system)
+        prepared = require(checked)
+        for warning in prepared.warnings:
+            console.print(f"[yellow]warning:[/] {escape(warning)}", soft_wrap=True)
+        register_fake_urls(prepared.line.port)
+        with open_session(prepared, lambda check: _tick(console, check)) as opened:
+            if opened.torn is not None:
+                console.print(f"[yellow]warning:[/] {opened.torn.describe()}")
+            interrupts.robot = opened.robot
+            return _run(console, opened, interrupts, system)
+    except PreflightFailed as exc:
+        if exc.check not in checked.checks:
+            _tick(console, exc.check)
+        console.print("[red]Pre-flight failed: nothing was moved.[/]")
+        return EXIT_BAD_INPUT
     except KeyboardInterrupt as exc:
         return exit_for_signal(signal_of(exc))
 
 
-def _run(
-    console: Console,
-    opened: Opened,
-    robot: Robot,
-    interrupts: Interrupts,
-    line: Line,
-    system: units.UnitSystem,
-) -> int:
-    description = description_of(opened.state)
+def _run(console: Console, opened: Opened, interrupts: Interrupts, system: units.UnitSystem) -> int:
+    """The session with the operator's prompts and screens, to the final screen."""
     progress = MotionProgress(console)
-    prompts = WizardPrompts(console, description, interrupts, progress)
+    prompts = WizardPrompts(console, opened.prepared.description, interrupts, progress)
     observer = WizardObserver(console, interrupts, progress, system)
-    engine = SessionEngine(
-        opened.journal,
-        opened.state,
-        robot,
-        OperatorSource(prompts),
-        estimator=IncrementalLiveEstimator(),
-        observer=observer,
-        connection=line.to_json(),
-        on_sample=observer.on_sample,
-        start_check=prompts.start_check(robot),
-    )
     try:
-        engine.run()
-    except StopUnconfirmedError:
-        progress.stop()
-        console.print(f"\n[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
-        report_stop(console, engine.stop_outcome, opened.journal.folder, _again(opened))
-        return EXIT_STOP_UNCONFIRMED
-    except KeyboardInterrupt as exc:
-        progress.stop()
-        console.print(f"\n[yellow]Interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
-        report_stop(console, engine.stop_outcome, opened.journal.folder, _again(opened))
-        return exit_for_signal(signal_of(exc))
-    except OdohilError as exc:
-        progress.stop()
-        console.print(f"[red]error:[/] {escape(str(exc))}", soft_wrap=True)
-        report_stop(console, engine.stop_outcome, opened.journal.folder, _again(opened))
-        return EXIT_ERROR
+        outcome = run_session(
+            opened, observer, source=OperatorSource(prompts), on_sample=observer.on_sample,
+            start_check=prompts.start_check(opened.robot),
+        )  # fmt: skip
     finally:
         progress.stop()
-    return final_screen(console, engine.state)
+    if outcome.status == "finished":
+        return final_screen(console, outcome.state)
+    report_run(console, outcome, _again(opened), interrupted="Interrupted")
+    return exit_for_run(outcome)
 
 
 def _again(opened: Opened) -> str:

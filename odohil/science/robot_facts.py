@@ -33,6 +33,8 @@ class FakeFacts:
         emulate_time_scale: ``odohil emulate``'s default time scale
             (simulated seconds per wall second).
         demo_time_scale: ``odohil demo``'s time scale.
+        demo_url_options: more URL options of ``odohil demo``'s fake
+            (name, value), e.g. a clock step limit the time scale needs.
     """
 
     url_scheme: str
@@ -40,6 +42,7 @@ class FakeFacts:
     emulator: str = ""
     emulate_time_scale: float = 1.0
     demo_time_scale: float = 1.0
+    demo_url_options: tuple[tuple[str, float], ...] = ()
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,7 @@
 """Pre-flight checks of a session's inputs, made before any session folder is
-created or any port opened: the plan against what the wire carries, the robot
-description, the session folder, and a trial file against the plan.
+created or any port opened: the plan against what the robot does, the
+session folder, and a trial file against the plan. The ordered list that
+every command runs is odohil/session/lifecycle/checks.py.
 
 Every check raises an :class:`~odohil.errors.OdohilError` whose message names
 the option or file and what is accepted; nothing has moved yet.
@@ -9,60 +10,15 @@ the option or file and what is accepted; nothing has moved yet.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
 from pathlib import Path
 
 from odohil import units
-from odohil.errors import OdohilError, ParameterError, TrialFileError
+from odohil.errors import ParameterError, TrialFileError
 from odohil.science.estimators.checks import plan_problems
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
-from odohil.session.floor_space import check_floor
-from odohil.session.plan import Plan, check_session_plan, parse_plan
-from odohil.session.robot_file import read_robot_toml
-from odohil.session.robots import parse_description as parse_robot_description
+from odohil.session.plan import Plan
 from odohil.session.trial_files import read_trials
-
-
-@dataclass(frozen=True)
-class Checked:
-    """The inputs of a new session, validated.
-
-    Attributes:
-        plan: the plan (legs within the wire range, trial counts within caps).
-        description: the robot description.
-        toml: its TOML text, as journaled.
-    """
-
-    plan: Plan
-    description: RobotDescription
-    toml: str
-
-
-def check_new_session(
-    plan_text: str, robot_file: Path, session: Path | None, allow_turns: bool = False
-) -> Checked:
-    """Validate ``--plan``, ``--robot`` and ``--session`` of a new session; a
-    design without a variant gets the robot's default (:func:`default_variant`).
-
-    Raises:
-        ParameterError: a bad plan, a ``turn`` design the robot refuses
-            (:func:`check_turns`), a plan the estimator cannot use
-            (:func:`check_estimable`) or a ``--session`` that is not a folder.
-        RobotDescriptionError: the robot description cannot be read or is invalid.
-    """
-    toml = read_robot_toml(robot_file, what="--robot: robot description")
-    description = parse_robot_description(toml, source=str(robot_file))
-    try:
-        plan = check_session_plan(
-            parse_plan(plan_text, default_variant(description)), description.robot.protocol
-        )
-    except ParameterError as exc:
-        raise ParameterError(f"--plan: {exc}") from None
-    check_turns(plan, description, allow_turns)
-    check_estimable(plan, description)
-    check_session_folder(session)
-    return Checked(plan=plan, description=description, toml=toml)
 
 
 def default_variant(description: RobotDescription) -> str:
@@ -76,6 +32,18 @@ def turn_designs(plan: Plan, description: RobotDescription) -> list[str]:
     if description.robot.turns_exact:
         return []
     return [i.design.label() for i in plan.items if i.design.variant == "turn"]
+
+
+def turn_warning(plan: Plan, description: RobotDescription) -> str | None:
+    """What to say when the plan turns in place on a robot whose turns carry
+    error (allowed with ``--allow-turns``); None when it does not."""
+    turns = turn_designs(plan, description)
+    if not turns:
+        return None
+    return (
+        f"turn designs on a robot whose turns carry error ({', '.join(turns)}): "
+        "the estimate will not be trusted; use variant=reverse"
+    )
 
 
 def check_turns(plan: Plan, description: RobotDescription, allow_turns: bool) -> None:
@@ -177,53 +145,3 @@ def check_trial_file(
         raise TrialFileError(
             f"--measure {path}: {len(wrong)} row(s) of another design than the plan's:\n  {shown}"
         )
-
-
-# --- the checks as values (the wizard shows them as ticks) ---------------------
-
-
-@dataclass(frozen=True)
-class Check:
-    """One pre-flight check: its name, whether it passed, and what was found."""
-
-    name: str
-    ok: bool
-    detail: str
-
-
-def leg_check(plan: Plan, max_leg_m: float) -> Check:
-    """Do the plan's legs fit the floor (``--max-leg-m``)? What one move
-    command carries is the robot's own limit, checked with the plan
-    (:func:`~odohil.session.plan.check_session_plan`), not here."""
-    problems = [
-        f"{item.design.label()}: legs of {item.design.l_m:g} m exceed {max_leg_m:g} m"
-        for item in plan.items
-        if item.design.l_m > max_leg_m
-    ]
-    detail = (
-        "; ".join(problems)
-        if problems
-        else f"{units.plural(plan.n_trials, 'trial')}, {plan.distance_m:.1f} m of driving "
-        f"({plan.to_text()})"
-    )
-    return Check("plan feasible", not problems, detail)
-
-
-def estimable_check(plan: Plan, description: RobotDescription) -> Check:
-    """:func:`check_estimable` as a check."""
-    try:
-        check_estimable(plan, description)
-    except OdohilError as exc:
-        return Check("plan estimable", False, str(exc))
-    return Check("plan estimable", True, "its trials can identify the four parameters")
-
-
-def floor_check(plan: Plan, description: RobotDescription) -> Check:
-    """Does the plan fit the robot description's free floor ([floor] length_m)?"""
-    try:
-        check_floor(plan, description)
-    except OdohilError as exc:
-        return Check("floor space", False, str(exc))
-    given = description.floor_length_m
-    limit = f"of {given:g} m" if given is not None else "(no [floor] length_m given)"
-    return Check("floor space", True, f"the plan needs {plan.excursion_m:g} m of floor {limit}")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from odohil.cli.demo import CREATE2_PLAN, DEMO_TRUTH
+from odohil.cli.demo import DEMO_TRUTH, TURN_FREE_PLAN
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.session.plan import parse_plan
 
@@ -27,8 +27,8 @@ def test_demo_create2_is_trusted_and_near_the_truth(tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stderr  # 3 would be an untrusted verdict
     result = json.loads(done.stdout)
-    assert result["n_trials"] == parse_plan(CREATE2_PLAN).n_trials
-    assert all(item.design.variant == "reverse" for item in parse_plan(CREATE2_PLAN).items)
+    assert result["n_trials"] == parse_plan(TURN_FREE_PLAN).n_trials
+    assert all(item.design.variant == "reverse" for item in parse_plan(TURN_FREE_PLAN).items)
     truth = DEMO_TRUTH.to_si_dict()
     # The acceptance: every 95 % interval contains the fake's true value. The
     # fake's clock is bounded between driver calls (max_gap_ms), so a busy

@@ -22,7 +22,6 @@ from odohil.science.floor_marks import (
 from odohil.science.robot_description import parse_robot_description
 from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
 from odohil.session.plan import parse_plan
-from odohil.session.preflight import leg_check
 from odohil.session.sources import OperatorSource, TrialContext, relative_true_pose
 from odohil.session.tape_entry import (
     ExpectedRange,
@@ -201,14 +200,3 @@ def test_the_expected_ranges_contain_the_truth_on_the_fake(tmp_path: Path) -> No
     assert final.finished
     assert operator.asked == 6 * len(LABELS)
     assert operator.outside == []
-
-
-# --- the plan against the floor ------------------------------------------------------
-
-
-def test_the_floor_check_applies_no_robots_wire_limit() -> None:
-    long_legs = parse_plan("k=1,l=90,n=10", "reverse")
-    assert leg_check(long_legs, 100.0).ok  # a 90 m leg: no Nomad 150 wire limit here
-    refused = leg_check(long_legs, 50.0)
-    assert not refused.ok
-    assert "legs of 90 m exceed 50 m" in refused.detail

@@ -12,10 +12,10 @@ from pathlib import Path
 from rich.console import Console
 
 from odohil.cli.render import MotionProgress, parameters_table
-from odohil.cli.run import final_estimate
 from odohil.cli.wizard import WizardObserver
 from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
 from odohil.session.interrupts import Interrupts
+from odohil.session.lifecycle import final_estimate
 from odohil.session.plan import parse_plan
 from odohil.session.sources import FakeTruthSource
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot

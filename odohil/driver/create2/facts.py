@@ -34,6 +34,11 @@ CREATE2_FACTS = RobotFacts(
         emulator="fakes.create2.run:emulate",
         emulate_time_scale=1.0,
         demo_time_scale=10.0,
+        # a leg ends on 15 ms readings and a stop sent by the host: on a faster
+        # clock a late reading ends a leg centimetres long; the fake's clock then
+        # advances at most one 15 ms tick between two driver calls
+        # (fakes/create2/clock.py)
+        demo_url_options=(("max_gap_ms", 15.0),),
     ),
 )
 """A differential drive: its spins carry error (turns_exact false), its legs

@@ -1,0 +1,385 @@
+"""What run, resume, demo, validate and the wizard show of a session's
+lifecycle (odohil/session/lifecycle/): the pre-flight failure, the progress
+bar, how the run ended, the verdict line and the summary; the exit statuses
+are odohil/cli/exit_codes.py's."""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import signal
+import time
+from collections.abc import Iterator, Mapping
+from pathlib import Path
+from typing import Annotated, Any, NoReturn
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from odohil import units
+from odohil.cli.exit_codes import (
+    EXIT_BAD_INPUT,
+    EXIT_ERROR,
+    EXIT_STOP_UNCONFIRMED,
+    exit_for_check,
+    exit_for_run,
+    exit_for_signal,
+)
+from odohil.cli.line import register_fake_urls
+from odohil.cli.options import bounded
+from odohil.cli.render import parameters_table
+from odohil.cli.verdict import export_refusal_lines, outcome_line
+from odohil.errors import (
+    JournalError,
+    OdohilError,
+    ParameterError,
+    RobotDescriptionError,
+    StopUnconfirmedError,
+    TrialFileError,
+)
+from odohil.science.estimators import EstimateResult
+from odohil.science.robot_description import RobotDescription
+from odohil.session.engine import IncrementalLiveEstimator, StartCheck, StopOutcome
+from odohil.session.events import Solved, Void
+from odohil.session.journal import Record
+from odohil.session.lifecycle import (
+    Opened,
+    Preflight,
+    PreflightCheck,
+    PreflightFailed,
+    Prepared,
+    RunOutcome,
+    interrupt_text,
+    require,
+    run_session,
+)
+from odohil.session.lifecycle.opening import CheckSeen
+from odohil.session.plan import Plan
+from odohil.session.preflight import turn_warning
+from odohil.session.signals import signal_name, signal_of, signals_raise
+from odohil.session.start_pose import StartPose
+from odohil.session.state import SessionState
+from odohil.session.tape_records import MeasurementsRejected, Remeasured
+
+MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
+"""What odohil says, prominently, when it could not confirm the robot's stop."""
+PortOption = Annotated[
+    str | None,
+    typer.Option(
+        "--port",
+        help="Serial device, pty path or pyserial URL (default: the session's, else "
+        "robot.toml \\[serial] port).",
+    ),
+]
+BaudOption = Annotated[
+    int | None,
+    typer.Option(
+        "--baud",
+        callback=bounded("baud"),
+        help="Line speed (default: the session's, else robot.toml \\[serial] baud, else "
+        "the robot's default).",
+    ),
+]
+TruthSocketOption = Annotated[
+    str | None,
+    typer.Option("--truth-socket", help="The fake robot's truth socket (for --measure fake)."),
+]
+JsonOption = Annotated[
+    bool,
+    typer.Option(
+        "--json",
+        help="Print one JSON object (SI): the final estimate (as estimate --json) with "
+        '"status": "finished"; when interrupted or failed, the status, the signal, '
+        "whether the stop was confirmed and the partial estimate.",
+    ),
+]
+
+
+def default_session_folder() -> Path:
+    """``odohil-session-YYYYmmdd-HHMMSS`` in the current directory."""
+    return Path(f"odohil-session-{time.strftime('%Y%m%d-%H%M%S')}")
+
+
+def prepared_or_exit(checked: Preflight, console: Console) -> Prepared:
+    """The prepared session; else the first failed check's message and its exit
+    status (nothing moved). Registers the fakes' URL handlers for its port."""
+    try:
+        prepared = require(checked)
+    except PreflightFailed as exc:
+        refuse(console, exc.check)
+    for warning in prepared.warnings:
+        console.print(f"[yellow]warning:[/] {escape(warning)}", soft_wrap=True)
+    register_fake_urls(prepared.line.port)
+    return prepared
+
+
+def refuse(console: Console, check: PreflightCheck) -> NoReturn:
+    """A failed pre-flight check: its message, exit by its class."""
+    console.print(f"[red]error[/]: {escape(check.message)}; nothing moved", soft_wrap=True)
+    raise typer.Exit(exit_for_check(check))
+
+
+def say_opened(console: Console) -> CheckSeen:
+    """Told each step of opening a session: says what the pose source tells
+    once it is ready (e.g. the motion-capture stream delivers)."""
+
+    def seen(check: PreflightCheck) -> None:
+        if check.name == "measurement":
+            console.print(check.message, soft_wrap=True, markup=False)
+
+    return seen
+
+
+class ProgressObserver:
+    """A rich progress bar of completed trials, on stderr, with notes."""
+
+    def __init__(
+        self,
+        console: Console,
+        state: SessionState,
+        system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+        measurer: str = "the simulated operator",
+    ) -> None:
+        assert state.plan is not None
+        self.console = console
+        self.system = system
+        self.measurer = measurer
+        self.remeasured: dict[int, None] = {}  # trial numbers, in order
+        self.progress = Progress(
+            TextColumn("[bold]trials"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            TextColumn("{task.description}"),
+            console=console,
+            transient=False,
+        )
+        self.task = self.progress.add_task(
+            "", total=state.plan.n_trials, completed=len(state.completed)
+        )
+
+    @contextlib.contextmanager
+    def shown(self) -> Iterator[None]:
+        """The bar while within; afterwards the slip check's summary."""
+        self.progress.start()
+        try:
+            yield
+        finally:
+            self.progress.stop()
+            if (summary := self.remeasure_summary()) is not None:
+                self.console.print(summary, soft_wrap=True, highlight=False)
+
+    def show_start(self, start: StartPose) -> None:
+        """The start check: print where the encoders read (with the heading)."""
+        self.console.print(f"robot: {start.describe()}")
+
+    def record(self, record: Record, state: SessionState) -> None:
+        """Advance on each solved trial; print voids and rejections."""
+        event = record.event
+        if isinstance(event, Solved):
+            self.progress.update(self.task, completed=len(state.completed))
+        elif isinstance(event, Void):
+            self.progress.console.print(
+                f"trial {event.trial} attempt {event.attempt} void: {event.reason}"
+            )
+        elif isinstance(event, MeasurementsRejected):
+            self.progress.console.print(
+                f"trial {event.trial}: the distances {self.measurer} took fit no "
+                f"rigid motion, so {self.measurer} measured them again: the check at work; "
+                "nothing is lost and the trial counts once (the reason is in the journal).",
+                soft_wrap=True,
+                highlight=False,
+            )
+        elif isinstance(event, Remeasured) and not event.kept:
+            self.remeasured.setdefault(event.trial, None)
+
+    def remeasure_summary(self) -> str | None:
+        """One line for every distance the slip check had taken again (None if none)."""
+        if not self.remeasured:
+            return None
+        trials = list(self.remeasured)
+        return (
+            f"In {units.plural(len(trials), 'trial')} ({', '.join(map(str, trials))}) the "
+            f"slip check doubted a distance and {self.measurer} measured it again: the check "
+            "at work; nothing is lost and each trial counts once."
+        )
+
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        """Show the live E_R beside the bar."""
+        e_r = result.parameter("E_R").value
+        if math.isfinite(e_r):
+            value = units.parameter_in("E_R", e_r, self.system)
+            unit = units.parameter_unit("E_R", self.system)
+            self.progress.update(self.task, description=f"E_R {value:+.4g} {unit}")
+
+
+def run_with_progress(
+    console: Console,
+    opened: Opened,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+    start_check: StartCheck | None = None,
+) -> RunOutcome:
+    """Run the session with a progress bar. The bar shows a live E_R value
+    only, so the cheap incremental fit serves it instead of the recipe's
+    robust fit per trial; the verdict is the recipe's (odohil/session/lifecycle)."""
+    observer = ProgressObserver(console, opened.state, system)
+    estimator = IncrementalLiveEstimator(opened.prepared.spec.exclude)
+    with observer.shown():
+        return run_session(
+            opened, observer, estimator=estimator, start_check=start_check or observer.show_start
+        )
+
+
+def report_run(
+    console: Console,
+    outcome: RunOutcome,
+    continue_with: str | None = None,
+    interrupted: str = "interrupted",
+) -> None:
+    """How the run ended: the verdict line (and why it may not be exported)
+    when it finished; else what ended it, the robot's stop and the journal."""
+    if outcome.status == "finished":
+        console.print(outcome_line(outcome.estimate), highlight=False, soft_wrap=True)
+        for line in export_refusal_lines(outcome.estimate):
+            console.print(line, highlight=False, soft_wrap=True)
+        return
+    if outcome.status == "stop unconfirmed":
+        console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
+        if outcome.cause:
+            console.print(f"the run ended on: {outcome.cause}", soft_wrap=True, markup=False)
+        if outcome.stop is None:
+            text = f"st sent but not confirmed: {outcome.message}"
+            console.print(text, soft_wrap=True, markup=False)
+            return
+    elif outcome.status == "interrupted":
+        console.print(f"[yellow]{interrupted}[/] ({outcome.message})", soft_wrap=True)
+    else:
+        console.print(f"[red]error[/]: {escape(outcome.message)}", soft_wrap=True)
+    report_stop(console, outcome.stop, outcome.folder, continue_with)
+
+
+def report_stop(
+    console: Console,
+    outcome: StopOutcome | None,
+    folder: Path,
+    continue_with: str | None = None,
+) -> None:
+    """Say what was checked on the way out: the robot's stop, then the journal,
+    and the command that continues the session (``continue_with``; default
+    ``odohil resume FOLDER``).
+
+    "robot stopped" only when the robot reported it; "journaled" only when the
+    closing record is on disk.
+    """
+    again = continue_with or f"odohil resume {folder}"
+    if outcome is None:
+        return
+    if outcome.robot_stopped:
+        console.print(f"robot stopped (it reports {escape(outcome.detail)})", soft_wrap=True)
+    else:
+        console.print(f"[bold red]{MAY_STILL_MOVE}[/]: {escape(outcome.detail)}", soft_wrap=True)
+    if outcome.journaled:
+        console.print(f"session journaled in {folder}; continue with `{again}`", soft_wrap=True)
+    else:
+        console.print(
+            f"[bold red]the journal could not be written[/]: {escape(outcome.journal_error)}; "
+            f"the records before this failure are kept in {folder}; free the disk, then "
+            f"`{again}`",
+            soft_wrap=True,
+        )
+
+
+def finish(
+    outcome: RunOutcome,
+    json_out: bool,
+    console: Console,
+    extra: Mapping[str, Any] | None = None,
+    truth: Mapping[str, float] | None = None,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+    code: int | None = None,
+) -> None:
+    """Print the summary (a table on stdout, or one JSON object) and exit with
+    the outcome's status (``code`` when given). With ``json_out`` a run that
+    did not finish prints its status and partial estimate instead of nothing."""
+    code = exit_for_run(outcome) if code is None else code
+    result = outcome.estimate.result if outcome.status == "finished" else None
+    if json_out:
+        if result is not None:
+            document = {"status": outcome.status, **result.to_json_dict()}
+        else:
+            document = {"status": outcome.status, "exit_code": code, **outcome.details()}
+        typer.echo(json.dumps({**document, **(extra or {})}))
+    elif result is not None:
+        title = f"estimate ({result.method}, {units.plural(result.n_trials, 'trial')})"
+        table = parameters_table(result, system, title, truth)
+        Console(width=max(110, Console().width)).print(table)
+    if code:
+        raise typer.Exit(code)
+
+
+def _ctrl_c(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt("Ctrl-C")
+
+
+@contextlib.contextmanager
+def ctrl_c_in_words() -> Iterator[None]:
+    """Within: Ctrl-C raises a KeyboardInterrupt that says "Ctrl-C", so what the
+    engine journals and what the operator reads name the key, not a class
+    (main thread only; the previous handler comes back afterwards)."""
+    try:
+        previous = signal.signal(signal.SIGINT, _ctrl_c)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[None]:
+    """Make every signal that ends a process (odohil/session/signals.py) end the
+    command as Ctrl-C does, and turn what escapes into its exit status: a
+    signal 128 + N, an unconfirmed stop 4, a failed pre-flight step by its
+    class, a session that cannot be opened or is in use 2, any other odohil or
+    OS error 1 (the robot was already stopped and the journal written below).
+    With ``json_out`` an interrupt before the session ran still prints one
+    JSON object saying so."""
+    try:
+        with signals_raise(), ctrl_c_in_words():
+            yield
+    except KeyboardInterrupt as exc:
+        console.print(f"[yellow]interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
+        if json_out:
+            signum = signal_of(exc)
+            document = {
+                "status": "interrupted",
+                "signal": signal_name(signum),
+                "message": interrupt_text(exc) + " before the session ran: nothing moved",
+                "stop_confirmed": None,
+                "partial_estimate": None,
+            }
+            typer.echo(json.dumps(document))
+        raise typer.Exit(exit_for_signal(signal_of(exc))) from None
+    except StopUnconfirmedError as exc:
+        console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
+    except PreflightFailed as exc:
+        refuse(console, exc.check)
+    except (ParameterError, RobotDescriptionError, TrialFileError, JournalError) as exc:
+        # found before anything moved
+        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(EXIT_BAD_INPUT) from None
+    except (OdohilError, OSError) as exc:
+        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
+        raise typer.Exit(EXIT_ERROR) from None
+
+
+def warn_turns(console: Console, plan: Plan, description: RobotDescription) -> None:
+    """Warn when the plan turns in place on a robot whose turns carry error."""
+    if (warning := turn_warning(plan, description)) is not None:
+        console.print(f"[yellow]warning:[/] {escape(warning)}", soft_wrap=True)
