@@ -78,6 +78,22 @@ class Serial(SerialBase):  # type: ignore[misc]
         self._pump()
         return len(self._rx)
 
+    @property
+    def idle(self) -> bool:
+        """True when no byte is on its way: nothing queued on the line (pacing)
+        and nothing scheduled by the robot (a reply due later, a stray or late
+        packet, line noise). The host's quiet wait before a request ends at once
+        then (odohil/driver/port.py's ``vouches_idle``): it waits for bytes in
+        flight, and this peer knows there are none."""
+        self._pump()
+        return (
+            not self._rx and self._pacer.pending == 0 and self._engine().next_output_wall() is None
+        )
+
+    listens_at_open = True
+    """The robot in this process listens as soon as the port is open (a real
+    Create 2 is given its wait after open; odohil/driver/port.py)."""
+
     def read(self, size: int = 1) -> bytes:
         """Up to ``size`` bytes, waiting at most the port timeout (pyserial semantics)."""
         deadline = None if self._timeout is None else time.monotonic() + self._timeout

@@ -1,10 +1,41 @@
-"""Test-session set-up shared by every test file."""
+"""Suite-wide settings.
+
+Test folders on a RAM file system where there is one: session tests write
+journals, and the journal fsyncs every record (404 fsyncs in a 40-trial run:
+4.5 s on a disk, nothing on tmpfs). So, unless the caller chose
+(``--basetemp`` or ``PYTEST_DEBUG_TEMPROOT``), pytest's numbered
+``pytest-of-<user>/pytest-N`` folders go under ``/dev/shm`` when it is a
+writable folder with room; otherwise under the system's temporary folder as
+usual. pytest's own numbering and locks keep concurrent runs (and xdist's
+workers, which get folders under the controller's) apart, as they do in /tmp.
+The journal's fsync calls still run: only where the bytes land changes.
+
+The signals the signal tests send get their default dispositions, whatever
+the shell that started pytest left ignored.
+"""
 
 from __future__ import annotations
 
+import os
 import signal
 
 import pytest
+
+RAM_ROOT = "/dev/shm"
+"""Where test folders go when it is usable (Linux's tmpfs)."""
+MIN_FREE_BYTES = 1 << 30
+"""Room the RAM file system must have left for the suite's folders, bytes."""
+
+
+def _usable(root: str) -> bool:
+    try:
+        if not (os.path.isdir(root) and os.access(root, os.W_OK | os.X_OK)):
+            return False
+        stat = os.statvfs(root)
+    except OSError:
+        return False
+    return stat.f_bavail * stat.f_frsize >= MIN_FREE_BYTES
+
 
 _INHERITED_IGNORE = (signal.SIGINT, signal.SIGQUIT, signal.SIGHUP)
 """Signals a shell leaves ignored for a job it starts in the background (and
@@ -14,9 +45,13 @@ ignored: an odohil started so ignores them too, as any Unix tool does."""
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    """Give the test processes the default dispositions of the signals the
-    signal tests send, whatever the shell that started pytest left ignored."""
+    """Point pytest's temporary root at :data:`RAM_ROOT` when nothing else was
+    chosen; restore the default dispositions of :data:`_INHERITED_IGNORE`."""
     for signum in _INHERITED_IGNORE:
         if signal.getsignal(signum) == signal.SIG_IGN:
             default = signal.default_int_handler if signum == signal.SIGINT else signal.SIG_DFL
             signal.signal(signum, default)
+    if config.option.basetemp or os.environ.get("PYTEST_DEBUG_TEMPROOT"):
+        return
+    if _usable(RAM_ROOT):
+        os.environ["PYTEST_DEBUG_TEMPROOT"] = RAM_ROOT

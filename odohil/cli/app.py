@@ -1,12 +1,16 @@
 """The ``odohil`` command: one typer app; each command lives in its own module.
 
 A command module defines ``register(app: typer.Typer) -> None``; add its name
-to ``COMMAND_MODULES`` to expose it.
+to ``COMMAND_MODULES`` to expose it. The console script running one command
+imports that command's module only (``odohil emulate`` loads no estimator and
+no scipy.stats); an import from elsewhere (tests, ``--help``) registers all.
 """
 
 from __future__ import annotations
 
 import importlib
+import sys
+from pathlib import Path
 from typing import Any
 
 import typer
@@ -89,7 +93,22 @@ def _root(
     """Calibrate odometry: predict, simulate, talk to the robot, estimate."""
 
 
-for _name in COMMAND_MODULES:
+_COMMAND_NAMES = {"import": "import_log"}
+"""Command names that differ from their module's name."""
+
+
+def _modules_to_register(argv: list[str]) -> tuple[str, ...]:
+    """The command modules to import: the named command's alone when this
+    process is the console script (or ``python -m odohil``) and its first
+    argument names a command, else every one (a typo, ``--help``, an import)."""
+    if len(argv) > 1 and Path(argv[0]).name in ("odohil", "__main__.py"):
+        module = _COMMAND_NAMES.get(argv[1], argv[1])
+        if module in COMMAND_MODULES:
+            return (module,)
+    return COMMAND_MODULES
+
+
+for _name in _modules_to_register(sys.argv):
     importlib.import_module(f"odohil.cli.{_name}").register(app)
 
 

@@ -57,3 +57,21 @@ def open_serial_url(url: str, baud: int, read_timeout_s: float = READ_SLICE_S) -
     except (serial.SerialException, OSError, ValueError) as exc:
         raise ConnectionFailedError(f"cannot open {url!r}: {exc}") from exc
     return port
+
+
+def vouches_idle(port: object) -> bool:
+    """Whether the port vouches that no byte is on its way to us now.
+
+    A real line cannot know what is in flight, so this is False for it, and
+    a link waits for a quiet line by the clock. A peer in this process (the
+    fakes' URL handlers) knows: it says ``idle`` when nothing is queued on
+    its line or scheduled to be written, and a quiet wait can end at once.
+    """
+    return getattr(port, "idle", False) is True
+
+
+def listens_at_open(port: object) -> bool:
+    """Whether the peer listens from the moment the port opens (a peer in
+    this process says ``listens_at_open``); a real robot is given its
+    documented wait after open."""
+    return getattr(port, "listens_at_open", False) is True

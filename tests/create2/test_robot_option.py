@@ -1,17 +1,20 @@
 """``--robot`` by built-in name, the description's [robot] settings reaching
 the backend, and turn-free calibration of a robot whose turns carry error
-(issue 12, items 4 and 5), through the console command as a user runs it."""
+(issue 12, items 4 and 5), through the console command's parsing, session and
+rendering in process (typer's CliRunner on odohil.cli.app's app): no test here
+needs a process of its own."""
 
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from typer.testing import CliRunner
 
 import fakes
+from odohil.cli.app import app
 from odohil.cli.line import resolve_line
 from odohil.cli.robot_option import builtin_names, builtin_path
 from odohil.driver.create2.robot import Create2Robot
@@ -24,14 +27,22 @@ from odohil.session.state import load_session
 
 fakes.register_url_handlers()
 
-ODOHIL = shutil.which("odohil") or "odohil"
 FAKE = "fakecreate2://?seed=1&time_scale=10&max_gap_ms=15"
 
 
-def odohil(*args: str | Path, timeout: float = 120) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [ODOHIL, *map(str, args)], capture_output=True, text=True, timeout=timeout, check=False
-    )
+@dataclass(frozen=True)
+class Done:
+    """What ``odohil ARGS`` ended with: exit status and its two streams."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def odohil(*args: str | Path) -> Done:
+    """``odohil ARGS`` in process (CliRunner), as the console script parses and renders it."""
+    done = CliRunner().invoke(app, [str(a) for a in args])
+    return Done(done.exit_code, done.stdout, done.stderr)
 
 
 def test_the_builtin_descriptions_parse_with_their_robot_constants() -> None:
@@ -151,7 +162,7 @@ def test_run_with_allow_turns_defaults_to_reverse_and_is_not_trusted(tmp_path: P
         "run", "--allow-few-trials",
         "--robot", "create2", "--port", FAKE, "--measure", "fake", "--allow-turns",
         "--plan", "k=1,l=0.5,n=6,variant=turn;k=0.5,l=0.5,n=6", "--session", tmp_path / "s",
-        "--json", timeout=300,
+        "--json",
     )  # fmt: skip
     assert done.returncode == 3, done.stderr
     assert "warning: turn designs on a robot whose turns carry error" in done.stderr

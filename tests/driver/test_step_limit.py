@@ -67,7 +67,7 @@ def test_a_create2_leg_that_cannot_end_is_stopped_at_its_limit() -> None:
     message = str(raised.value)
     assert "leg 0.3 m not done within its time limit of 6.1 s" in message, message
     assert "stop confirmed" in message
-    assert 6.1 <= took < 10.0
+    assert 6.05 <= took < 10.0  # the limit is 6.0996 s, printed as 6.1 s
     assert truth.travel_m < 0.3
 
 

@@ -62,8 +62,12 @@ def test_joint_is_more_precise_than_the_paper_method() -> None:
 
 
 def test_intervals_cover_the_truth_about_95_percent() -> None:
+    """50 data sets of 30 + 30 trials: each 95 % interval covers the truth in
+    more than 95 % - 3 binomial SE of them (at least 43 of 50): a method whose
+    coverage is 95 % passes with probability 0.997, one at 80 % fails with
+    0.81 (80 sets at 4 SE, before: 0.999 and 0.90). Full size: bench/coverage.py."""
     rng = np.random.default_rng(24)
-    reps = 80
+    reps = 50
     hits = np.zeros(4)
     for _ in range(reps):
         result = estimate(trials([(A, 30), (B, 30)], rng, meas=MEAS))
@@ -71,7 +75,7 @@ def test_intervals_cover_the_truth_about_95_percent() -> None:
         for i, (p, true) in enumerate(zip(result.parameters, NOMAD150.as_tuple(), strict=True)):
             hits[i] += p.ci95[0] <= true <= p.ci95[1]
     coverage = hits / reps
-    assert np.all(coverage > 0.95 - 4 * math.sqrt(0.95 * 0.05 / reps)), coverage
+    assert np.all(coverage > 0.95 - 3 * math.sqrt(0.95 * 0.05 / reps)), coverage
 
 
 def test_headings_near_pi_are_unwrapped() -> None:

@@ -89,8 +89,8 @@ class FrameServer:
             while self._alive():
                 line = self.frame(time.monotonic() - t0)
                 try:
-                    if line:
-                        conn.sendall(line)
+                    if line:  # no SIGPIPE when odohil in this process hangs up
+                        conn.sendall(line, socket.MSG_NOSIGNAL)
                 except OSError:
                     return
                 n += 1

@@ -1,5 +1,11 @@
-"""``odohil run`` and ``odohil resume`` as console commands, against the fake
-robot on a real pseudo-terminal (``python -m fakes.nomad``)."""
+"""``odohil run`` and ``odohil resume`` against the fake robot on a real
+pseudo-terminal (``python -m fakes.nomad``).
+
+As console processes where the process is the point (kill -9 anywhere, Ctrl-C);
+in process (typer's CliRunner on odohil.cli.app's app: the same parsing,
+session and rendering) where only the session's numbers, journal and exit
+status are (the estimate printed, a failing robot, a refused resume).
+"""
 
 from __future__ import annotations
 
@@ -12,8 +18,10 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from typer.testing import CliRunner, Result
 
 from fakes.nomad.process import EmulatorProcess
+from odohil.cli.app import app
 from odohil.science.estimators import estimate
 from odohil.session import state as ev
 from odohil.session.journal import JOURNAL_NAME, read_journal
@@ -49,6 +57,12 @@ def _run_args(emulator: EmulatorProcess, tmp_path: Path, plan: str) -> list[str]
         "--seed", "2",
         "--json",
     ]  # fmt: skip
+
+
+def _in_process(command: list[str]) -> Result:
+    """``command`` (``[ODOHIL, *args]``) through typer's CliRunner, in this process."""
+    assert command[0] == ODOHIL
+    return CliRunner().invoke(app, command[1:])
 
 
 def _resume_args(tmp_path: Path) -> list[str]:
@@ -98,10 +112,8 @@ def _wait_stopped(emulator: EmulatorProcess, within_s: float = 5.0) -> bool:
 
 def test_run_prints_the_estimate_of_the_session(emulator: EmulatorProcess, tmp_path: Path) -> None:
     plan = "k=1,l=0.5,n=4;k=0.5,l=0.5,n=4"
-    done = subprocess.run(
-        _run_args(emulator, tmp_path, plan), capture_output=True, text=True, timeout=120
-    )
-    assert done.returncode == 0, done.stderr
+    done = _in_process(_run_args(emulator, tmp_path, plan))
+    assert done.exit_code == 0, done.stderr
     result = json.loads(done.stdout)
     assert result.pop("status") == "finished"  # beside the estimate object (issue 11)
     assert result["n_trials"] == 8
@@ -113,13 +125,8 @@ def test_run_prints_the_estimate_of_the_session(emulator: EmulatorProcess, tmp_p
     offline = estimate(trials_to_observations(load_session_trials(tmp_path / "session")))
     assert json.loads(json.dumps(offline.to_json_dict())) == result
     # and so does the console command on the folder
-    again = subprocess.run(
-        [ODOHIL, "estimate", str(tmp_path / "session"), "--json"],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert again.returncode == 0, again.stderr
+    again = _in_process([ODOHIL, "estimate", str(tmp_path / "session"), "--json"])
+    assert again.exit_code == 0, again.stderr
     assert json.loads(again.stdout)["parameters"] == result["parameters"]
     assert _wait_stopped(emulator)
 
@@ -181,16 +188,11 @@ def test_sigkill_anywhere_then_resume_counts_every_trial_once(
     assert {"moving", "measuring", "between trials"} <= set(phases), phases
 
     if _last_kind(tmp_path) != "finished":
-        final = subprocess.run(_resume_args(tmp_path), capture_output=True, text=True, timeout=120)
-        assert final.returncode == _exit_of(final.stdout), final.stderr
+        final = _in_process(_resume_args(tmp_path))
+        assert final.exit_code == _exit_of(final.stdout), final.stderr
         assert json.loads(final.stdout)["n_trials"] == n_trials
-    offline = subprocess.run(
-        [ODOHIL, "estimate", str(tmp_path / "session"), "--json"],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    assert offline.returncode == _exit_of(offline.stdout), offline.stderr
+    offline = _in_process([ODOHIL, "estimate", str(tmp_path / "session"), "--json"])
+    assert offline.exit_code == _exit_of(offline.stdout), offline.stderr
     assert json.loads(offline.stdout)["n_trials"] == n_trials
     records = read_journal(tmp_path / "session").records
     solved = [r.data["trial"] for r in records if r.kind == ev.SOLVED]
@@ -229,13 +231,8 @@ def test_ctrl_c_stops_journals_and_exits_130(emulator: EmulatorProcess, tmp_path
     journal = tmp_path / "session" / JOURNAL_NAME
     with journal.open("ab") as handle:
         handle.write(b'{"seq":999,"kind":"meas')
-    resumed = subprocess.run(
-        _resume_args(tmp_path),
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert resumed.returncode == 0, resumed.stderr
+    resumed = _in_process(_resume_args(tmp_path))
+    assert resumed.exit_code == 0, resumed.stderr
     assert "torn" in resumed.stderr
     assert json.loads(resumed.stdout)["n_trials"] == 8
     kept = list((tmp_path / "session").glob("journal.torn-*.bin"))
@@ -246,14 +243,9 @@ def test_a_failing_robot_exits_non_zero_with_the_session_journaled(tmp_path: Pat
     args = [*EMULATOR, "--no-pacing", "--fault", "disconnect:pr@3"]
     args += ["--truth-socket", str(tmp_path / "t.sock")]
     with EmulatorProcess(args) as emulator:
-        done = subprocess.run(
-            _run_args(emulator, tmp_path, "k=1,l=0.5,n=3"),
-            capture_output=True,
-            text=True,
-            timeout=120,
-        )
+        done = _in_process(_run_args(emulator, tmp_path, "k=1,l=0.5,n=3"))
     # the line is cut: st cannot be confirmed, so the exit is 4, not "robot stopped"
-    assert done.returncode == 4
+    assert done.exit_code == 4, done.output
     assert "error" in done.stderr
     assert "odohil resume" in done.stderr
     records = read_journal(tmp_path / "session").records
@@ -263,9 +255,7 @@ def test_a_failing_robot_exits_non_zero_with_the_session_journaled(tmp_path: Pat
 
 
 def test_resume_refuses_a_finished_or_missing_session(tmp_path: Path) -> None:
-    done = subprocess.run(
-        [ODOHIL, "resume", str(tmp_path / "nothing")], capture_output=True, text=True, timeout=60
-    )
-    assert done.returncode == 2  # a session that cannot be used is bad input
+    done = _in_process([ODOHIL, "resume", str(tmp_path / "nothing")])
+    assert done.exit_code == 2  # a session that cannot be used is bad input
     assert "cannot open the session journal" in done.stderr
     assert not (tmp_path / "nothing").exists()

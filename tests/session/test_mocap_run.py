@@ -2,7 +2,12 @@
 motion-capture sender that republishes the fake robot's true pose, in a
 rotated and shifted world frame with noise, at 100 Hz: the estimate's
 intervals contain the fake's parameters. And the stream is checked before
-anything moves."""
+anything moves.
+
+``odohil run`` and ``odohil resume`` run in process (typer's CliRunner on
+odohil.cli.app's app) against the fake on its pseudo-terminal; only the test
+whose sender dies under a running session starts odohil as a process.
+"""
 
 from __future__ import annotations
 
@@ -11,13 +16,16 @@ import shutil
 import subprocess
 import time
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
 
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
+from odohil.cli.app import app
 from odohil.science.parameters import ErrorParameters
 from odohil.session import state as ev
 from odohil.session.journal import JOURNAL_NAME, read_journal
@@ -105,14 +113,25 @@ def mocap(emulator: EmulatorProcess) -> Iterator[FrameServer]:
             yield server
 
 
-def _run(emulator: EmulatorProcess, robot: Path, url: str, tmp_path: Path, plan: str):
-    return subprocess.run(
-        [
-            ODOHIL, "run", "--allow-few-trials", "--port", emulator.device, "--measure", url,
-            "--robot", str(robot), "--plan", plan,
-            "--session", str(tmp_path / "session"), "--json",
-        ],
-        capture_output=True, text=True, timeout=300,
+@dataclass(frozen=True)
+class Done:
+    """What ``odohil ARGS`` ended with: exit status and its two streams."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def _odohil(*args: str) -> Done:
+    """``odohil ARGS`` in process (CliRunner), as the console script parses and renders it."""
+    done = CliRunner().invoke(app, list(args))
+    return Done(done.exit_code, done.stdout, done.stderr)
+
+
+def _run(emulator: EmulatorProcess, robot: Path, url: str, tmp_path: Path, plan: str) -> Done:
+    return _odohil(
+        "run", "--allow-few-trials", "--port", emulator.device, "--measure", url,
+        "--robot", str(robot), "--plan", plan, "--session", str(tmp_path / "session"), "--json",
     )  # fmt: skip
 
 
@@ -180,10 +199,9 @@ def test_a_bad_tcp_url_is_bad_input(idle: EmulatorProcess, tmp_path: Path) -> No
     assert idle.truth().motion_log == ()
 
 
-def _resume(tmp_path: Path, url: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [ODOHIL, "resume", str(tmp_path / "session"), "--measure", url, "--json", "--from-here"],
-        capture_output=True, text=True, timeout=120,
+def _resume(tmp_path: Path, url: str) -> Done:
+    return _odohil(
+        "resume", str(tmp_path / "session"), "--measure", url, "--json", "--from-here"
     )  # fmt: skip
 
 
@@ -283,7 +301,7 @@ def _frozen(seed: int):
     return frame
 
 
-def _refused_at_the_first_trial(tmp_path: Path, done: subprocess.CompletedProcess[str]) -> None:
+def _refused_at_the_first_trial(tmp_path: Path, done: Done) -> None:
     assert done.returncode == 1, done.stderr
     records = read_journal(tmp_path / "session").records
     kinds = [r.kind for r in records]

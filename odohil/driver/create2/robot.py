@@ -59,6 +59,7 @@ from odohil.driver.create2.link import (
 )
 from odohil.driver.guardian import Guardian, start_guardian
 from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
+from odohil.driver.port import listens_at_open
 from odohil.driver.step_limit import StepLimit, step_limit
 from odohil.errors import (
     ConnectionFailedError,
@@ -204,7 +205,8 @@ class Create2Robot:
         link = Create2Link(open_port(url, baud), url, baud, sampling)
         robot = cls(link, geometry, full_mode=full_mode)
         try:
-            time.sleep(open_wait_s)
+            if not listens_at_open(link.port):
+                time.sleep(open_wait_s)
             link.send(commands.RESYNC)
             time.sleep(MODE_WAIT_S)
             link.stop_stream()

@@ -19,7 +19,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from odohil.driver.port import IO_ERRORS, Port, open_serial_url
+from odohil.driver.port import IO_ERRORS, Port, open_serial_url, vouches_idle
 from odohil.errors import (
     ChecksumError,
     DisconnectedError,
@@ -178,7 +178,9 @@ class Link:
         return self._read_reply(first_byte_s, accept)
 
     def _wait_quiet(self) -> None:
-        """Drain until no byte has come for ``quiet_s`` (at most ``quiet_total_s``)."""
+        """Drain until no byte has come for ``quiet_s`` (at most ``quiet_total_s``),
+        or until the port vouches that no byte is on its way (a peer in process:
+        odohil/driver/port.py's :func:`vouches_idle`; never a real line)."""
         self._decoder.reset()
         start = time.monotonic()
         drained = bytearray()
@@ -191,7 +193,7 @@ class Link:
                 self._last_rx = time.monotonic()
             now = time.monotonic()
             quiet_for = now - self._last_rx
-            if quiet_for >= self._quiet_s:
+            if quiet_for >= self._quiet_s or vouches_idle(self._port):
                 return
             if now - start >= self._quiet_total_s:
                 raise OdohilTimeoutError(

@@ -1,0 +1,43 @@
+"""The console script running one command imports that command's module only:
+``odohil emulate`` and ``odohil simulate`` start without the estimators and
+scipy.stats (about 1 s of CPU per process), and every command is still there
+for ``--help``, a typo and an in-process import (odohil/cli/app.py)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+_PROBE = """
+import runpy, sys
+sys.argv = ["odohil", *sys.argv[1:]]
+try:
+    runpy.run_module("odohil", run_name="__main__")
+except SystemExit:
+    pass
+print("STATS:", "scipy.stats" in sys.modules, "RUN:", "odohil.cli.run" in sys.modules)
+"""
+
+
+def _probe(*args: str) -> list[str]:
+    done = subprocess.run(
+        [sys.executable, "-c", _PROBE, *args], capture_output=True, text=True, timeout=60
+    )
+    assert "Usage" in done.stdout, done.stderr
+    return done.stdout.strip().splitlines()[-1].split()
+
+
+@pytest.mark.parametrize("command", ["emulate", "simulate"])
+def test_a_light_command_loads_neither_the_estimators_nor_scipy_stats(command: str) -> None:
+    assert _probe(command, "--help") == ["STATS:", "False", "RUN:", "False"]
+
+
+def test_the_top_level_help_and_an_import_still_have_every_command() -> None:
+    assert _probe("--help") == ["STATS:", "True", "RUN:", "True"]
+    from odohil.cli.app import COMMAND_MODULES, app
+
+    names = {command.name for command in app.registered_commands}
+    assert len(names) == len(COMMAND_MODULES)
+    assert {"emulate", "run", "import", "wizard"} <= names
