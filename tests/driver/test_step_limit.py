@@ -100,7 +100,7 @@ def test_a_nomad_step_that_never_reports_its_end_is_stopped_at_its_limit() -> No
     message = str(raised.value)
     assert "leg 0.3 m not done within its time limit of 6.1 s" in message, message
     assert "stop confirmed" in message
-    assert 6.1 <= took < 10.0
+    assert 6.05 <= took < 10.0  # the limit is 6.0996 s, printed as 6.1 s
 
 
 def test_the_issues_run_on_a_wrapping_create2_ends_with_a_clear_error(tmp_path: Path) -> None:
