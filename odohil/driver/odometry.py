@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from odohil.science.paths import Design
+from odohil.science.paths import Drivable
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,8 @@ class TrialMotion:
     """What one trial's motion did, as the robot's odometry saw it.
 
     Attributes:
-        design: the design driven (one-way trials may be backward).
+        design: the trial driven: a forth-and-back design (one-way trials
+            may be backward) or a general path design.
         samples: every odometry sample taken during the motion, in time order.
         start, end: samples before the first and after the last step.
         end_pose: ``end`` in the frame of ``start``: (x m, y m, heading
@@ -80,7 +81,7 @@ class TrialMotion:
         started_s, ended_s: host monotonic times of the motion, s.
     """
 
-    design: Design
+    design: Drivable
     samples: tuple[OdometrySample, ...]
     start: OdometrySample
     end: OdometrySample

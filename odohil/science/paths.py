@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -224,6 +224,19 @@ class EncoderPath:
         x = float((legs.sign * legs.length_m * np.cos(legs.heading_rad)).sum())
         y = float((legs.sign * legs.length_m * np.sin(legs.heading_rad)).sum())
         return (x, y, self.net_turn_rad - self.winding_rad)
+
+
+class Drivable(Protocol):
+    """What a robot can drive as one trial: a forth-and-back :class:`Design`
+    or a general path design (odohil/science/path_designs.py)."""
+
+    def path(self) -> EncoderPath:
+        """The encoder path of one trial."""
+        ...
+
+    def label(self) -> str:
+        """A short human-readable name."""
+        ...
 
 
 def _leg_count(k: float) -> int:

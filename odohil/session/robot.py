@@ -15,7 +15,7 @@ from types import TracebackType
 from typing import Protocol, Self
 
 from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
-from odohil.science.paths import Design
+from odohil.science.paths import Drivable
 
 SampleCallback = Callable[[OdometrySample], None]
 """Called with every odometry sample taken during a motion (live read-outs)."""
@@ -65,11 +65,12 @@ class Robot(Protocol):
 
     def drive(
         self,
-        design: Design,
+        design: Drivable,
         settings: DriveSettings,
         on_sample: SampleCallback | None = None,
     ) -> TrialMotion:
-        """Drive one trial of ``design``, checking every step against the
+        """Drive one trial of ``design`` (a forth-and-back design or a general
+        path: its encoder path's legs and turns), checking every step against the
         odometry; stops the robot before raising on any failure."""
         ...
 

@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from odohil.driver.nomad.motion import forth_and_back
+from odohil.driver.nomad.motion import drive_trial
 from odohil.errors import (
     ChecksumError,
     DisconnectedError,
@@ -122,7 +122,7 @@ def test_watchdog_stop_mid_motion_is_a_motion_error() -> None:
         with pytest.raises(MotionError, match="robot stopped"):
             # 1 m at 0.5 m/s and 0.5 m/s^2 cruises, so a stop halfway ends short
             # (for a triangular profile, halfway is where braking starts anyway).
-            forth_and_back(fake.robot, Design(0.5, 1.0))
+            drive_trial(fake.robot, Design(0.5, 1.0))
         assert fake.commands("pr") == 1
         assert fake.settles()
 

@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from odohil.driver.nomad.link import open_port
-from odohil.driver.nomad.motion import forth_and_back
+from odohil.driver.nomad.motion import drive_trial
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import ConnectionFailedError, OdohilTimeoutError, ParameterError
 from odohil.protocol.nomad.limits import (
@@ -127,7 +127,7 @@ def test_legs_below_the_wire_resolution_are_refused_before_anything_moves(
 ) -> None:
     with fake_robot("seed=1&time_scale=50") as fake:
         with pytest.raises(ParameterError, match=r"50\.0 mm"):
-            forth_and_back(fake.robot, design)
+            drive_trial(fake.robot, design)
         with pytest.raises(ParameterError, match="rounds to 0"):
             fake.robot.move_relative(0.001, 0.0)
         with pytest.raises(ParameterError, match="would not move"):

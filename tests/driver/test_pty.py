@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from fakes.nomad.process import EmulatorProcess
-from odohil.driver.nomad.motion import forth_and_back
+from odohil.driver.nomad.motion import drive_trial
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import DisconnectedError, OdohilTimeoutError
 from odohil.protocol.nomad import wire_units
@@ -21,7 +21,7 @@ from odohil.science.paths import Design
 def test_forth_and_back_k2_l1_returns_to_start_within_one_wire_unit() -> None:
     with EmulatorProcess(["--seed", "11", "--time-scale", "50"], use_cli=True) as emu:
         with NomadRobot.connect(emu.device) as robot:
-            record = forth_and_back(robot, Design(2, 1.0))
+            record = drive_trial(robot, Design(2, 1.0))
         start, end = record.start, record.end
         assert abs(end.x_wire - start.x_wire) <= 1
         assert abs(end.y_wire - start.y_wire) <= 1
@@ -81,7 +81,7 @@ def test_repeated_forth_and_back_runs_drift_as_the_parameters_say() -> None:
     with EmulatorProcess(args, use_cli=True) as emu, NomadRobot.connect(emu.device) as robot:
         for _ in range(runs):
             before = emu.truth()
-            record = forth_and_back(robot, Design(2, 1.0))
+            record = drive_trial(robot, Design(2, 1.0))
             after = emu.truth()
             assert abs(record.end.x_wire - record.start.x_wire) <= 1
             assert abs(record.end.y_wire - record.start.y_wire) <= 1

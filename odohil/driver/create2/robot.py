@@ -77,7 +77,7 @@ from odohil.protocol.create2.numbers import encoder_delta
 from odohil.protocol.create2.opcodes import Mode
 from odohil.science import frames
 from odohil.science.diff_drive import DiffDriveGeometry, odometry_step
-from odohil.science.paths import Design, Leg, Turn
+from odohil.science.paths import Drivable, Leg, Turn
 from odohil.science.robot_description import RobotSettings
 from odohil.units import wrap_angle
 
@@ -453,7 +453,7 @@ class Create2Robot:
             )
         return leg, turn
 
-    def _steps(self, design: Design, settings: DriveSettings) -> list[_Step]:
+    def _steps(self, design: Drivable, settings: DriveSettings) -> list[_Step]:
         leg_speed, turn_speed = self._speeds(settings)
         steps: list[_Step] = []
         for step in design.path().steps:
@@ -493,7 +493,7 @@ class Create2Robot:
 
     def drive(
         self,
-        design: Design,
+        design: Drivable,
         settings: DriveSettings,
         on_sample: Callable[[OdometrySample], None] | None = None,
     ) -> TrialMotion:

@@ -15,14 +15,14 @@ from odohil.driver import stopping
 from odohil.driver.guardian import Guardian, start_guardian
 from odohil.driver.nomad.facts import NOMAD150_FACTS
 from odohil.driver.nomad.link import open_port
-from odohil.driver.nomad.motion import DEFAULT_TOLERANCE_WIRE, MotionRecord, forth_and_back
+from odohil.driver.nomad.motion import DEFAULT_TOLERANCE_WIRE, MotionRecord, drive_trial
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.driver.nomad.sample import EncoderSample
 from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
 from odohil.driver.port import Port
 from odohil.errors import ParameterError
 from odohil.protocol.nomad import messages as m
-from odohil.science.paths import Design
+from odohil.science.paths import Drivable
 from odohil.units import wrap_angle
 
 SampleCallback = Callable[[OdometrySample], None]
@@ -154,12 +154,13 @@ class NomadBackend:
 
     def drive(
         self,
-        design: Design,
+        design: Drivable,
         settings: DriveSettings,
         on_sample: SampleCallback | None = None,
     ) -> TrialMotion:
-        """One forth-and-back trial (:func:`~odohil.driver.nomad.motion.forth_and_back`);
-        ``on_sample`` sees every encoder sample as an OdometrySample."""
+        """One trial, forth-and-back or a general path
+        (:func:`~odohil.driver.nomad.motion.drive_trial`); ``on_sample`` sees every
+        encoder sample as an OdometrySample."""
         if settings.step_timeout_s <= 0:
             raise ParameterError(f"step timeout must be > 0 s, got {settings.step_timeout_s!r}")
         hook = None
@@ -169,7 +170,7 @@ class NomadBackend:
             def hook(sample: EncoderSample) -> None:
                 callback(odometry_sample(sample))
 
-        record = forth_and_back(
+        record = drive_trial(
             self.nomad,
             design,
             tolerance_wire=self.tolerance_wire,

@@ -1,4 +1,5 @@
-"""Forth-and-back runs on the robot: legs are ``pr(trans)``, turns ``pr(0, steer)``.
+"""Trials on the robot, forth-and-back or general paths: legs are ``pr(trans)``,
+turns ``pr(0, steer)``.
 
 After each step the encoders must end where the command says (within a
 tolerance in wire units); otherwise the robot is stopped and MotionError
@@ -32,7 +33,7 @@ from odohil.protocol.nomad.wire_units import (
     wire_to_radians,
 )
 from odohil.science import frames
-from odohil.science.paths import Design, Leg
+from odohil.science.paths import Drivable, Leg
 from odohil.units import wrap_angle
 
 DEFAULT_TOLERANCE_WIRE = 2
@@ -45,10 +46,10 @@ DEFAULT_ACCELERATIONS = (0.5, math.radians(30.0))
 
 @dataclass(frozen=True)
 class MotionRecord:
-    """What one forth-and-back run commanded and what the encoders reported.
+    """What one trial commanded and what the encoders reported.
 
     Attributes:
-        design: the experiment design run.
+        design: the trial driven (a forth-and-back design or a general path).
         commands: the ``pr`` commands sent, wire units, in order.
         samples: every encoder sample taken during the run, in time order.
         step_ends: the encoder sample at the end of each step.
@@ -58,7 +59,7 @@ class MotionRecord:
         started_s, ended_s: host monotonic times of the run, s.
     """
 
-    design: Design
+    design: Drivable
     commands: tuple[Pr, ...]
     samples: tuple[EncoderSample, ...]
     step_ends: tuple[EncoderSample, ...]
@@ -103,7 +104,7 @@ def _check_step(
         )
 
 
-def _wire_steps(design: Design) -> list[tuple[int, int]]:
+def _wire_steps(design: Drivable) -> list[tuple[int, int]]:
     """Every step of ``design`` as (translation, steering) wire units, all
     checked before the first is sent."""
     steps: list[tuple[int, int]] = []
@@ -122,7 +123,7 @@ def _wire_steps(design: Design) -> list[tuple[int, int]]:
 
 
 def _step_limits(
-    design: Design,
+    design: Drivable,
     speeds: tuple[float, float],
     accelerations: tuple[float, float],
     step_timeout_s: float,
@@ -164,9 +165,9 @@ def _poll_within(
         raise OdohilTimeoutError(f"{limit.expired_text()}: {exc}; stop confirmed") from exc
 
 
-def forth_and_back(
+def drive_trial(
     robot: NomadRobot,
-    design: Design,
+    design: Drivable,
     *,
     tolerance_wire: int = DEFAULT_TOLERANCE_WIRE,
     step_timeout_s: float = DEFAULT_STEP_TIMEOUT_S,
@@ -174,7 +175,8 @@ def forth_and_back(
     accelerations: tuple[float, float] = DEFAULT_ACCELERATIONS,
     on_sample: Callable[[EncoderSample], None] | None = None,
 ) -> MotionRecord:
-    """Drive one trial of ``design`` and record the encoders (gs polling).
+    """Drive one trial of ``design`` (any :class:`~odohil.science.paths.Drivable`:
+    its encoder path's legs and turns, one ``pr`` each) and record the encoders (gs polling).
 
     First sets ``speeds`` (translation m/s, steering rad/s) and
     ``accelerations`` (m/s^2, rad/s^2); a ``pr`` with zero speed would not move.
