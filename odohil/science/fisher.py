@@ -107,10 +107,13 @@ def moment_derivatives(path: EncoderPath, params: ErrorParameters) -> MomentDeri
 
 
 def trial_information(derivatives: MomentDerivatives, measurement_cov: FloatArray) -> FloatArray:
-    """Fisher information (4, 4) of one trial, SI.
+    """Fisher information (p, p) of one trial, SI (p = 4 from
+    :func:`moment_derivatives`; any number of parameters whose derivatives
+    the value holds, e.g. the turn errors of odohil/science/path_plans.py).
 
     Args:
-        derivatives: from :func:`moment_derivatives`.
+        derivatives: from :func:`moment_derivatives` (or any d_mean (p, 3)
+            and d_cov (p, 3, 3)).
         measurement_cov: (3, 3), or a stack (n, 3, 3) to average the
             information over (each trial with its own measurement covariance).
 
@@ -138,10 +141,10 @@ def trial_information(derivatives: MomentDerivatives, measurement_cov: FloatArra
     dmu = derivatives.d_mean
     mean_part = (dmu @ inverse.mean(axis=0) @ dmu.T)[None]
     w = inverse[:, None] @ derivatives.d_cov[None]  # S^-1 dS_a, (n, 4, 3, 3)
-    n = w.shape[0]
+    n, p = w.shape[:2]
     # tr(W_a W_b) = sum_ik W_a[i, k] W_b[k, i]
-    flat = w.reshape(n, 4, 9)
-    flat_t = np.swapaxes(w, 2, 3).reshape(n, 4, 9)
+    flat = w.reshape(n, p, 9)
+    flat_t = np.swapaxes(w, 2, 3).reshape(n, p, 9)
     cov_part = 0.5 * (flat @ np.swapaxes(flat_t, 1, 2))
     info: FloatArray = mean_part[0] + cov_part.mean(axis=0)
     return 0.5 * (info + info.T)
