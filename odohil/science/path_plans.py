@@ -844,16 +844,24 @@ def compare_with_paths(
     if not general:
         raise ParameterError("the comparison needs at least one general path")
     grid = list(designs) if designs is not None else default_design_grid()
-    common = {
-        "operator": operator,
-        "target_errors": target_errors,
-        "min_trials": min_trials,
-        "max_items": max_items,
-    }
-    free = [d for d in grid if d.variant == "reverse"]
-    turn_free = best_plan(free, robot, budget_s, **common) if free else None  # type: ignore[arg-type]
-    forth = best_plan(grid, robot, budget_s, **common)  # type: ignore[arg-type]
-    mixed = best_plan([*general, *grid], robot, budget_s, required=general, **common)  # type: ignore[arg-type]
+
+    def search(shapes: Sequence[Shape], required: Sequence[Shape] = ()) -> PlanScore | None:
+        if not shapes:
+            return None
+        return best_plan(
+            shapes,
+            robot,
+            budget_s,
+            operator=operator,
+            target_errors=target_errors,
+            min_trials=min_trials,
+            max_items=max_items,
+            required=required,
+        )
+
+    turn_free = search([d for d in grid if d.variant == "reverse"])
+    forth = search(grid)
+    mixed = search([*general, *grid], general)
     gains = tuple(
         Gain(
             name,

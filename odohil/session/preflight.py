@@ -10,11 +10,22 @@ the option or file and what is accepted; nothing has moved yet.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from odohil import units
 from odohil.errors import ParameterError, TrialFileError
 from odohil.science.estimators.checks import plan_problems
+from odohil.science.path_plans import (
+    Estimability,
+    RobotModel,
+    Shape,
+    acting,
+    plan_estimability,
+    shape_path,
+)
+from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
 from odohil.session.plan import Plan
@@ -59,19 +70,88 @@ def check_turns(plan: Plan, description: RobotDescription, allow_turns: bool) ->
         )
 
 
-def check_estimable(plan: Plan, description: RobotDescription) -> None:
-    """Refuse a plan whose trials, all driven, could give no estimate of the four
-    parameters (:func:`odohil.science.estimators.checks.plan_problems`, at the
-    description's ``[priors]``): ParameterError naming ``--plan``, the reason and
-    what would make it estimable."""
-    problems = plan_problems(
-        [(item.design, item.n_trials) for item in plan.items], description.priors.mean
+FOLDED_TURNS = (
+    "Forth-and-back sessions are estimated with the four parameters, so the turn "
+    "designs' spin errors fold into E_R and K_theta and the verdict is doubtful; to "
+    "estimate the turn errors, name the turns as paths (e.g. path=square:1.0,cw,n=10)"
+)
+"""What the statement adds for ``turn`` designs on a robot whose turns carry error."""
+
+
+def plan_items(plan: Plan) -> list[tuple[Shape, int]]:
+    """The plan's (shape, number of trials): forth-and-back designs and paths."""
+    return [(item.design, item.n_trials) for item in plan.items]
+
+
+def estimability(items: Sequence[tuple[Shape, int]], description: RobotDescription) -> Estimability:
+    """What trials of ``items`` can and cannot estimate on the described robot
+    (:func:`odohil.science.path_plans.plan_estimability` at its ``[priors]``,
+    with its floor marks), as the session will estimate them: a plan naming a
+    path is estimated from general paths, with the turn errors unless the
+    robot's turns are exact (odohil/session/outcome.py ``estimate_paths``), a
+    plan of forth-and-back designs with the four parameters; ``turn`` designs
+    on a robot whose turns carry error then fold the turn errors into E_R and
+    K_theta, and the statement says so (:data:`FOLDED_TURNS`).
+
+    Raises:
+        ParameterError: an empty plan, or priors at which the information is
+            not defined (K_theta = 0 with exact poses).
+    """
+    robot = RobotModel.of(description)
+    designs_only = all(isinstance(shape, Design) for shape, _ in items)
+    turns = any(
+        any(step != 0.0 for step in shape_path(shape).turns.total_abs_rad) for shape, _ in items
     )
-    if problems:
+    statement = plan_estimability(items, robot)
+    if designs_only and turns and not robot.turns_exact:
+        four = plan_estimability(items, replace(robot, turns_exact=True))
+        idle = acting([shape_path(shape) for shape, _ in items], robot)
+        folded = "not fitted by the forth-and-back estimator (folded into E_R and K_theta)"
+        return replace(
+            four,
+            turns_exact=False,
+            not_estimable=tuple(
+                (name, idle.get(name, folded)) for name in robot.names if name not in four.estimable
+            ),
+            notes=(*four.notes, FOLDED_TURNS),
+        )
+    if robot.turns_exact and turns:
+        exact = "Turns declared exact ([robot] turns_exact): no turn errors in the model"
+        return replace(statement, notes=(*statement.notes, exact))
+    return statement
+
+
+def check_estimable(plan: Plan, description: RobotDescription) -> Estimability | None:
+    """Refuse a plan whose trials, all driven, could give no estimate, and say
+    what they can and cannot estimate (:func:`estimability`; None when the
+    information is not defined at the priors). A plan of forth-and-back
+    designs is held to the estimator's own rule
+    (:func:`odohil.science.estimators.checks.plan_problems`, at the
+    description's ``[priors]``); a plan naming a path to the statement's
+    problems (one of the four or a turn error its trials make not identified,
+    too few trials). ParameterError naming ``--plan``, the reason and what
+    would make it estimable."""
+    items = plan_items(plan)
+    designs = [(shape, n) for shape, n in items if isinstance(shape, Design)]
+    if len(designs) == len(items):
+        problems = plan_problems(designs, description.priors.mean)
+        if problems:
+            raise ParameterError(
+                f"--plan {plan.to_text()}: no estimate could come of these trials (nothing "
+                "was driven): " + "; ".join(problems)
+            )
+    try:
+        statement = estimability(items, description)
+    except ParameterError:
+        if len(designs) == len(items):
+            return None
+        raise
+    if len(designs) < len(items) and not statement.ok:
         raise ParameterError(
             f"--plan {plan.to_text()}: no estimate could come of these trials (nothing "
-            "was driven): " + "; ".join(problems)
+            "was driven): " + "; ".join(statement.problems) + ". " + statement.text()
         )
+    return statement
 
 
 def check_trials_per_design(

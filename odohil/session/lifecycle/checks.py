@@ -18,6 +18,7 @@ from typing import Any, Literal, TypeVar
 
 from odohil import units
 from odohil.errors import InitError, JournalError, OdohilError, ParameterError
+from odohil.science.path_plans import Estimability
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session.floor_space import check_floor
@@ -341,8 +342,10 @@ def _plan_text(plan: Plan) -> str:
     )
 
 
-def _estimable(_: None) -> str:
-    return "its trials can identify the four parameters"
+def _estimable(statement: Estimability | None) -> str:
+    if statement is None:
+        return "its trials can identify the four parameters"
+    return statement.text()
 
 
 def _few(_: None) -> str:
