@@ -20,12 +20,20 @@ from typer.testing import CliRunner
 
 from odohil.cli.app import app
 from odohil.errors import MeasurementError
+from odohil.robots import __file__ as robots_init
 from odohil.science.estimators import estimate
 from odohil.science.estimators.checks import plan_problems
 from odohil.science.estimators.observations import Observation
 from odohil.science.parameters import NOMAD150
+from odohil.science.paths import Design, square
 from odohil.science.simulator import simulate
+from odohil.session.lifecycle import SessionSpec, preflight
 from odohil.session.plan import parse_plan
+from odohil.session.preflight import estimability
+from odohil.session.robot_file import read_robot_toml
+from odohil.session.robots import parse_description
+
+ROBOTS = Path(robots_init).parent
 
 
 def _run(*args: str) -> tuple[int, str]:
@@ -97,3 +105,74 @@ def test_a_plan_the_estimator_cannot_use_is_refused_before_anything_moves(
     for words in said:
         assert words in err, err
     assert not folder.exists()  # nothing journaled: no session, no port opened
+
+
+# --- what a plan can and cannot estimate (issue 19, deliverable 4) -----------------
+
+
+def _estimable_check(tmp_path: Path, robot: str, port: str, plan: str, **more: object) -> str:
+    spec = SessionSpec(
+        tmp_path / "session",
+        robot_path=ROBOTS / f"{robot}.toml",
+        plan=plan,
+        measure="fake",
+        port=port,
+        **more,
+    )
+    checks = {c.name: c for c in preflight(spec).checks}
+    assert checks["plan estimable"].passed, checks["plan estimable"].message
+    return checks["plan estimable"].message
+
+
+def test_the_preflight_says_a_turn_free_plan_cannot_estimate_the_turn_errors(
+    tmp_path: Path,
+) -> None:
+    said = _estimable_check(
+        tmp_path, "create2", "fakecreate2://?seed=1", "k=0.5,l=1,n=10;k=2,l=1,n=10"
+    )
+    assert said.startswith("Estimates E_R (SE ")
+    assert "Cannot estimate e_turn_spin: the plan makes no spins (turns in place)" in said
+    assert "K_spin: the plan makes no spins" in said
+    assert "e_turn_arc: the plan makes no arcs" in said
+
+
+def test_the_preflight_says_forth_and_back_turn_designs_fold_the_turn_errors(
+    tmp_path: Path,
+) -> None:
+    """On a robot whose turns carry error, forth-and-back sessions are
+    estimated with the four parameters: the statement says the turn errors
+    are not estimated but folded into E_R and K_theta."""
+    said = _estimable_check(
+        tmp_path,
+        "create2",
+        "fakecreate2://?seed=1",
+        "k=0.5,l=1,n=10,variant=reverse;k=1,l=1,n=10,variant=turn",
+        allow_turns=True,
+    )
+    assert "e_turn_spin: not fitted by the forth-and-back estimator (folded into E_R" in said
+    assert "name the turns as paths" in said
+
+
+def test_the_preflight_of_a_robot_whose_turns_are_exact_says_so(tmp_path: Path) -> None:
+    said = _estimable_check(
+        tmp_path, "nomad150", "fakerobot://?seed=1", "k=1,l=6,n=30;k=20,l=0.5,n=30"
+    )
+    assert said.startswith("Estimates E_R (SE ")
+    assert "Turns declared exact ([robot] turns_exact): no turn errors in the model" in said
+
+
+def test_a_plan_of_squares_on_a_create2_estimates_its_turn_errors() -> None:
+    """A plan naming general paths is estimated from general paths with the
+    turn errors (odohil/session/outcome.py): the statement names them
+    estimated with the four, and what the paths leave out."""
+    description = parse_description(
+        read_robot_toml(ROBOTS / "create2.toml", what="robot"), "create2.toml"
+    )
+    items = [(square(1.0, True), 10), (square(1.0, False), 10), (Design(0.5, 1.0, "reverse"), 10)]
+    statement = estimability(items, description)
+    assert statement.ok
+    assert statement.estimable == ("E_R", "E_T", "K_theta", "K_rho", "e_turn_spin", "K_spin")
+    assert "the turn errors with the four (not folded into E_R and K_theta)" in statement.text()
+    assert "Cannot estimate e_turn_arc: the plan makes no arcs" in statement.text()
+    too_few = estimability([(square(1.0, True), 2), (square(1.0, False), 2)], description)
+    assert too_few.problems == ("4 trials for 6 parameters: need at least 7",)
