@@ -52,6 +52,7 @@ from dataclasses import dataclass, field
 from typing import Protocol, runtime_checkable
 
 import numpy as np
+import numpy.typing as npt
 
 from odohil import units
 from odohil.errors import ParameterError
@@ -663,13 +664,16 @@ def best_plan(
     min_trials: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
     max_items: int = 3,
     required: Sequence[Shape] = (),
+    max_required: int = 2,
 ) -> PlanScore | None:
-    """The plan of at most ``max_items`` of ``shapes`` (at least one of
-    ``required`` when given), each at least ``min_trials`` trials, within
-    ``budget_s`` operator seconds, with the smallest largest ratio of standard
-    error to target among the parameters the shapes together can identify
-    (the others are reported not estimable). A grid search: items are the
-    best alone and the best per parameter (:data:`POOL_SIZE`), the time is
+    """The plan of at most ``max_items`` of ``shapes`` (with ``required``:
+    one to ``max_required`` of those, and at most ``max_items`` others), each
+    at least ``min_trials`` trials, within ``budget_s`` operator seconds, that
+    estimates as many as it can of the parameters the shapes together
+    identify (the others are reported not estimable), and among those the
+    one with the smallest largest ratio of standard error to target over the
+    parameters acting on its trials. A grid search: items are the best alone
+    and the best per parameter per second (:data:`POOL_SIZE`), the time is
     shared in steps of 1/:data:`SHARE_STEPS`. None when no plan fits.
 
     Raises:
@@ -681,9 +685,10 @@ def best_plan(
         raise ParameterError(
             f"the time budget must be a positive number of seconds, got {budget_s!r}"
         )
-    if min_trials < 1 or not 1 <= max_items <= 3:
+    if min_trials < 1 or not 1 <= max_items <= 3 or not 1 <= max_required <= 2:
         raise ParameterError(
-            f"min_trials >= 1 and 1 <= max_items <= 3; got {min_trials}, {max_items}"
+            "min_trials >= 1, 1 <= max_items <= 3 and 1 <= max_required <= 2; got "
+            f"{min_trials}, {max_items}, {max_required}"
         )
     operator = operator or OperatorTime()
     wanted_targets = default_targets(robot) if target_errors is None else target_errors
@@ -706,28 +711,26 @@ def best_plan(
     divisor = wanted_targets[wanted]
     per_trial = np.array([i.info[np.ix_(wanted, wanted)] for i in items])
     seconds = np.array([i.seconds for i in items])
+    wanted_names = [robot.names[k] for k in wanted]
+    acts = np.array(
+        [[n not in acting([shape_path(i.shape)], robot) for n in wanted_names] for i in items]
+    )
     must = {id(s) for s in required}
     needed = [k for k, i in enumerate(items) if id(i.shape) in must] if required else []
     if required and not needed:
         return None
-    pool = _search_pool(per_trial, seconds, budget_s, scale, divisor, needed)
-    best: tuple[float, tuple[int, ...], FloatArray] | None = None
-    for size in range(1, max_items + 1):
-        shares = _shares(size)
-        for group in itertools.combinations(pool, size):
-            if needed and not set(group) & set(needed):
-                continue
-            counts = np.floor(shares * budget_s / seconds[list(group)] + 1e-9)
-            counts = counts[np.all(counts >= min_trials, axis=1)]
-            if counts.size == 0:
-                continue
-            total = np.einsum("bd,dij->bij", counts, per_trial[list(group)])
-            errors = _batch_errors(total, scale)
-            ratios = errors / divisor
-            value = ratios.max(axis=1) + _TIE_BREAK * np.sqrt((ratios**2).mean(axis=1))
-            row = int(np.argmin(value))
-            if math.isfinite(value[row]) and (best is None or value[row] < best[0]):
-                best = (float(value[row]), group, counts[row])
+    search = _Search(per_trial, seconds, acts, scale, divisor)
+    pool = search.pool(budget_s, needed)
+    best: tuple[tuple[int, float], tuple[int, ...], FloatArray] | None = None
+    for group in _groups(pool, needed, max_items, max_required):
+        shares = _shares(len(group))
+        counts = np.floor(shares * budget_s / seconds[list(group)] + 1e-9)
+        counts = counts[np.all(counts >= min_trials, axis=1)]
+        if counts.size == 0:
+            continue
+        key, row = search.best(group, counts)
+        if math.isfinite(key[1]) and (best is None or key < best[0]):
+            best = (key, group, counts[row])
     if best is None:
         return None
     _, group, counts = best
@@ -735,23 +738,72 @@ def best_plan(
     return score_plan(plan, robot, operator)
 
 
-def _search_pool(
-    per_trial: FloatArray,
-    seconds: FloatArray,
-    budget_s: float,
-    scale: FloatArray,
-    divisor: FloatArray,
-    needed: Sequence[int],
-) -> list[int]:
-    alone = np.floor(budget_s / seconds)
-    errors = _batch_errors(per_trial * alone[:, None, None], scale)
-    value = (errors / divisor).max(axis=1)
-    chosen = set(np.argsort(value, kind="stable")[:POOL_SIZE].tolist())
-    per_second = np.einsum("bii->bi", per_trial) / seconds[:, None]
-    for a in range(per_trial.shape[1]):
-        chosen.update(np.argsort(-per_second[:, a], kind="stable")[:2].tolist())
-    chosen.update(needed)
-    return sorted(chosen)
+def _groups(
+    pool: Sequence[int], needed: Sequence[int], max_items: int, max_required: int
+) -> list[tuple[int, ...]]:
+    """The groups of candidates :func:`best_plan` tries."""
+    if not needed:
+        return [g for size in range(1, max_items + 1) for g in itertools.combinations(pool, size)]
+    others = [k for k in pool if k not in set(needed)]
+    return [
+        (*head, *tail)
+        for size in range(1, max_required + 1)
+        for head in itertools.combinations(needed, size)
+        for extra in range(max_items + 1)
+        for tail in itertools.combinations(others, extra)
+    ]
+
+
+@dataclass(frozen=True)
+class _Search:
+    """The candidates of :func:`best_plan` restricted to the wanted parameters.
+
+    Attributes:
+        per_trial: (K, w, w) one trial's information; seconds: (K,) its time.
+        acts: (K, w) which wanted parameters act on each candidate's trials.
+        scale: (w,) typical magnitudes; divisor: (w,) target standard errors.
+    """
+
+    per_trial: FloatArray
+    seconds: FloatArray
+    acts: npt.NDArray[np.bool_]
+    scale: FloatArray
+    divisor: FloatArray
+
+    def values(self, total: FloatArray, mask: npt.NDArray[np.bool_]) -> FloatArray:
+        """The criterion (B,) of informations (B, w, w) over the parameters
+        ``mask`` (those acting): the largest standard error / target ratio
+        plus a small tie-break (the RMS ratio); inf where singular."""
+        sub = total[:, mask][:, :, mask]
+        ratios = _batch_errors(sub, self.scale[mask]) / self.divisor[mask]
+        value: FloatArray = ratios.max(axis=1) + _TIE_BREAK * np.sqrt((ratios**2).mean(axis=1))
+        return value
+
+    def best(self, group: Sequence[int], counts: FloatArray) -> tuple[tuple[int, float], int]:
+        """((wanted parameters not acting, criterion), row) of the best row of
+        ``counts`` (B, len(group)): as many wanted parameters as possible, then precision."""
+        mask = self.acts[list(group)].any(axis=0)
+        total = np.einsum("bd,dij->bij", counts, self.per_trial[list(group)])
+        values = self.values(total, mask)
+        row = int(np.argmin(values))
+        return (int((~mask).sum()), float(values[row])), row
+
+    def pool(self, budget_s: float, needed: Sequence[int]) -> list[int]:
+        """The candidates worth mixing: the best :data:`POOL_SIZE` alone
+        (each over the parameters acting on it), the best two per parameter
+        per second, and ``needed``."""
+        alone = np.floor(budget_s / self.seconds)
+        keys = []
+        for k in range(len(self.seconds)):
+            total = self.per_trial[k][None] * alone[k]
+            value = float(self.values(total, self.acts[k])[0])
+            keys.append((int((~self.acts[k]).sum()), value))
+        chosen = set(sorted(range(len(keys)), key=keys.__getitem__)[:POOL_SIZE])
+        per_second = np.einsum("bii->bi", self.per_trial) / self.seconds[:, None]
+        for a in range(self.per_trial.shape[1]):
+            chosen.update(np.argsort(-per_second[:, a], kind="stable")[:2].tolist())
+        chosen.update(needed)
+        return sorted(chosen)
 
 
 @dataclass(frozen=True)
@@ -786,6 +838,8 @@ class Gain:
         return self.forth_and_back / self.with_paths
 
 
+MIXED_DESIGNS = 2
+"""Most forth-and-back designs beside the general shapes in a comparison's plan."""
 BUYS_RATIO = 1.2
 """General paths buy precision in a parameter when they shrink its standard
 error by at least this factor at the same time."""
@@ -802,8 +856,8 @@ class PathComparison:
             planner recommends for a robot whose turns carry error).
         forth_and_back: the best forth-and-back plan, turn designs allowed
             (the turn errors estimated, not folded into E_R and K_theta).
-        with_paths: the best plan with at least one of the general shapes
-            (and forth-and-back designs beside them).
+        with_paths: the best plan with one or two of the general shapes and
+            up to :data:`MIXED_DESIGNS` forth-and-back designs beside them.
         gains: per parameter, what the general paths change.
         findings: the comparison in sentences, paper units.
     """
@@ -855,7 +909,7 @@ def compare_with_paths(
             operator=operator,
             target_errors=target_errors,
             min_trials=min_trials,
-            max_items=max_items,
+            max_items=min(max_items, MIXED_DESIGNS) if required else max_items,
             required=required,
         )
 
@@ -914,7 +968,7 @@ def _findings(
         ("forth-and-back with turns", forth),
         ("with the general paths", mixed),
     ):
-        out.append(f"best {title}: " + ("none fits" if score is None else describe_plan(score)))
+        out.append(f"Best {title}: " + ("none fits" if score is None else describe_plan(score)))
     for gain in gains:
         name = gain.name
         parts: list[str] = []
@@ -935,9 +989,7 @@ def _findings(
                 if gain.newly_estimable:
                     text += ": estimable only with them"
                 elif math.isfinite(gain.ratio):
-                    text += (
-                        f" ({gain.ratio:.2g} times {'smaller' if gain.ratio >= 1 else 'larger'})"
-                    )
+                    text += f" ({_ratio_words(gain.ratio)})"
                 parts.append(text + (f", {entry.note}" if entry.note else ""))
             else:
                 parts.append(f"nor do the general paths: {entry.reason}")
