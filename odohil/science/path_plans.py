@@ -30,8 +30,8 @@ a variance rate within a step of 0), as odohil/science/fisher.py.
 
 **Estimable.** A turn error does not act on trials that have no turn of its
 kind (no spins: K_spin; no clockwise spins: ``e_turn_spin_cw``...): it is not
-estimable and not needed for those trials. Among the parameters that act, one with no information
-(:data:`NO_INFORMATION`) is not estimable; the others are identified when
+estimable and not needed for those trials. Among the parameters that act,
+one with no information (:data:`NO_INFORMATION`) is not estimable; the others are identified when
 their unit vector lies in the range of the information in correlation form
 (eigenvalues below :data:`SINGULAR` count as zero); otherwise a parameter is
 confounded with those sharing its null direction, and only a combination of
@@ -41,6 +41,14 @@ sqrt((I^+)_aa); a correlation above :data:`CONFOUNDED` with another is named
 tests/estimation/test_path_plans.py holds these standard errors to the spread
 of maximum-likelihood estimates over data sets simulated with the discrete
 model (odohil/science/diff_drive.py :func:`~odohil.science.diff_drive.simulate_turn_errors`).
+
+**Plans in a time budget.** :func:`best_plan` searches mixtures of shapes
+within an operator time (:func:`path_seconds`: marking and measuring, driving,
+spinning); :func:`compare_with_paths` compares the best turn-free plan, the
+best forth-and-back plan and the best plan with the given general shapes of
+the same time, and says per parameter what the general shapes buy
+(:class:`PathComparison`). :func:`plan_estimability` is the pre-flight's
+statement of what a plan can and cannot estimate (odohil/session/preflight.py).
 """
 
 from __future__ import annotations
@@ -49,7 +57,7 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -71,7 +79,6 @@ from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN, OperatorTime
 from odohil.science.robot_description import RobotDescription
 
 
-@runtime_checkable
 class HasPath(Protocol):
     """A plan's shape that drives an encoder path (a forth-and-back
     :class:`~odohil.science.paths.Design`, a plan's path item)."""
