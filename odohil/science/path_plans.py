@@ -3,8 +3,9 @@ drive's turn errors, and what a plan can and cannot estimate.
 
 A plan is a list of (shape, number of trials), a shape a forth-and-back
 :class:`~odohil.science.paths.Design`, an :class:`~odohil.science.paths.EncoderPath`,
-or any value with a ``path()`` giving one (:class:`HasPath`: a plan's path
-item). One trial of a shape is its encoder path driven once.
+or any :class:`~odohil.science.paths.Drivable` (a
+:class:`~odohil.science.path_designs.PathDesign`: square, polygon, circle).
+One trial of a shape is its encoder path driven once.
 
 **Parameters** (SI). The four (E_R rad/m, E_T, K_theta rad^2/m, K_rho m); for
 a robot whose turns carry error (``[robot] turns_exact = false``) also its turn
@@ -57,7 +58,6 @@ import itertools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -74,22 +74,14 @@ from odohil.science.fisher import (
 )
 from odohil.science.moments import BATCH_COLUMNS, PathSet, TurnErrors, batch_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
-from odohil.science.paths import TURN_CLASSES, Design, EncoderPath, FloatArray, Turn
+from odohil.science.paths import TURN_CLASSES, Design, Drivable, EncoderPath, FloatArray, Turn
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN, OperatorTime
 from odohil.science.robot_description import RobotDescription
 
-
-class HasPath(Protocol):
-    """A plan's shape that drives an encoder path (a forth-and-back
-    :class:`~odohil.science.paths.Design`, a plan's path item)."""
-
-    def path(self) -> EncoderPath:
-        """The encoder path of one trial."""
-        ...
-
-
-Shape = EncoderPath | HasPath
-"""What one plan item drives: an encoder path, or a value giving one."""
+Shape = EncoderPath | Drivable
+"""What one plan item drives: an encoder path, or a design giving one (a
+forth-and-back :class:`~odohil.science.paths.Design`, a
+:class:`~odohil.science.path_designs.PathDesign`)."""
 
 DEFAULT_TURN_PRIOR = TurnErrors.uniform(0.01, k_spin=1e-4)
 """Turn errors at which the information is evaluated when none are known:
@@ -131,9 +123,9 @@ def shape_path(shape: Shape) -> EncoderPath:
 def shape_label(shape: Shape) -> str:
     """A short name of ``shape`` for messages: a design's label, a path's
     name (with its sense, ``ccw`` or ``cw``, when the name does not say it)."""
-    if isinstance(shape, Design):
+    if not isinstance(shape, EncoderPath):
         return shape.label()
-    path = shape_path(shape)
+    path = shape
     name = path.name or f"path of {path.legs.length_m.size} legs"
     net = path.net_turn_rad
     if net != 0.0 and not any(word in name for word in ("cw", "clockwise")):

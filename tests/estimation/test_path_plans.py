@@ -17,6 +17,7 @@ from odohil.science.estimators.paths import fit_paths, turn_model
 from odohil.science.fisher import default_description, fisher_information, pose_spread_measurement
 from odohil.science.moments import BATCH_COLUMNS, PathSet, TurnErrors, batch_moments
 from odohil.science.parameters import NOMAD150, ErrorParameters
+from odohil.science.path_designs import parse_path_design
 from odohil.science.path_plans import (
     RobotModel,
     Shape,
@@ -258,6 +259,7 @@ def test_shape_labels_name_the_sense() -> None:
     assert shape_label(square(1.0, False)) == "square 1 m cw"
     assert shape_label(Design(0.5, 2.0, "reverse")) == "k=0.5 l=2 m reverse"
     assert shape_label(arc_circle(0.5, 12, True)) == "arc circle r=0.5 m ccw"
+    assert shape_label(parse_path_design("circle:0.5,16,cw")) == "circle r=0.5 m 16 sides cw"
 
 
 # --- what general paths buy ------------------------------------------------------------

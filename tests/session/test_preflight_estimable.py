@@ -25,6 +25,7 @@ from odohil.science.estimators import estimate
 from odohil.science.estimators.checks import plan_problems
 from odohil.science.estimators.observations import Observation
 from odohil.science.parameters import NOMAD150
+from odohil.science.path_designs import parse_path_design
 from odohil.science.paths import Design, square
 from odohil.science.simulator import simulate
 from odohil.session.lifecycle import SessionSpec, preflight
@@ -168,11 +169,16 @@ def test_a_plan_of_squares_on_a_create2_estimates_its_turn_errors() -> None:
     description = parse_description(
         read_robot_toml(ROBOTS / "create2.toml", what="robot"), "create2.toml"
     )
-    items = [(square(1.0, True), 10), (square(1.0, False), 10), (Design(0.5, 1.0, "reverse"), 10)]
+    items = [
+        (parse_path_design("square:1.0,ccw"), 10),
+        (parse_path_design("square:1.0,cw"), 10),
+        (Design(0.5, 1.0, "reverse"), 10),
+    ]
     statement = estimability(items, description)
     assert statement.ok
     assert statement.estimable == ("E_R", "E_T", "K_theta", "K_rho", "e_turn_spin", "K_spin")
     assert "the turn errors with the four (not folded into E_R and K_theta)" in statement.text()
     assert "Cannot estimate e_turn_arc: the plan makes no arcs" in statement.text()
     too_few = estimability([(square(1.0, True), 2), (square(1.0, False), 2)], description)
+    assert not too_few.ok
     assert too_few.problems == ("4 trials for 6 parameters: need at least 7",)
