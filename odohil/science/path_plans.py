@@ -781,7 +781,7 @@ class _Search:
     def best(self, group: Sequence[int], counts: FloatArray) -> tuple[tuple[int, float], int]:
         """((wanted parameters not acting, criterion), row) of the best row of
         ``counts`` (B, len(group)): as many wanted parameters as possible, then precision."""
-        mask = self.acts[list(group)].any(axis=0)
+        mask: npt.NDArray[np.bool_] = np.asarray(self.acts[list(group)].any(axis=0), dtype=bool)
         total = np.einsum("bd,dij->bij", counts, self.per_trial[list(group)])
         values = self.values(total, mask)
         row = int(np.argmin(values))
