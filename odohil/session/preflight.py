@@ -38,11 +38,17 @@ def default_variant(description: RobotDescription) -> str:
 
 
 def turn_designs(plan: Plan, description: RobotDescription) -> list[str]:
-    """Labels of the plan's ``turn`` designs when the robot's turns carry error
-    (``[robot] turns_exact = false``); empty otherwise."""
+    """Labels of the plan's forth-and-back ``turn`` designs when the robot's
+    turns carry error (``[robot] turns_exact = false``); empty otherwise. A
+    plan's paths are not among them: they are estimated with the turn errors
+    (:func:`estimability`)."""
     if description.robot.turns_exact:
         return []
-    return [i.design.label() for i in plan.items if i.design.variant == "turn"]
+    return [
+        i.design.label()
+        for i in plan.items
+        if isinstance(i.design, Design) and i.design.variant == "turn"
+    ]
 
 
 def turn_warning(plan: Plan, description: RobotDescription) -> str | None:

@@ -29,8 +29,8 @@ from odohil.science.path_designs import parse_path_design
 from odohil.science.paths import Design, square
 from odohil.science.simulator import simulate
 from odohil.session.lifecycle import SessionSpec, preflight
-from odohil.session.plan import parse_plan
-from odohil.session.preflight import estimability
+from odohil.session.plan import Plan, PlanItem, parse_plan
+from odohil.session.preflight import check_estimable, check_turns, estimability, turn_designs
 from odohil.session.robot_file import read_robot_toml
 from odohil.session.robots import parse_description
 
@@ -182,3 +182,24 @@ def test_a_plan_of_squares_on_a_create2_estimates_its_turn_errors() -> None:
     too_few = estimability([(square(1.0, True), 2), (square(1.0, False), 2)], description)
     assert not too_few.ok
     assert too_few.problems == ("4 trials for 6 parameters: need at least 7",)
+
+
+def test_a_plan_item_naming_squares_passes_the_turn_check_and_is_stated() -> None:
+    """A plan item may be a path design (odohil/science/path_designs.py): the
+    turn check leaves it alone (its turns are estimated, not folded) and the
+    estimability check states its turn errors."""
+    description = parse_description(
+        read_robot_toml(ROBOTS / "create2.toml", what="robot"), "create2.toml"
+    )
+    plan = Plan(
+        (
+            PlanItem(parse_path_design("square:1,ccw"), 10),  # type: ignore[arg-type]
+            PlanItem(parse_path_design("square:1,cw"), 10),  # type: ignore[arg-type]
+            PlanItem(Design(0.5, 1.0, "reverse"), 10),
+        )
+    )
+    assert turn_designs(plan, description) == []
+    check_turns(plan, description, allow_turns=False)
+    statement = check_estimable(plan, description)
+    assert statement is not None
+    assert statement.estimable[-2:] == ("e_turn_spin", "K_spin")
