@@ -57,7 +57,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -1078,6 +1078,7 @@ def plan_estimability(items: Sequence[tuple[Shape, int]], robot: RobotModel) -> 
         for b in range(a + 1, len(names))
         if abs(corr[a, b]) > CONFOUNDED
     ]
+    notes += _split_note(checked, robot)
     kept = [p for p in score.parameters if p.estimable]
     return Estimability(
         turns_exact=robot.turns_exact,
@@ -1087,3 +1088,26 @@ def plan_estimability(items: Sequence[tuple[Shape, int]], robot: RobotModel) -> 
         notes=tuple(notes),
         problems=tuple(problems),
     )
+
+
+def _split_note(items: Sequence[tuple[Shape, int]], robot: RobotModel) -> list[str]:
+    """What one e_turn per direction would estimate, for a plan that turns
+    both ways with one kind of turn (the estimator splits e_turn by direction
+    when a likelihood-ratio test asks for it: odohil/science/estimators/paths.py)."""
+    if robot.turns_exact or robot.split_directions:
+        return []
+    turned = sum((shape_path(shape).turns.total_abs_rad for shape, _ in items), np.zeros(4))
+    if not ((turned[0] > 0 and turned[1] > 0) or (turned[2] > 0 and turned[3] > 0)):
+        return []
+    split = score_plan(items, replace(robot, split_directions=True))
+    both = [
+        p
+        for p in split.parameters
+        if p.name.startswith("e_turn") and not p.reason.startswith("the plan makes no")
+    ]
+    found = [f"{p.name} (SE {_paper(p.name, p.standard_error)})" for p in both if p.estimable]
+    lost = [f"{p.name}: {p.reason}" for p in both if not p.estimable]
+    text = "If the data ask for one e_turn per direction, the split fit estimates " + (
+        _join(found) or "none of them"
+    )
+    return [text + (f"; not {'; '.join(lost)}" if lost else "")]

@@ -241,6 +241,8 @@ def test_squares_of_one_sense_confound_e_turn_with_E_R() -> None:
     )
     text = both.text()
     assert "the turn errors with the four (not folded into E_R and K_theta)" in text
+    assert "If the data ask for one e_turn per direction, the split fit estimates" in text
+    assert "e_turn_spin_cw (SE " in text
     assert "Cannot estimate e_turn_arc: the plan makes no arcs" in text
 
 
