@@ -1024,8 +1024,9 @@ class Estimability:
         """Whether an estimate can come of these trials."""
         return not self.problems
 
-    def text(self) -> str:
-        """The statement (expected standard errors in paper units)."""
+    def text(self, *, problems: bool = True) -> str:
+        """The statement (expected standard errors in paper units), with the
+        problems unless ``problems`` is False."""
         found = [
             f"{name} (SE {_paper(name, se)})"
             for name, se in zip(self.estimable, self.standard_errors, strict=True)
@@ -1038,7 +1039,7 @@ class Estimability:
                 "Cannot estimate "
                 + "; ".join(f"{name}: {reason}" for name, reason in self.not_estimable)
             )
-        sentences += [*self.notes, *self.problems]
+        sentences += [*self.notes, *(self.problems if problems else ())]
         return ". ".join(sentences) + "."
 
 

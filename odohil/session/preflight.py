@@ -23,6 +23,7 @@ from odohil.science.path_plans import (
     Shape,
     acting,
     plan_estimability,
+    shape_label,
     shape_path,
 )
 from odohil.science.paths import Design
@@ -39,16 +40,12 @@ def default_variant(description: RobotDescription) -> str:
 
 def turn_designs(plan: Plan, description: RobotDescription) -> list[str]:
     """Labels of the plan's forth-and-back ``turn`` designs when the robot's
-    turns carry error (``[robot] turns_exact = false``); empty otherwise. A
-    plan's paths are not among them: they are estimated with the turn errors
-    (:func:`estimability`)."""
-    if description.robot.turns_exact:
+    turns carry error (``[robot] turns_exact = false``) and the plan names no
+    path; empty otherwise: a plan naming a path is estimated from general
+    paths with the turn errors (:func:`estimability`), its turn designs too."""
+    if description.robot.turns_exact or not designs_only(plan_items(plan)):
         return []
-    return [
-        i.design.label()
-        for i in plan.items
-        if isinstance(i.design, Design) and i.design.variant == "turn"
-    ]
+    return [i.design.label() for i in plan.items if i.design.variant == "turn"]
 
 
 def turn_warning(plan: Plan, description: RobotDescription) -> str | None:
@@ -89,6 +86,13 @@ def plan_items(plan: Plan) -> list[tuple[Shape, int]]:
     return [(item.design, item.n_trials) for item in plan.items]
 
 
+def designs_only(items: Sequence[tuple[Shape, int]]) -> bool:
+    """Whether every item is a forth-and-back design (the session estimates
+    such a plan with the four parameters; one naming a path from general
+    paths, with the turn errors unless the robot's turns are exact)."""
+    return all(isinstance(shape, Design) for shape, _ in items)
+
+
 def estimability(items: Sequence[tuple[Shape, int]], description: RobotDescription) -> Estimability:
     """What trials of ``items`` can and cannot estimate on the described robot
     (:func:`odohil.science.path_plans.plan_estimability` at its ``[priors]``,
@@ -104,12 +108,10 @@ def estimability(items: Sequence[tuple[Shape, int]], description: RobotDescripti
             not defined (K_theta = 0 with exact poses).
     """
     robot = RobotModel.of(description)
-    designs_only = all(isinstance(shape, Design) for shape, _ in items)
     turns = any(
         any(step != 0.0 for step in shape_path(shape).turns.total_abs_rad) for shape, _ in items
     )
-    statement = plan_estimability(items, robot)
-    if designs_only and turns and not robot.turns_exact:
+    if designs_only(items) and turns and not robot.turns_exact:
         four = plan_estimability(items, replace(robot, turns_exact=True))
         idle = acting([shape_path(shape) for shape, _ in items], robot)
         folded = "not fitted by the forth-and-back estimator (folded into E_R and K_theta)"
@@ -121,6 +123,7 @@ def estimability(items: Sequence[tuple[Shape, int]], description: RobotDescripti
             ),
             notes=(*four.notes, FOLDED_TURNS),
         )
+    statement = plan_estimability(items, robot)
     if robot.turns_exact and turns:
         exact = "Turns declared exact ([robot] turns_exact): no turn errors in the model"
         return replace(statement, notes=(*statement.notes, exact))
@@ -153,9 +156,11 @@ def check_estimable(plan: Plan, description: RobotDescription) -> Estimability |
             return None
         raise
     if len(designs) < len(items) and not statement.ok:
+        named = "; ".join(f"{shape_label(shape)} n={n}" for shape, n in items)
         raise ParameterError(
-            f"--plan {plan.to_text()}: no estimate could come of these trials (nothing "
-            "was driven): " + "; ".join(statement.problems) + ". " + statement.text()
+            f"--plan ({named}): no estimate could come of these trials (nothing "
+            f"was driven): {'; '.join(statement.problems)}. What they would give: "
+            + statement.text(problems=False)
         )
     return statement
 

@@ -19,7 +19,7 @@ import pytest
 from typer.testing import CliRunner
 
 from odohil.cli.app import app
-from odohil.errors import MeasurementError
+from odohil.errors import MeasurementError, ParameterError
 from odohil.robots import __file__ as robots_init
 from odohil.science.estimators import estimate
 from odohil.science.estimators.checks import plan_problems
@@ -185,9 +185,10 @@ def test_a_plan_of_squares_on_a_create2_estimates_its_turn_errors() -> None:
 
 
 def test_a_plan_item_naming_squares_passes_the_turn_check_and_is_stated() -> None:
-    """A plan item may be a path design (odohil/science/path_designs.py): the
-    turn check leaves it alone (its turns are estimated, not folded) and the
-    estimability check states its turn errors."""
+    """A plan item may be a path design (odohil/science/path_designs.py): a
+    plan naming one is estimated from general paths with the turn errors, so
+    the turn check leaves it and its turn designs alone, and the
+    estimability check states the turn errors estimated."""
     description = parse_description(
         read_robot_toml(ROBOTS / "create2.toml", what="robot"), "create2.toml"
     )
@@ -196,10 +197,31 @@ def test_a_plan_item_naming_squares_passes_the_turn_check_and_is_stated() -> Non
             PlanItem(parse_path_design("square:1,ccw"), 10),  # type: ignore[arg-type]
             PlanItem(parse_path_design("square:1,cw"), 10),  # type: ignore[arg-type]
             PlanItem(Design(0.5, 1.0, "reverse"), 10),
+            PlanItem(Design(1, 1.0, "turn"), 10),
         )
     )
-    assert turn_designs(plan, description) == []
+    assert turn_designs(plan, description) == []  # estimated with the turn errors too
     check_turns(plan, description, allow_turns=False)
     statement = check_estimable(plan, description)
     assert statement is not None
     assert statement.estimable[-2:] == ("e_turn_spin", "K_spin")
+    assert "folded" not in statement.text().replace("not folded", "")
+
+
+def test_a_plan_naming_paths_that_cannot_give_an_estimate_is_refused() -> None:
+    description = parse_description(
+        read_robot_toml(ROBOTS / "create2.toml", what="robot"), "create2.toml"
+    )
+    plan = Plan(
+        (
+            PlanItem(parse_path_design("square:1,ccw"), 3),  # type: ignore[arg-type]
+            PlanItem(parse_path_design("square:1,cw"), 3),  # type: ignore[arg-type]
+        )
+    )
+    with pytest.raises(ParameterError) as refused:
+        check_estimable(plan, description)
+    said = str(refused.value)
+    assert said.startswith(
+        "--plan (square 1 m ccw n=3; square 1 m cw n=3): no estimate could come of these trials"
+    )
+    assert "6 trials for 6 parameters: need at least 7. What they would give: Estimates" in said
