@@ -1,10 +1,15 @@
 """Trials on the robot, forth-and-back or general paths: legs are ``pr(trans)``,
 turns ``pr(0, steer)``.
 
-After each step the encoders must end where the command says (within a
-tolerance in wire units); otherwise the robot is stopped and MotionError
-raised. Lengths and angles are realised in whole wire units; the record
-keeps what was actually commanded.
+Every step is checked before the first is sent (a leg in the wire's range,
+:func:`~odohil.protocol.nomad.limits.leg_to_wire`; a turn of at least
+:data:`MIN_TURN_WIRE`); an error names the step (``step 3 of 8``) and the
+accepted range. After each step the encoders must end where the command says
+(within a tolerance in wire units, from where the last step ended); otherwise
+the robot is stopped and MotionError raised. Lengths and angles are realised
+in whole wire units, the turns rounded on their running sum so that a closed
+path's turns add up to whole turns (a 7-gon's 51.43 degrees go out as 514 or
+515 tenths, 3600 in all); the record keeps what was actually commanded.
 """
 
 from __future__ import annotations
@@ -33,10 +38,15 @@ from odohil.protocol.nomad.wire_units import (
     wire_to_radians,
 )
 from odohil.science import frames
-from odohil.science.paths import Drivable, Leg
+from odohil.science.paths import Drivable, Leg, Step
 from odohil.units import wrap_angle
 
 DEFAULT_TOLERANCE_WIRE = 2
+MIN_TURN_WIRE = 20
+"""Smallest |turn| the driver sends, wire units of 0.1 degree (2 degrees; a
+circle of at most 180 sides): the wire's 0.1 degree is at most 5 % of it, and
+a turn that does not happen fails the end-of-step check (2 units) by a wide
+margin, as :data:`~odohil.protocol.nomad.limits.MIN_LEG_M` does for legs."""
 DEFAULT_STEP_TIMEOUT_S = 120.0
 DEFAULT_SPEEDS = (0.5, math.radians(45.0))
 """Translation m/s and steering rad/s for the run (within the N150 client maxima)."""
@@ -84,7 +94,12 @@ def relative_pose(start: EncoderSample, end: EncoderSample) -> tuple[float, floa
 
 
 def _check_step(
-    robot: NomadRobot, before: EncoderSample, after: EncoderSample, cmd: Pr, tolerance: int
+    robot: NomadRobot,
+    before: EncoderSample,
+    after: EncoderSample,
+    cmd: Pr,
+    tolerance: int,
+    what: str = "",
 ) -> None:
     heading = wire_to_radians(before.steer_wire)
     want_x = before.x_wire + cmd.trans * math.cos(heading)
@@ -98,26 +113,45 @@ def _check_step(
     if max(errors) > tolerance:
         robot.stop()
         raise MotionError(
-            f"pr({cmd.trans}, {cmd.steer}, {cmd.turret}) ended at {after.pose_text()}, "
+            f"{what + ': ' if what else ''}pr({cmd.trans}, {cmd.steer}, {cmd.turret}) ended "
+            f"at {after.pose_text()}, "
             f"expected x={want_x:.1f} y={want_y:.1f} steer={want_steer} "
             f"(tolerance {tolerance} wire units); robot stopped"
         )
 
 
+def _step_name(index: int, n: int, step: Step) -> str:
+    what = f"leg {step.length_m:g} m" if isinstance(step, Leg) else f"turn {step.angle_rad:g} rad"
+    return f"{what} (step {index} of {n})"
+
+
 def _wire_steps(design: Drivable) -> list[tuple[int, int]]:
     """Every step of ``design`` as (translation, steering) wire units, all
-    checked before the first is sent."""
+    checked before the first is sent; the turns rounded on their running sum
+    (module docstring). ParameterError names the step and the accepted range."""
     steps: list[tuple[int, int]] = []
-    for step in design.path().steps:
+    path_steps = design.path().steps
+    n = len(path_steps)
+    turned = 0.0  # the turns so far, rad
+    sent = 0  # the turns so far as sent, wire units
+    for index, step in enumerate(path_steps, start=1):
         if isinstance(step, Leg):
-            steps.append((leg_to_wire(step.length_m), 0))
+            try:
+                steps.append((leg_to_wire(step.length_m), 0))
+            except ParameterError as exc:
+                raise ParameterError(
+                    f"{_step_name(index, n, step)} of {design.label()}: {exc}; nothing sent"
+                ) from None
             continue
-        steer = radians_to_wire(step.angle_rad)
-        if steer == 0 or abs(steer) > S16_MAX:
+        turned += step.angle_rad
+        steer = radians_to_wire(turned) - sent
+        if abs(steer) < MIN_TURN_WIRE or abs(steer) > S16_MAX:
             raise ParameterError(
-                f"turn of {step.angle_rad:g} rad is {steer} wire units of 0.1 degree; "
-                f"it must be 1..{S16_MAX} in magnitude"
+                f"{_step_name(index, n, step)} of {design.label()} is {steer} wire units of "
+                f"0.1 degree; a turn must be {MIN_TURN_WIRE}..{S16_MAX} in magnitude "
+                f"({MIN_TURN_WIRE / 10:g} to {S16_MAX / 10:g} degrees); nothing sent"
             )
+        sent += steer
         steps.append((0, steer))
     return steps
 
@@ -131,17 +165,17 @@ def _step_limits(
     """The time limit of each step (odohil/driver/step_limit.py), checked before
     anything is sent."""
     limits: list[StepLimit] = []
-    for step in design.path().steps:
+    path_steps = design.path().steps
+    for index, step in enumerate(path_steps, start=1):
+        what = _step_name(index, len(path_steps), step)
         if isinstance(step, Leg):
-            what, size, speed, acceleration = (
-                f"leg {step.length_m:g} m",
+            size, speed, acceleration = (
                 step.length_m,
                 speeds[0],
                 accelerations[0],
             )
         else:
-            what, size, speed, acceleration = (
-                f"turn {step.angle_rad:g} rad",
+            size, speed, acceleration = (
                 step.angle_rad,
                 speeds[1],
                 accelerations[1],
@@ -181,9 +215,10 @@ def drive_trial(
     First sets ``speeds`` (translation m/s, steering rad/s) and
     ``accelerations`` (m/s^2, rad/s^2); a ``pr`` with zero speed would not move.
 
-    Raises ParameterError before anything is sent when a leg is outside the
-    wire's range (:func:`odohil.protocol.nomad.limits.check_leg_length_m`: at least
-    50 mm, at most 83.2 m) or a turn rounds to no wire units; MotionError if
+    Raises ParameterError before anything is sent, naming the step, when a leg
+    is outside the wire's range (:func:`odohil.protocol.nomad.limits.check_leg_length_m`:
+    at least 50 mm, at most 83.2 m) or a turn is under :data:`MIN_TURN_WIRE`
+    (2 degrees) or over the s16 range; MotionError if
     a step ends off its commanded encoder pose, and whatever the robot raises
     (after ``st``) on protocol errors or timeouts, OdohilTimeoutError (the stop
     confirmed) when a step outlasts its time limit (its length at ``speeds``,
@@ -194,6 +229,7 @@ def drive_trial(
     if tolerance_wire < 0:
         raise ParameterError(f"tolerance must be >= 0 wire units, got {tolerance_wire}")
     wire_steps = _wire_steps(design)
+    limits = _step_limits(design, speeds, accelerations, step_timeout_s)
     samples: list[EncoderSample] = []
     commands: list[Pr] = []
     step_ends: list[EncoderSample] = []
@@ -210,12 +246,11 @@ def drive_trial(
     record(start)
     before = start
 
-    limits = _step_limits(design, speeds, accelerations, step_timeout_s)
     for (trans, steer), limit in zip(wire_steps, limits, strict=True):
         cmd = robot.move_relative_wire(trans, steer, 0)
         commands.append(cmd)
         after = _poll_within(robot, limit, record)
-        _check_step(robot, before, after, cmd, tolerance_wire)
+        _check_step(robot, before, after, cmd, tolerance_wire, limit.what)
         step_ends.append(after)
         before = after
     end = before
