@@ -65,7 +65,7 @@ def test_a_create2_leg_that_cannot_end_is_stopped_at_its_limit() -> None:
         truth = robot.transport.truth()  # type: ignore[attr-defined]
         assert not truth.moving  # stopped, and the stop confirmed before the error
     message = str(raised.value)
-    assert "leg 0.3 m not done within its time limit of 6.1 s" in message, message
+    assert "leg 0.3 m (step 1 of 1) not done within its time limit of 6.1 s" in message, message
     assert "stop confirmed" in message
     assert 6.05 <= took < 10.0  # the limit is 6.0996 s, printed as 6.1 s
     assert truth.travel_m < 0.3
@@ -98,7 +98,7 @@ def test_a_nomad_step_that_never_reports_its_end_is_stopped_at_its_limit() -> No
         took = time.monotonic() - started
         assert not robot.odometry().moving
     message = str(raised.value)
-    assert "leg 0.3 m not done within its time limit of 6.1 s" in message, message
+    assert "leg 0.3 m (step 1 of 1) not done within its time limit of 6.1 s" in message, message
     assert "stop confirmed" in message
     assert 6.05 <= took < 10.0  # the limit is 6.0996 s, printed as 6.1 s
 
@@ -120,6 +120,6 @@ def test_the_issues_run_on_a_wrapping_create2_ends_with_a_clear_error(tmp_path: 
     assert time.monotonic() - started < 60.0
     err = " ".join(result.stderr.split())
     assert result.exit_code == 1, err
-    assert "leg 1 m: the encoders changed by" in err
+    assert "leg 1 m (step 1 of 1): the encoders changed by" in err
     assert "wrap-around of the 16-bit counters cannot be ruled out" in err
     assert "robot stopped (it reports" in err

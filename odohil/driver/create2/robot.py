@@ -14,13 +14,22 @@ What it sends (facts §3-§9 and the CHOICEs in protocols/create2/README.md):
   stream of the driver's packets starts (``148``; or, with ``sampling="poll"``,
   every reading is a Query List): bench/create2_leg_end.py found streaming
   ends legs at least as tightly at 115200 and 19200 baud (BENCHMARKS.md);
-- drive: straight legs with Drive Direct (both wheels at the set speed),
-  in-place turns with the wheels at opposite speeds; each step ends on the
-  encoder counts 43/44 (deltas mod 65536, wrap-safe both ways) against
-  targets counted from the trial's start, so a leg that ends a count long
-  makes the next one a count short; near the end it slows to a crawl and
-  stops ahead of the target by the distance the wheels cover while a
-  reading is on its way;
+- drive: any encoder path (odohil/science/paths.py: a forth-and-back design,
+  a square, a polygon, a circle cut into short legs and turns): straight
+  legs with Drive Direct (both wheels at the set speed), in-place turns with
+  the wheels at opposite speeds; every step is checked before the first is
+  sent (:data:`MIN_STEP_TOLERANCES`); each step ends on the encoder counts
+  43/44 (deltas mod 65536, wrap-safe both ways) against targets counted from
+  the trial's start, so a leg that ends a count long makes the next leg a
+  count short, and a turn that ends a count short makes the next turn a count
+  longer; near the end it slows to a crawl and stops ahead of the target by
+  the distance the wheels cover while a reading is on its way. The end check
+  splits the wheels' miss into its two motions: the mean of the wheels (what
+  legs drive, made up by the next leg) and their half difference (what turns
+  drive, made up by the next turn); each must be within the tolerance of the
+  last step that drove it (:meth:`Create2Robot._drive_step`), so a leg that
+  ended within its tolerance and a turn that ended within its own do not add
+  up to a failure on one wheel;
 - every reading during a motion is checked: a cliff, a wheel drop, a bump or
   a mode other than the armed one (the OI drops Safe to Passive on its own
   safety stops) stops the robot and raises SafetyStopError; encoders that do
@@ -116,6 +125,11 @@ odohil/driver/create2/facts.py), when larger (a late stop on a
 busy host; the next step's target makes up for it)."""
 MIN_STEP_COUNTS = 10
 """Shortest step the backend drives, counts (4.4 mm at the Create 2's constants)."""
+MIN_STEP_TOLERANCES = 2.0
+"""Every step must turn the wheels at least this many times its end-of-step
+tolerance (so a step that did not happen fails its end check by a wide margin):
+with the Create 2's constants a leg of at least 2 cm, a turn of at least
+0.17 rad (9.6 degrees; a circle of at most 37 sides)."""
 STOP_CONFIRM_TIMEOUT_S = 2.0
 CLOSE_BYTES = (
     commands.drive_direct(0, 0)
@@ -145,6 +159,13 @@ class _Step:
     speed_mm_s: int
     what: str
     limit: StepLimit
+    tolerance: float
+    """How far (counts, per motion) the step may end from its target."""
+
+    @property
+    def is_turn(self) -> bool:
+        """True for an in-place turn (the wheels opposite)."""
+        return self.left_sign != self.right_sign
 
 
 class Create2Robot:
@@ -453,42 +474,59 @@ class Create2Robot:
             )
         return leg, turn
 
+    def _tolerance(self, counts: float) -> float:
+        """End-of-step tolerance of a step of ``counts`` wheel counts, counts."""
+        return max(self.geometry.counts_for(STEP_TOLERANCE_M), STEP_TOLERANCE_FRACTION * counts)
+
     def _steps(self, design: Drivable, settings: DriveSettings) -> list[_Step]:
+        """Every step of ``design`` as wheel targets, all checked before the first
+        is sent: ParameterError naming the step and the accepted range."""
         leg_speed, turn_speed = self._speeds(settings)
+        path_steps = design.path().steps
+        n = len(path_steps)
         steps: list[_Step] = []
-        for step in design.path().steps:
+        half_base = self.geometry.wheel_base_m / 2.0
+        for index, step in enumerate(path_steps, start=1):
             if isinstance(step, Leg):
                 sign = 1 if step.length_m > 0 else -1
                 counts = self.geometry.counts_for(abs(step.length_m))
                 what = f"leg {step.length_m:g} m"
-                limit = step_limit(
-                    what,
+                size, speed, acceleration = (
                     step.length_m,
                     settings.speed_m_s,
                     settings.acceleration_m_s2,
-                    settings.step_timeout_s,
                 )
-                steps.append(_Step(sign, sign, counts, leg_speed, what, limit))
+                left_sign, right_sign, wheel_speed = sign, sign, leg_speed
             else:
                 assert isinstance(step, Turn)
                 sign = 1 if step.angle_rad > 0 else -1
-                arc = abs(step.angle_rad) * self.geometry.wheel_base_m / 2.0
-                counts = self.geometry.counts_for(arc)
+                counts = self.geometry.counts_for(abs(step.angle_rad) * half_base)
                 what = f"turn {step.angle_rad:g} rad"
-                limit = step_limit(
-                    what,
+                size, speed, acceleration = (
                     step.angle_rad,
                     settings.turn_rate_rad_s,
                     settings.turn_acceleration_rad_s2,
-                    settings.step_timeout_s,
                 )
-                steps.append(_Step(-sign, sign, counts, turn_speed, what, limit))
-        for planned in steps:
-            if planned.counts < MIN_STEP_COUNTS:
+                left_sign, right_sign, wheel_speed = -sign, sign, turn_speed
+            tolerance = self._tolerance(counts)
+            least = max(MIN_STEP_COUNTS, MIN_STEP_TOLERANCES * tolerance)
+            if counts < least:
+                least_m = least * self.geometry.metres_per_count
+                accepted = (
+                    f"|angle| >= {least_m / half_base:.3g} rad "
+                    f"({math.degrees(least_m / half_base):.3g} degrees)"
+                    if isinstance(step, Turn)
+                    else f"|length| >= {least_m:.3g} m"
+                )
                 raise ParameterError(
-                    f"{planned.what} is {planned.counts:.1f} encoder counts; at least "
-                    f"{MIN_STEP_COUNTS} (nothing sent)"
+                    f"step {index} of {n} of {design.label()}: {what} turns each wheel "
+                    f"{counts:.1f} encoder counts; at least {least:.0f} ({accepted}: "
+                    f"{MIN_STEP_TOLERANCES:g} x its end-of-step tolerance of "
+                    f"{tolerance:.0f} counts); nothing sent"
                 )
+            what = f"{what} (step {index} of {n})"
+            limit = step_limit(what, size, speed, acceleration, settings.step_timeout_s)
+            steps.append(_Step(left_sign, right_sign, counts, wheel_speed, what, limit, tolerance))
         return steps
 
     def drive(
@@ -516,10 +554,14 @@ class Create2Robot:
             record(start)
             travelled = [0.0, 0.0]  # signed counts since the trial's start
             target = [0.0, 0.0]
+            # how far the wheels' mean (legs) and half difference (turns) may be
+            # from their targets: the tolerance of the last step that drove each
+            allowed = [self._tolerance(0.0), self._tolerance(0.0)]
             for step in steps:
                 target[0] += step.left_sign * step.counts
                 target[1] += step.right_sign * step.counts
-                self._drive_step(step, target, travelled, settings, record)
+                allowed[1 if step.is_turn else 0] = step.tolerance
+                self._drive_step(step, target, travelled, allowed, record)
             end = samples[-1]
         return TrialMotion(
             design=design,
@@ -539,9 +581,12 @@ class Create2Robot:
         step: _Step,
         target: list[float],
         travelled: list[float],
-        settings: DriveSettings,
+        allowed: list[float],
         record: Callable[[OdometrySample], None],
     ) -> None:
+        """Drive one step to its target (counted from the trial's start) and check
+        where it ended: the wheels' mean and half difference each within
+        ``allowed`` (counts: the tolerance of the last leg, of the last turn)."""
         signs = (step.left_sign, step.right_sign)
 
         def remaining() -> float:
@@ -549,9 +594,7 @@ class Create2Robot:
 
         crawl = min(step.speed_mm_s, CRAWL_MM_S)
         deadline = time.monotonic() + step.limit.limit_s
-        tolerance = max(
-            self.geometry.counts_for(STEP_TOLERANCE_M), STEP_TOLERANCE_FRACTION * step.counts
-        )
+        tolerance = step.tolerance
         speed = step.speed_mm_s
         for _attempt in range(MAX_ATTEMPTS):
             last = self._run_to_target(step, speed, crawl, remaining, travelled, deadline, record)
@@ -575,12 +618,15 @@ class Create2Robot:
                 break
             speed = crawl  # stopped short (a late reading): finish at the crawl
         off = [t - d for t, d in zip(target, travelled, strict=True)]
-        if max(abs(o) for o in off) > tolerance:
+        mean, half_difference = (off[0] + off[1]) / 2, (off[1] - off[0]) / 2
+        if abs(mean) > allowed[0] or abs(half_difference) > allowed[1]:
+            metres = self.geometry.metres_per_count
             raise MotionError(
-                f"{step.what} ended {off[0]:+.0f} (left), {off[1]:+.0f} (right) counts from "
-                f"its target (tolerance {tolerance:.0f} counts, "
-                f"{tolerance * self.geometry.metres_per_count:.3g} m); "
-                "robot stopped"
+                f"{step.what} ended {off[0]:+.0f} (left), {off[1]:+.0f} (right) counts "
+                f"from its target: the wheels' mean {mean:+.0f} counts (legs; tolerance "
+                f"{allowed[0]:.0f} counts, {allowed[0] * metres:.3g} m), their half "
+                f"difference {half_difference:+.0f} counts (turns; tolerance {allowed[1]:.0f} "
+                f"counts, {allowed[1] * metres:.3g} m per wheel); robot stopped"
             )
 
     def _run_to_target(
