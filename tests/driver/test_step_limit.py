@@ -79,7 +79,14 @@ def test_a_create2_at_a_time_scale_that_wraps_its_encoders_ends_the_leg_at_once(
         robot.arm(SETTINGS)
         robot.zero()
         started = time.monotonic()
-        with pytest.raises(MotionError, match="wrap-around of the 16-bit counters"):
+        # a frame 15 ms after the last shows the ambiguous change; on a busy host
+        # readings arrive bunched (the link keeps the newest), and a change that
+        # wrapped back into range reads as the leg ending thousands of counts long
+        # (the rate, measured from the second reading on, stops it there): either
+        # way the leg ends at once with the reason
+        with pytest.raises(
+            MotionError, match=r"wrap-around of the 16-bit counters|counts from its target"
+        ):
             robot.drive(Design(0.5, 1.0, "reverse"), SETTINGS)
         assert time.monotonic() - started < 5.0
         robot.stop_and_confirm()

@@ -643,8 +643,13 @@ class Create2Robot:
         then stop; the last reading."""
         last = self._last
         assert last is not None
-        rate = 0.0  # counts per second along the step, measured
-        history: list[tuple[float, float]] = []  # (robot time, -remaining) at this speed
+        # counts per second along the step: the commanded speed's until the
+        # readings span RATE_MIN_SPAN_S, measured from then on
+        rate = speed / (1000.0 * self.geometry.metres_per_count)
+        # (robot time, -remaining) at this speed, from the reading before the
+        # command: a short step at a fast rate (a fake run fast) knows its rate
+        # from its second reading on, in time to slow down
+        history: list[tuple[float, float]] = [(last.robot_time_s, -remaining())]
         lead_s = STOP_LEAD_S + self._link.transfer_s
         moved_at = time.monotonic()
         if remaining() > 0:
