@@ -226,6 +226,17 @@ class EncoderPath:
         return (x, y, self.net_turn_rad - self.winding_rad)
 
 
+def check_trial_length(label: str, path: EncoderPath) -> None:
+    """ParameterError when one trial of ``path`` drives more than
+    :data:`~odohil.science.limits.TRIAL_DISTANCE_MAX_M` metres, the longest trial
+    any design may drive: a robot backend calls it before it sends anything."""
+    if path.distance_m > TRIAL_DISTANCE_MAX_M:
+        raise ParameterError(
+            f"{label} drives {path.distance_m:g} m in one trial; at most "
+            f"{TRIAL_DISTANCE_MAX_M:g} m (odohil/science/limits.py); nothing sent"
+        )
+
+
 class Drivable(Protocol):
     """What a robot can drive as one trial: a forth-and-back :class:`Design`
     or a general path design (odohil/science/path_designs.py)."""

@@ -173,6 +173,28 @@ def test_a_step_out_of_range_is_refused_by_name_before_anything_moves(
         assert not truth(robot).moving
 
 
+@pytest.mark.parametrize("backend", sorted(URLS))
+def test_a_path_longer_than_any_trial_may_be_is_refused_before_anything_moves(
+    backend: str,
+) -> None:
+    # 126 legs of 80 m: each in both robots' leg range, 10,080 m in all
+    with armed(backend, URLS[backend]) as robot:
+        with pytest.raises(ParameterError, match="drives 10080 m in one trial; at most 10000 m"):
+            robot.drive(Steps((Leg(80.0),) * 126), SETTINGS)
+        assert sent_motion(backend, truth(robot)) == 0
+
+
+def test_the_nomad_rounds_turns_on_their_running_sum_so_a_heptagon_closes() -> None:
+    # 360/7 degrees is 514.29 tenths: seven turns of 514 would leave 2 tenths open
+    design = parse_path_design("circle:0.5,7")
+    with armed("nomad150", URLS["nomad150"]) as robot:
+        motion = robot.drive(design, SETTINGS)
+        steers = [r.args[1] for r in truth(robot).motion_log if r.command == "pr" and r.args[1]]
+    assert sorted(set(steers)) == [514, 515]
+    assert sum(steers) == 3600
+    assert abs(motion.end_pose[2]) <= DEFAULT_TOLERANCE_WIRE * RADIANS_PER_WIRE_ANGLE
+
+
 def test_the_create2_refuses_a_circle_whose_turns_its_end_check_cannot_tell_from_none() -> None:
     # a 40-gon's 9 degree turns are under twice the turn's end tolerance
     with armed("create2", URLS["create2"]) as robot:

@@ -86,7 +86,7 @@ from odohil.protocol.create2.numbers import encoder_delta
 from odohil.protocol.create2.opcodes import Mode
 from odohil.science import frames
 from odohil.science.diff_drive import DiffDriveGeometry, odometry_step
-from odohil.science.paths import Drivable, Leg, Turn
+from odohil.science.paths import Drivable, Leg, Turn, check_trial_length
 from odohil.science.robot_description import RobotSettings
 from odohil.units import wrap_angle
 
@@ -128,8 +128,9 @@ MIN_STEP_COUNTS = 10
 MIN_STEP_TOLERANCES = 2.0
 """Every step must turn the wheels at least this many times its end-of-step
 tolerance (so a step that did not happen fails its end check by a wide margin):
-with the Create 2's constants a leg of at least 2 cm, a turn of at least
-0.17 rad (9.6 degrees; a circle of at most 37 sides)."""
+with the Create 2's constants a turn of at least 0.17 rad (9.6 degrees; a circle
+of at most 37 sides); a leg must also be within the facts' leg range (5 cm to
+100 m, odohil/driver/create2/facts.py)."""
 STOP_CONFIRM_TIMEOUT_S = 2.0
 CLOSE_BYTES = (
     commands.drive_direct(0, 0)
@@ -482,7 +483,9 @@ class Create2Robot:
         """Every step of ``design`` as wheel targets, all checked before the first
         is sent: ParameterError naming the step and the accepted range."""
         leg_speed, turn_speed = self._speeds(settings)
-        path_steps = design.path().steps
+        path = design.path()
+        check_trial_length(design.label(), path)
+        path_steps = path.steps
         n = len(path_steps)
         steps: list[_Step] = []
         half_base = self.geometry.wheel_base_m / 2.0
@@ -510,6 +513,14 @@ class Create2Robot:
                 left_sign, right_sign, wheel_speed = -sign, sign, turn_speed
             tolerance = self._tolerance(counts)
             least = max(MIN_STEP_COUNTS, MIN_STEP_TOLERANCES * tolerance)
+            if isinstance(step, Leg) and not (
+                CREATE2_FACTS.min_leg_m <= abs(step.length_m) <= CREATE2_FACTS.max_leg_m
+            ):
+                raise ParameterError(
+                    f"step {index} of {n} of {design.label()}: {what}; a leg must be "
+                    f"{CREATE2_FACTS.min_leg_m:g} m to {CREATE2_FACTS.max_leg_m:g} m long "
+                    "(odohil/driver/create2/facts.py); nothing sent"
+                )
             if counts < least:
                 least_m = least * self.geometry.metres_per_count
                 accepted = (

@@ -38,7 +38,7 @@ from odohil.protocol.nomad.wire_units import (
     wire_to_radians,
 )
 from odohil.science import frames
-from odohil.science.paths import Drivable, Leg, Step
+from odohil.science.paths import Drivable, Leg, Step, check_trial_length
 from odohil.units import wrap_angle
 
 DEFAULT_TOLERANCE_WIRE = 2
@@ -130,7 +130,9 @@ def _wire_steps(design: Drivable) -> list[tuple[int, int]]:
     checked before the first is sent; the turns rounded on their running sum
     (module docstring). ParameterError names the step and the accepted range."""
     steps: list[tuple[int, int]] = []
-    path_steps = design.path().steps
+    path = design.path()
+    check_trial_length(design.label(), path)
+    path_steps = path.steps
     n = len(path_steps)
     turned = 0.0  # the turns so far, rad
     sent = 0  # the turns so far as sent, wire units
