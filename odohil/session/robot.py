@@ -71,7 +71,10 @@ class Robot(Protocol):
     ) -> TrialMotion:
         """Drive one trial of ``design`` (a forth-and-back design or a general
         path: its encoder path's legs and turns), checking every step against the
-        odometry; stops the robot before raising on any failure."""
+        odometry, each within its own time limit; stops the robot before raising
+        on any failure and resends nothing. Every step is checked before the
+        first is sent: ParameterError naming the step (``turn 0.1 rad (step 2
+        of 8)``) and the backend's accepted range, nothing moved."""
         ...
 
     def stop(self) -> None:
