@@ -195,6 +195,14 @@ def test_the_nomad_rounds_turns_on_their_running_sum_so_a_heptagon_closes() -> N
     assert abs(motion.end_pose[2]) <= DEFAULT_TOLERANCE_WIRE * RADIANS_PER_WIRE_ANGLE
 
 
+def test_the_create2_refuses_arc_turns_it_could_only_drive_in_place() -> None:
+    steps = (Leg(0.3), Turn(0.5, "arc"), Leg(0.3))
+    with armed("create2", URLS["create2"]) as robot:
+        with pytest.raises(ParameterError, match=r"step 2 of 3 .*is an arc turn"):
+            robot.drive(Steps(steps), SETTINGS)
+        assert sent_motion("create2", truth(robot)) == 0
+
+
 def test_the_create2_refuses_a_circle_whose_turns_its_end_check_cannot_tell_from_none() -> None:
     # a 40-gon's 9 degree turns are under twice the turn's end tolerance
     with armed("create2", URLS["create2"]) as robot:
@@ -270,18 +278,22 @@ def test_a_create2_fault_during_a_turn_stops_the_robot_and_resends_nothing(
 # ---- over a real pty ------------------------------------------------------------------------
 @pytest.mark.parametrize("backend", ["nomad150", "create2"])
 def test_a_square_over_a_real_pty(backend: str) -> None:
-    design = parse_path_design("square:0.3,cw")
+    design = parse_path_design("square:0.2,cw")
     process: EmulatorProcess | Create2Process
+    settings = SETTINGS
     if backend == "nomad150":
         process = EmulatorProcess(["--seed", "4", "--time-scale", "20", "--no-pacing"])
     else:
-        # a process on the wall clock: a host descheduled for 0.1 s lets the crawl
-        # (40 mm/s) run on 8 mm at time scale 2, within the 10 mm tolerance
-        process = Create2Process(["--seed", "4", "--time-scale", "2", "--no-pacing"])
+        # a process on the wall clock, whose wheels turn on while the host is
+        # descheduled: at 0.25 m/s (turns: 0.12 m/s a wheel) and time scale 1 a
+        # step slows to the crawl 45 ms before its end, and a host away for
+        # another 40 ms at that moment still ends it within the 10 mm tolerance
+        process = Create2Process(["--seed", "4", "--time-scale", "1", "--no-pacing"])
+        settings = DriveSettings(speed_m_s=0.25, turn_rate_rad_s=1.0, watchdog_s=0.0)
     with process, open_robot(backend, process.device) as robot:
-        robot.arm(SETTINGS)
+        robot.arm(settings)
         robot.settle(5.0)
         robot.zero()
-        motion = robot.drive(design, SETTINGS)
+        motion = robot.drive(design, settings)
         check_closed(backend, design, motion)
         assert not process.truth().moving

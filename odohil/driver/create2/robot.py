@@ -502,6 +502,13 @@ class Create2Robot:
                 left_sign, right_sign, wheel_speed = sign, sign, leg_speed
             else:
                 assert isinstance(step, Turn)
+                if step.kind != "spin":
+                    raise ParameterError(
+                        f"step {index} of {n} of {design.label()}: turn {step.angle_rad:g} rad "
+                        f"is an {step.kind} turn (a curve's heading change); the Create 2 "
+                        "backend turns in place only, and a spin's turn error would be "
+                        "taken for an arc's; nothing sent"
+                    )
                 sign = 1 if step.angle_rad > 0 else -1
                 counts = self.geometry.counts_for(abs(step.angle_rad) * half_base)
                 what = f"turn {step.angle_rad:g} rad"
