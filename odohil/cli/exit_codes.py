@@ -10,8 +10,10 @@
 | 128 + N | ended by signal N after the robot was stopped |
 
 A failed pre-flight check (odohil/session/lifecycle/checks.py) exits by its
-class (:func:`exit_for_check`): 2 bad input, 1 an error (a port or stream
-that does not answer); a session run by how it ended (:func:`exit_for_run`).
+class (:func:`exit_for_check`), the same from run, resume, demo, validate and
+the wizard: 2 bad input, 1 an error (a port or stream that does not answer);
+either way nothing moved. A session run exits by how it ended
+(:func:`exit_for_run`).
 
 Status 3: the verdict is doubtful or failed, or the trials give no estimate
 (too few, or every one left out); for report and export also a trusted

@@ -32,6 +32,7 @@ from odohil.cli.exit_codes import (
     EXIT_OK,
     EXIT_STOP_UNCONFIRMED,
     EXIT_UNTRUSTED,
+    exit_for_check,
     exit_for_outcome,
     exit_for_run,
     exit_for_signal,
@@ -351,7 +352,7 @@ def _guided(
         if exc.check not in checked.checks:
             _tick(console, exc.check)
         console.print("[red]Pre-flight failed: nothing was moved.[/]")
-        return EXIT_BAD_INPUT
+        raise typer.Exit(exit_for_check(exc.check)) from None
     except KeyboardInterrupt as exc:
         return exit_for_signal(signal_of(exc))
 

@@ -276,7 +276,7 @@ class Journal:
                 journal_path(path), os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_EXCL, 0o644
             )
         except FileExistsError:
-            cls._check_not_in_use(path)
+            cls.check_not_in_use(path)
             raise JournalError(
                 f"{path} already holds a session journal; use `odohil resume {path}` "
                 "to continue it, or choose another folder"
@@ -328,8 +328,15 @@ class Journal:
         return cls(path, fd, len(contents.records) + 1), contents
 
     @classmethod
-    def _check_not_in_use(cls, folder: Path) -> None:
-        """Raise the in-use error if another process holds the journal's lock."""
+    def check_not_in_use(cls, folder: str | Path) -> None:
+        """Whether another odohil uses the session in ``folder``: returns when
+        nobody holds its journal's lock (or there is no journal to lock).
+
+        Raises:
+            JournalError: ``session in use``: another open journal (another
+                process, or another :class:`Journal` of this one) holds the lock.
+        """
+        folder = Path(folder)
         try:
             fd = os.open(journal_path(folder), os.O_RDONLY | os.O_NONBLOCK | os.O_NOCTTY)
         except OSError:

@@ -192,3 +192,23 @@ def test_ctrl_c_during_an_append_waits_for_the_record(
     contents = read_journal(tmp_path)
     assert contents.torn is None
     assert [r.kind for r in contents.records] == ["session", "measurement", "stopped"]
+
+
+def test_whether_a_session_is_in_use_is_a_public_question(tmp_path: Path) -> None:
+    """The pre-flight asked ``Journal._check_not_in_use`` from outside the
+    journal module; the question is public and documented now."""
+    folder = tmp_path / "s"
+    Journal.check_not_in_use(folder)  # no journal: nobody uses it
+    with Journal.create(folder), pytest.raises(JournalError, match="session in use"):
+        Journal.check_not_in_use(folder)
+    Journal.check_not_in_use(folder)  # closed: free again
+
+
+def test_no_private_journal_member_is_used_outside_the_journal_module() -> None:
+    package = Path(__file__).resolve().parents[2] / "odohil"
+    users = [
+        str(path.relative_to(package))
+        for path in package.rglob("*.py")
+        if path.name != "journal.py" and "Journal._" in path.read_text(encoding="utf-8")
+    ]
+    assert users == []

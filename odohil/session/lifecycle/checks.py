@@ -249,7 +249,7 @@ def _load(folder: Path) -> SessionState:
             f"cannot open the session journal in {folder}: it holds no journal.jsonl "
             "(nothing to resume)"
         )
-    Journal._check_not_in_use(folder)  # a running odohil's: "session in use"
+    Journal.check_not_in_use(folder)  # a running odohil's: "session in use"
     state = load_session(folder).state
     if state.finished:
         raise JournalError(f"the session in {folder} is finished; nothing to resume")
@@ -261,7 +261,7 @@ def _load(folder: Path) -> SessionState:
 def _folder(spec: SessionSpec, exists: bool) -> None:
     check_session_folder(spec.folder)
     if spec.mode == "new" and exists:
-        Journal._check_not_in_use(spec.folder)  # a running odohil's: "session in use"
+        Journal.check_not_in_use(spec.folder)  # a running odohil's: "session in use"
         raise ParameterError(
             f"--session {spec.folder} already holds a session journal; use "
             f"`odohil resume {spec.folder}` to continue it, or give another --session"
