@@ -27,7 +27,6 @@ from odohil.cli.options import (
     parameters_option,
     unit_system,
 )
-from odohil.cli.render import parameters_line
 from odohil.errors import OdohilError
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.session.design_tools import (
@@ -37,6 +36,7 @@ from odohil.session.design_tools import (
     named_path,
     path_moments,
 )
+from odohil.session.outcome_text import parameters_line
 
 
 class PathChoice(StrEnum):

@@ -14,10 +14,10 @@ from rich.console import Console
 
 from odohil import units
 from odohil.cli.exit_codes import exit_for_outcome
-from odohil.cli.options import UNITS_DEFAULT, UnitsOption, unit_system
+from odohil.cli.options import UNITS_DEFAULT, JsonOption, UnitsOption, unit_system
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_input, print_outcome, torn_warning
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
+from odohil.cli.robot_option import robot_option
 from odohil.errors import OdohilError
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome import EstimateOutcome, Selection, estimate_source
@@ -28,11 +28,6 @@ SOURCES_HELP = (
     "file of `odohil import`); or a recording `odohil import` reads (odohil log CSVs, TUM "
     "files in pairs, ROS 2 bags, optiodom run files or folders; needs --robot)."
 )
-
-
-def robot_option(help_tail: str) -> object:
-    """``--robot``, optional, for a command that reads a source."""
-    return typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP + help_tail)
 
 
 class MethodChoice(StrEnum):
@@ -82,7 +77,7 @@ def estimate(
             "joint (Gaussian maximum likelihood) or paper.",
         ),
     ] = MethodChoice.robust,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON (SI).")] = False,
+    as_json: JsonOption = False,
     units_choice: UnitsOption = UNITS_DEFAULT,
     *,
     exclude: frozenset[int],

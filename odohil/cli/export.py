@@ -9,12 +9,11 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil.cli.estimate import SOURCES_HELP, load_outcome, robot_option
-from odohil.cli.exit_codes import EXIT_UNTRUSTED
+from odohil.cli.estimate import SOURCES_HELP, load_outcome
 from odohil.cli.options import option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, print_refusal
-from odohil.cli.verdict import outcome_line
+from odohil.cli.render import bad_input, verdict_or_refuse
+from odohil.cli.robot_option import robot_option
 from odohil.errors import OdohilError
 from odohil.science.exports import (
     DEFAULT_RATE_HZ,
@@ -90,11 +89,9 @@ def export(
     lin = Linearisation(speed, rate_hz, update_min_d, update_min_a)
     err = Console(stderr=True)
     outcome = load_outcome(sources, robot, exclude, err, "robust", recording, selection)
+    verdict_or_refuse(err, outcome, force, None if outcome.result is None else "export it")
     result = outcome.result
-    if result is None or not (outcome.exportable or force):
-        print_refusal(err, outcome, None if result is None else "export it", "nothing written")
-        raise typer.Exit(EXIT_UNTRUSTED)
-    err.print(outcome_line(outcome), highlight=False)
+    assert result is not None
     try:
         text = export_text(fmt.value, result, lin, source=sources[0].name)
         if out is not None:

@@ -1,6 +1,7 @@
-"""Command-line options shared by several commands: the four error parameters
-in the paper's units (defaults: the paper's Nomad 150 values) and the
-forth-and-back variant."""
+"""Command-line options shared by several commands, declared once: the four
+error parameters in the paper's units (defaults: the paper's Nomad 150 values),
+the forth-and-back variant, units, and the options of the commands that run a
+session (port, baud, truth socket, --json, --exclude, --allow-turns)."""
 
 from __future__ import annotations
 
@@ -50,10 +51,12 @@ def add_options(
 
 
 def keyword(name: str, kind: Any, default: Any, *flags: str, help: str) -> inspect.Parameter:
-    """An option as a keyword parameter of a command (for :func:`add_options`)."""
-    option = typer.Option(*flags, help=help)
+    """An option as a keyword parameter of a command (for :func:`add_options`);
+    a flag with a range in ``RANGES`` (``--E-R`` ...) is checked against it."""
+    bound = flags[0][2:].replace("-", "_")
+    made = option(*flags, help=help, bound=bound if bound in RANGES else None)
     return inspect.Parameter(
-        name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=Annotated[kind, option]
+        name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=Annotated[kind, made]
     )
 
 
@@ -89,27 +92,11 @@ JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JS
 
 PAPER_DEFAULTS = NOMAD150.to_paper_units()
 """The Nomad 150 values in the paper's units (deg/m, 1, deg^2/m, m)."""
-
-E_R_DEFAULT = PAPER_DEFAULTS["E_R"]
-E_T_DEFAULT = PAPER_DEFAULTS["E_T"]
-K_THETA_DEFAULT = PAPER_DEFAULTS["K_theta"]
-K_RHO_DEFAULT = PAPER_DEFAULTS["K_rho"]
-
-ERDegPerM = Annotated[
-    float, typer.Option("--E-R", help="Systematic E_R, deg/m.", callback=bounded("E_R"))
-]
-ETOption = Annotated[
-    float,
-    typer.Option(
-        "--E-T",
-        help="Systematic E_T (no unit; the paper's 1+E_T = 0.98 is -0.02).",
-        callback=bounded("E_T"),
-    ),
-]
-KThetaDeg2PerM = Annotated[
-    float, typer.Option("--K-theta", help="K_theta, deg^2/m.", callback=bounded("K_theta"))
-]
-KRhoM = Annotated[float, typer.Option("--K-rho", help="K_rho, m.", callback=bounded("K_rho"))]
+_E_T_HELP = "Systematic E_T (no unit; the paper's 1+E_T = 0.98 is -0.02)."
+_PARAMETER_OPTIONS = (  # (parameter, flag, help)
+    ("e_r", "--E-R", "Systematic E_R, deg/m."), ("e_t", "--E-T", _E_T_HELP),
+    ("k_theta", "--K-theta", "K_theta, deg^2/m."), ("k_rho", "--K-rho", "K_rho, m."),
+)  # fmt: skip
 
 
 class VariantChoice(StrEnum):
@@ -126,7 +113,7 @@ VariantOption = Annotated[
 
 
 def _parameters(values: dict[str, Any]) -> dict[str, Any]:
-    given = [values.pop(name) for name in ("e_r", "e_t", "k_theta", "k_rho")]
+    given = [values.pop(name) for name, _, _ in _PARAMETER_OPTIONS]
     try:
         return {"params": ErrorParameters.from_paper_units(*given)}
     except OdohilError as exc:
@@ -134,12 +121,10 @@ def _parameters(values: dict[str, Any]) -> dict[str, Any]:
 
 
 Parameters = ErrorParameters
-_PARAMETER_TYPES = (("e_r", ERDegPerM), ("e_t", ETOption), ("k_theta", KThetaDeg2PerM),
-                    ("k_rho", KRhoM))  # fmt: skip
 parameters_option = add_options(
     [
-        inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=default, annotation=kind)
-        for (name, kind), default in zip(_PARAMETER_TYPES, PAPER_DEFAULTS.values(), strict=True)
+        keyword(name, float, PAPER_DEFAULTS[flag[2:].replace("-", "_")], flag, help=text)
+        for name, flag, text in _PARAMETER_OPTIONS
     ],
     ["params"],
     _parameters,
@@ -171,3 +156,45 @@ UNITS_DEFAULT = UnitsChoice(units.DEFAULT_UNIT_SYSTEM)
 def unit_system(choice: UnitsChoice) -> units.UnitSystem:
     """The choice as :mod:`odohil.units` names it."""
     return "si" if choice is UnitsChoice.si else "paper"
+
+
+EXCLUDE_HELP = (
+    "Trial numbers to leave out of the estimate, comma-separated (e.g. 3,17); "
+    "the journal and files keep every trial."
+)
+ExcludeOption = Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)]
+PortOption = Annotated[
+    str | None,
+    typer.Option(
+        "--port",
+        help="Serial device, pty path or pyserial URL (default: the session's, else "
+        "robot.toml \\[serial] port).",
+    ),
+]
+BaudOption = Annotated[
+    int | None,
+    option(
+        "--baud",
+        bound="baud",
+        help="Line speed (default: the session's, else robot.toml \\[serial] baud, else "
+        "the robot's default).",
+    ),
+]
+TruthSocketOption = Annotated[
+    str | None,
+    typer.Option("--truth-socket", help="The fake robot's truth socket (for --measure fake)."),
+]
+RunJsonOption = Annotated[
+    bool,
+    typer.Option(
+        "--json",
+        help="Print one JSON object (SI): the final estimate (as estimate --json) with "
+        '"status": "finished"; when interrupted or failed, the status, the signal, '
+        "whether the stop was confirmed and the partial estimate.",
+    ),
+]
+ALLOW_TURNS_HELP = (
+    "Run `turn` designs on a robot whose turns carry error (\\[robot] turns_exact = false); "
+    "the estimate is then not trusted."
+)
+AllowTurnsOption = Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)]

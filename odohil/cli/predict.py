@@ -21,11 +21,12 @@ from odohil.cli.options import (
     parameters_option,
     unit_system,
 )
-from odohil.cli.render import parameters_line, table
+from odohil.cli.render import table
 from odohil.errors import OdohilError
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.paths import Design
 from odohil.session.design_tools import OBSERVABLES, predict_document
+from odohil.session.outcome_text import parameters_line
 
 
 @parameters_option

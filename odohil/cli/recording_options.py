@@ -14,12 +14,11 @@ from collections.abc import Callable
 from enum import StrEnum
 from typing import Any
 
-from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
-from odohil.cli.options import Command, add_options, keyword
+from odohil.cli.options import EXCLUDE_HELP, Command, add_options, keyword
 from odohil.cli.render import bad_input
 from odohil.errors import OdohilError
 from odohil.session.logs import ImportOptions
-from odohil.session.outcome import Selection
+from odohil.session.outcome import Selection, parse_exclude
 
 
 class FormatChoice(StrEnum):

@@ -9,11 +9,10 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil.cli.estimate import SOURCES_HELP, load_outcome, robot_option
-from odohil.cli.exit_codes import exit_for_outcome
+from odohil.cli.estimate import SOURCES_HELP, load_outcome
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, print_refusal
-from odohil.cli.verdict import outcome_line
+from odohil.cli.render import bad_input, verdict_or_refuse
+from odohil.cli.robot_option import robot_option
 from odohil.errors import OdohilError
 from odohil.session.exports import export_files
 from odohil.session.logs import ImportOptions
@@ -65,10 +64,7 @@ def report(
         outcome = data.outcome
     else:
         outcome = load_outcome(sources, robot, exclude, console, "robust", recording, selection)
-    if not outcome.exportable and not force:
-        print_refusal(console, outcome, "write the report", "nothing written")
-        raise typer.Exit(exit_for_outcome(outcome, export=True))
-    console.print(outcome_line(outcome), highlight=False)
+    verdict_or_refuse(console, outcome, force, "write the report")
     result = outcome.result
     try:
         extra = () if result is None else export_files(result, source=sources[0].name)

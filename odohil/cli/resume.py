@@ -10,25 +10,32 @@ from rich.console import Console
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
-from odohil.cli.options import UNITS_DEFAULT, UnitsOption, unit_system
-from odohil.cli.session_view import (
+from odohil.cli.options import (
+    UNITS_DEFAULT,
     BaudOption,
-    JsonOption,
     PortOption,
+    RunJsonOption,
     TruthSocketOption,
-    finish,
-    prepared_or_exit,
-    report_run,
-    run_with_progress,
-    say_opened,
-    session_exit_codes,
+    UnitsOption,
+    unit_system,
 )
-from odohil.session.lifecycle import SessionSpec, open_session, preflight
+from odohil.cli.session_view import drive, finish
+from odohil.session.lifecycle import Opened, SessionSpec
 from odohil.session.start_pose import (
     HEADING_TOLERANCE_DEG,
     POSITION_TOLERANCE_M,
     StartPose,
     refuse_off_start,
+)
+
+_FROM_HERE_HELP = (
+    "Go on although the robot is not where the next trial starts "
+    f"(beyond {POSITION_TOLERANCE_M:g} m or {HEADING_TOLERANCE_DEG:g} deg); "
+    "the trial then starts where the robot stands."
+)
+_MEASURE_HELP = (
+    "`fake`, a trial file (CSV) or tcp://HOST:PORT (motion capture) for the "
+    "remaining trials (default: the session's)."
 )
 
 
@@ -37,25 +44,10 @@ def resume(
     port: PortOption = None,
     truth_socket: TruthSocketOption = None,
     baud: BaudOption = None,
-    measure: Annotated[
-        str | None,
-        typer.Option(
-            "--measure",
-            help="`fake`, a trial file (CSV) or tcp://HOST:PORT (motion capture) for the "
-            "remaining trials (default: the session's).",
-        ),
-    ] = None,
-    json_out: JsonOption = False,
+    measure: Annotated[str | None, typer.Option("--measure", help=_MEASURE_HELP)] = None,
+    json_out: RunJsonOption = False,
     units_choice: UnitsOption = UNITS_DEFAULT,
-    from_here: Annotated[
-        bool,
-        typer.Option(
-            "--from-here",
-            help="Go on although the robot is not where the next trial starts "
-            f"(beyond {POSITION_TOLERANCE_M:g} m or {HEADING_TOLERANCE_DEG:g} deg); "
-            "the trial then starts where the robot stands.",
-        ),
-    ] = False,
+    from_here: Annotated[bool, typer.Option("--from-here", help=_FROM_HERE_HELP)] = False,
 ) -> None:
     """Continue an interrupted session: no trial lost, none counted twice.
 
@@ -66,34 +58,32 @@ def resume(
     """
     console = Console(stderr=True)
     system = unit_system(units_choice)
+    refused: list[StartPose] = []
+
+    def say(opened: Opened) -> None:
+        if opened.torn is not None:
+            console.print(f"[yellow]warning[/]: {opened.torn.describe()}")
+        state = opened.state
+        assert state.plan is not None
+        console.print(
+            f"resuming {session}: {len(state.completed)} of "
+            f"{units.plural(state.plan.n_trials, 'trial')} done"
+            + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
+        )
+        console.print(f"robot: {opened.prepared.line.describe()}", soft_wrap=True, markup=False)
+
+    def start_check(start: StartPose) -> None:
+        console.print(f"robot: {start.describe()}")
+        if not start.ok and from_here:
+            console.print("[yellow]--from-here[/]: the trial starts where it stands")
+        elif not start.ok:
+            refused.append(start)
+            refuse_off_start(start)
+
     spec = SessionSpec(
         session, "resume", measure=measure, port=port, baud=baud, truth_socket=truth_socket
     )
-    with session_exit_codes(console, json_out):
-        prepared = prepared_or_exit(preflight(spec), console)
-        with open_session(prepared, say_opened(console)) as opened:
-            if opened.torn is not None:
-                console.print(f"[yellow]warning[/]: {opened.torn.describe()}")
-            state = opened.state
-            assert state.plan is not None
-            console.print(
-                f"resuming {session}: {len(state.completed)} of "
-                f"{units.plural(state.plan.n_trials, 'trial')} done"
-                + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
-            )
-            console.print(f"robot: {prepared.line.describe()}", soft_wrap=True, markup=False)
-            refused: list[StartPose] = []
-
-            def start_check(start: StartPose) -> None:
-                console.print(f"robot: {start.describe()}")
-                if not start.ok and from_here:
-                    console.print("[yellow]--from-here[/]: the trial starts where it stands")
-                elif not start.ok:
-                    refused.append(start)
-                    refuse_off_start(start)
-
-            outcome = run_with_progress(console, opened, system, start_check)
-            report_run(console, outcome)
+    outcome = drive(console, spec, system, json_out, say, start_check)
     finish(outcome, json_out, console, system=system, code=EXIT_BAD_INPUT if refused else None)
 
 

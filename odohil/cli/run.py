@@ -15,69 +15,59 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil.cli.exclude import EXCLUDE_HELP, parse_exclude
-from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.session_view import (
+from odohil.cli.options import (
+    UNITS_DEFAULT,
+    AllowTurnsOption,
     BaudOption,
-    JsonOption,
+    ExcludeOption,
     PortOption,
+    RunJsonOption,
     TruthSocketOption,
-    default_session_folder,
-    finish,
-    prepared_or_exit,
-    report_run,
-    run_with_progress,
-    say_opened,
-    session_exit_codes,
+    UnitsOption,
+    option,
+    unit_system,
 )
-from odohil.cli.session_view import warn_turns as warn_turns
-from odohil.session.lifecycle import SessionSpec, open_session, preflight
+from odohil.cli.render import bad_input
+from odohil.cli.robot_option import robot_option
+from odohil.cli.session_view import drive, finish
+from odohil.errors import OdohilError
+from odohil.session.lifecycle import Opened, SessionSpec, default_session_folder
+from odohil.session.outcome import parse_exclude
 
 _PLAN_HELP = (
     'Designs and trial counts, e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30" '
     "(k pairs, l metres, n trials, optional variant=turn|reverse)."
 )
-ALLOW_FEW_HELP = (
+_ALLOW_FEW_HELP = (
     "Run a plan with fewer trials a design than the planner's minimum (10); "
     "its estimate is then not exported without --force."
 )
-ALLOW_TURNS_HELP = (
-    "Run `turn` designs on a robot whose turns carry error (\\[robot] turns_exact = false); "
-    "the estimate is then not trusted."
+_MEASURE_HELP = (
+    "`fake` (the fake robot's true pose), a trial file (CSV), or "
+    "tcp://HOST:PORT (a motion-capture stream, docs/motion-capture.md)."
 )
 
 
 def run(
     port: PortOption = None,
     *,
-    robot_file: Annotated[Path, typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP)],
+    robot_file: Annotated[Path, robot_option()],
     plan_text: Annotated[str, typer.Option("--plan", help=_PLAN_HELP)],
-    measure: Annotated[
-        str,
-        typer.Option(
-            "--measure",
-            help="`fake` (the fake robot's true pose), a trial file (CSV), or "
-            "tcp://HOST:PORT (a motion-capture stream, docs/motion-capture.md).",
-        ),
-    ],
+    measure: Annotated[str, typer.Option("--measure", help=_MEASURE_HELP)],
     session: Annotated[
         Path | None,
         typer.Option("--session", help="Session folder (default: odohil-session-<time> here)."),
     ] = None,
     truth_socket: TruthSocketOption = None,
     seed: Annotated[
-        int,
-        typer.Option(
-            "--seed", callback=bounded("seed"), help="Seed of the simulated tape noise (fake)."
-        ),
+        int, option("--seed", bound="seed", help="Seed of the simulated tape noise (fake).")
     ] = 0,
     baud: BaudOption = None,
-    json_out: JsonOption = False,
-    exclude_text: Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)] = None,
+    json_out: RunJsonOption = False,
+    exclude_text: ExcludeOption = None,
     units_choice: UnitsOption = UNITS_DEFAULT,
-    allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
-    allow_few: Annotated[bool, typer.Option("--allow-few-trials", help=ALLOW_FEW_HELP)] = False,
+    allow_turns: AllowTurnsOption = False,
+    allow_few: Annotated[bool, typer.Option("--allow-few-trials", help=_ALLOW_FEW_HELP)] = False,
 ) -> None:
     """Run a calibration session unattended: n trials, no prompts, journaled.
 
@@ -85,19 +75,22 @@ def run(
     """
     console = Console(stderr=True)
     system = unit_system(units_choice)
-    with session_exit_codes(console, json_out):
-        spec = SessionSpec(
-            session or default_session_folder(), "new", robot_file, plan=plan_text,
-            measure=measure, port=port, baud=baud, truth_socket=truth_socket, seed=seed,
-            exclude=parse_exclude(exclude_text), allow_turns=allow_turns,
-            allow_few_trials=allow_few,
-        )  # fmt: skip
-        prepared = prepared_or_exit(preflight(spec), console)
-        with open_session(prepared, say_opened(console)) as opened:
-            console.print(f"session {spec.folder}")
-            console.print(f"robot: {prepared.line.describe()}", soft_wrap=True, markup=False)
-            outcome = run_with_progress(console, opened, system)
-            report_run(console, outcome)
+    folder = session or default_session_folder()
+
+    def say(opened: Opened) -> None:
+        console.print(f"session {folder}")
+        console.print(f"robot: {opened.prepared.line.describe()}", soft_wrap=True, markup=False)
+
+    try:
+        exclude = parse_exclude(exclude_text)
+    except OdohilError as exc:
+        raise bad_input(exc, console) from None
+    spec = SessionSpec(
+        folder, "new", robot_file, plan=plan_text, measure=measure, port=port, baud=baud,
+        truth_socket=truth_socket, seed=seed, exclude=exclude, allow_turns=allow_turns,
+        allow_few_trials=allow_few,
+    )  # fmt: skip
+    outcome = drive(console, spec, system, json_out, say)
     finish(outcome, json_out, console, system=system)
 
 

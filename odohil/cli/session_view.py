@@ -1,18 +1,16 @@
 """What run, resume, demo, validate and the wizard show of a session's
 lifecycle (odohil/session/lifecycle/): the pre-flight failure, the progress
 bar, how the run ended, the verdict line and the summary; the exit statuses
-are odohil/cli/exit_codes.py's."""
+are odohil/cli/exit_codes.py's. Also the one place the CLI registers the
+fakes' pyserial URL handlers (the only layer that may import the fakes)."""
 
 from __future__ import annotations
 
 import contextlib
 import json
 import math
-import signal
-import time
-from collections.abc import Iterator, Mapping
-from pathlib import Path
-from typing import Annotated, Any, NoReturn
+from collections.abc import Callable, Iterator, Mapping
+from typing import Any, NoReturn
 
 import typer
 from rich.console import Console
@@ -28,10 +26,7 @@ from odohil.cli.exit_codes import (
     exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.line import register_fake_urls
-from odohil.cli.options import bounded
-from odohil.cli.render import parameters_table
-from odohil.cli.verdict import export_refusal_lines, outcome_line
+from odohil.cli.render import parameters_table, print_lines
 from odohil.errors import (
     JournalError,
     OdohilError,
@@ -41,8 +36,7 @@ from odohil.errors import (
     TrialFileError,
 )
 from odohil.science.estimators import EstimateResult
-from odohil.science.robot_description import RobotDescription
-from odohil.session.engine import IncrementalLiveEstimator, StartCheck, StopOutcome
+from odohil.session.engine import IncrementalLiveEstimator, StartCheck
 from odohil.session.events import Solved, Void
 from odohil.session.journal import Record
 from odohil.session.lifecycle import (
@@ -52,73 +46,64 @@ from odohil.session.lifecycle import (
     PreflightFailed,
     Prepared,
     RunOutcome,
+    SessionSpec,
     interrupt_text,
+    interrupted_before_run,
+    open_session,
+    preflight,
     require,
     run_session,
 )
 from odohil.session.lifecycle.opening import CheckSeen
-from odohil.session.plan import Plan
-from odohil.session.preflight import turn_warning
-from odohil.session.signals import signal_name, signal_of, signals_raise
+from odohil.session.outcome_text import export_refusal_lines, outcome_line
+from odohil.session.robots import fake_url_schemes
+from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState
 from odohil.session.tape_records import MeasurementsRejected, Remeasured
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
-PortOption = Annotated[
-    str | None,
-    typer.Option(
-        "--port",
-        help="Serial device, pty path or pyserial URL (default: the session's, else "
-        "robot.toml \\[serial] port).",
-    ),
-]
-BaudOption = Annotated[
-    int | None,
-    typer.Option(
-        "--baud",
-        callback=bounded("baud"),
-        help="Line speed (default: the session's, else robot.toml \\[serial] baud, else "
-        "the robot's default).",
-    ),
-]
-TruthSocketOption = Annotated[
-    str | None,
-    typer.Option("--truth-socket", help="The fake robot's truth socket (for --measure fake)."),
-]
-JsonOption = Annotated[
-    bool,
-    typer.Option(
-        "--json",
-        help="Print one JSON object (SI): the final estimate (as estimate --json) with "
-        '"status": "finished"; when interrupted or failed, the status, the signal, '
-        "whether the stop was confirmed and the partial estimate.",
-    ),
-]
 
 
-def default_session_folder() -> Path:
-    """``odohil-session-YYYYmmdd-HHMMSS`` in the current directory."""
-    return Path(f"odohil-session-{time.strftime('%Y%m%d-%H%M%S')}")
+def register_fake_urls(port: str) -> None:
+    """Register the fakes' pyserial URL handlers when ``port`` uses one (and
+    only then: no fake is imported otherwise)."""
+    if port.startswith(fake_url_schemes()):
+        import fakes
+
+        fakes.register_url_handlers()
 
 
-def prepared_or_exit(checked: Preflight, console: Console) -> Prepared:
+def prepared_or_exit(
+    checked: Preflight, console: Console, tick: CheckSeen | None = None
+) -> Prepared:
     """The prepared session; else the first failed check's message and its exit
-    status (nothing moved). Registers the fakes' URL handlers for its port."""
+    status (nothing moved). With ``tick`` (the wizard) every check is shown
+    through it. Registers the fakes' URL handlers for its port."""
+    for check in checked.checks if tick else ():
+        tick(check)
     try:
         prepared = require(checked)
     except PreflightFailed as exc:
-        refuse(console, exc.check)
+        refuse(console, exc.check, tick, ticked=exc.check in checked.checks)
     for warning in prepared.warnings:
         console.print(f"[yellow]warning:[/] {escape(warning)}", soft_wrap=True)
     register_fake_urls(prepared.line.port)
     return prepared
 
 
-def refuse(console: Console, check: PreflightCheck) -> NoReturn:
-    """A failed pre-flight check: its message, exit by its class."""
-    console.print(f"[red]error[/]: {escape(check.message)}; nothing moved", soft_wrap=True)
+def refuse(
+    console: Console, check: PreflightCheck, tick: CheckSeen | None = None, ticked: bool = False
+) -> NoReturn:
+    """A failed pre-flight check: its message (the wizard: its tick, unless
+    ``ticked`` already), exit by its class."""
+    if tick is None:
+        console.print(f"[red]error[/]: {escape(check.message)}; nothing moved", soft_wrap=True)
+    else:
+        if not ticked:
+            tick(check)
+        console.print("[red]Pre-flight failed: nothing was moved.[/]")
     raise typer.Exit(exit_for_check(check))
 
 
@@ -131,6 +116,26 @@ def say_opened(console: Console) -> CheckSeen:
             console.print(check.message, soft_wrap=True, markup=False)
 
     return seen
+
+
+def drive(
+    console: Console,
+    spec: SessionSpec,
+    system: units.UnitSystem,
+    json_out: bool,
+    say: Callable[[Opened], None],
+    start_check: StartCheck | None = None,
+) -> RunOutcome:
+    """Pre-flight, open (``say`` tells what was opened), run with the progress
+    bar and say how the run ended; what escapes exits by its status
+    (:func:`session_exit_codes`)."""
+    with session_exit_codes(console, json_out):
+        prepared = prepared_or_exit(preflight(spec), console)
+        with open_session(prepared, say_opened(console)) as opened:
+            say(opened)
+            outcome = run_with_progress(console, opened, system, start_check)
+            report_run(console, outcome)
+    return outcome
 
 
 class ProgressObserver:
@@ -169,8 +174,15 @@ class ProgressObserver:
             yield
         finally:
             self.progress.stop()
-            if (summary := self.remeasure_summary()) is not None:
-                self.console.print(summary, soft_wrap=True, highlight=False)
+            if self.remeasured:
+                trials = list(self.remeasured)
+                self.console.print(
+                    f"In {units.plural(len(trials), 'trial')} ({', '.join(map(str, trials))}) "
+                    f"the slip check doubted a distance and {self.measurer} measured it again: "
+                    "the check at work; nothing is lost and each trial counts once.",
+                    soft_wrap=True,
+                    highlight=False,
+                )
 
     def show_start(self, start: StartPose) -> None:
         """The start check: print where the encoders read (with the heading)."""
@@ -195,17 +207,6 @@ class ProgressObserver:
             )
         elif isinstance(event, Remeasured) and not event.kept:
             self.remeasured.setdefault(event.trial, None)
-
-    def remeasure_summary(self) -> str | None:
-        """One line for every distance the slip check had taken again (None if none)."""
-        if not self.remeasured:
-            return None
-        trials = list(self.remeasured)
-        return (
-            f"In {units.plural(len(trials), 'trial')} ({', '.join(map(str, trials))}) the "
-            f"slip check doubted a distance and {self.measurer} measured it again: the check "
-            "at work; nothing is lost and each trial counts once."
-        )
 
     def estimated(self, result: EstimateResult, state: SessionState) -> None:
         """Show the live E_R beside the bar."""
@@ -240,11 +241,14 @@ def report_run(
     interrupted: str = "interrupted",
 ) -> None:
     """How the run ended: the verdict line (and why it may not be exported)
-    when it finished; else what ended it, the robot's stop and the journal."""
+    when it finished; else what ended it, then what was checked on the way
+    out: the robot's stop ("robot stopped" only when the robot reported it),
+    the journal ("journaled" only when the closing record is on disk) and the
+    command that continues the session (``continue_with``; default ``odohil
+    resume FOLDER``)."""
     if outcome.status == "finished":
-        console.print(outcome_line(outcome.estimate), highlight=False, soft_wrap=True)
-        for line in export_refusal_lines(outcome.estimate):
-            console.print(line, highlight=False, soft_wrap=True)
+        estimate = outcome.estimate
+        print_lines(console, [outcome_line(estimate), *export_refusal_lines(estimate)])
         return
     if outcome.status == "stop unconfirmed":
         console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
@@ -258,34 +262,19 @@ def report_run(
         console.print(f"[yellow]{interrupted}[/] ({outcome.message})", soft_wrap=True)
     else:
         console.print(f"[red]error[/]: {escape(outcome.message)}", soft_wrap=True)
-    report_stop(console, outcome.stop, outcome.folder, continue_with)
-
-
-def report_stop(
-    console: Console,
-    outcome: StopOutcome | None,
-    folder: Path,
-    continue_with: str | None = None,
-) -> None:
-    """Say what was checked on the way out: the robot's stop, then the journal,
-    and the command that continues the session (``continue_with``; default
-    ``odohil resume FOLDER``).
-
-    "robot stopped" only when the robot reported it; "journaled" only when the
-    closing record is on disk.
-    """
+    stop, folder = outcome.stop, outcome.folder
     again = continue_with or f"odohil resume {folder}"
-    if outcome is None:
+    if stop is None:
         return
-    if outcome.robot_stopped:
-        console.print(f"robot stopped (it reports {escape(outcome.detail)})", soft_wrap=True)
+    if stop.robot_stopped:
+        console.print(f"robot stopped (it reports {escape(stop.detail)})", soft_wrap=True)
     else:
-        console.print(f"[bold red]{MAY_STILL_MOVE}[/]: {escape(outcome.detail)}", soft_wrap=True)
-    if outcome.journaled:
+        console.print(f"[bold red]{MAY_STILL_MOVE}[/]: {escape(stop.detail)}", soft_wrap=True)
+    if stop.journaled:
         console.print(f"session journaled in {folder}; continue with `{again}`", soft_wrap=True)
     else:
         console.print(
-            f"[bold red]the journal could not be written[/]: {escape(outcome.journal_error)}; "
+            f"[bold red]the journal could not be written[/]: {escape(stop.journal_error)}; "
             f"the records before this failure are kept in {folder}; free the disk, then "
             f"`{again}`",
             soft_wrap=True,
@@ -320,26 +309,6 @@ def finish(
         raise typer.Exit(code)
 
 
-def _ctrl_c(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt("Ctrl-C")
-
-
-@contextlib.contextmanager
-def ctrl_c_in_words() -> Iterator[None]:
-    """Within: Ctrl-C raises a KeyboardInterrupt that says "Ctrl-C", so what the
-    engine journals and what the operator reads name the key, not a class
-    (main thread only; the previous handler comes back afterwards)."""
-    try:
-        previous = signal.signal(signal.SIGINT, _ctrl_c)
-    except ValueError:  # not the main thread
-        yield
-        return
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
 @contextlib.contextmanager
 def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[None]:
     """Make every signal that ends a process (odohil/session/signals.py) end the
@@ -355,15 +324,7 @@ def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[Non
     except KeyboardInterrupt as exc:
         console.print(f"[yellow]interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
         if json_out:
-            signum = signal_of(exc)
-            document = {
-                "status": "interrupted",
-                "signal": signal_name(signum),
-                "message": interrupt_text(exc) + " before the session ran: nothing moved",
-                "stop_confirmed": None,
-                "partial_estimate": None,
-            }
-            typer.echo(json.dumps(document))
+            typer.echo(json.dumps(interrupted_before_run(exc)))
         raise typer.Exit(exit_for_signal(signal_of(exc))) from None
     except StopUnconfirmedError as exc:
         console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
@@ -377,9 +338,3 @@ def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[Non
     except (OdohilError, OSError) as exc:
         console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
         raise typer.Exit(EXIT_ERROR) from None
-
-
-def warn_turns(console: Console, plan: Plan, description: RobotDescription) -> None:
-    """Warn when the plan turns in place on a robot whose turns carry error."""
-    if (warning := turn_warning(plan, description)) is not None:
-        console.print(f"[yellow]warning:[/] {escape(warning)}", soft_wrap=True)

@@ -32,34 +32,28 @@ from odohil.cli.exit_codes import (
     EXIT_OK,
     EXIT_STOP_UNCONFIRMED,
     EXIT_UNTRUSTED,
-    exit_for_check,
     exit_for_outcome,
     exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.line import register_fake_urls
-from odohil.cli.options import UNITS_DEFAULT, UnitsOption, bounded, unit_system
-from odohil.cli.render import MotionProgress, check_line, estimate_panel
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.run import ALLOW_TURNS_HELP
-from odohil.cli.session_view import (
-    MAY_STILL_MOVE,
+from odohil.cli.options import (
+    UNITS_DEFAULT,
+    AllowTurnsOption,
     BaudOption,
-    default_session_folder,
-    report_run,
+    PortOption,
+    UnitsOption,
+    option,
+    unit_system,
 )
-from odohil.cli.verdict import export_refusal_lines, outcome_line
+from odohil.cli.render import MotionProgress, check_line, estimate_panel, print_lines
+from odohil.cli.robot_option import robot_option
+from odohil.cli.session_view import MAY_STILL_MOVE, prepared_or_exit, refuse, report_run
 from odohil.driver.odometry import OdometrySample
-from odohil.errors import (
-    InconsistentMeasurementError,
-    MeasurementError,
-)
+from odohil.errors import InconsistentMeasurementError, MeasurementError
 from odohil.science.estimators import EstimateResult
 from odohil.science.planner import DEFAULT_MAX_LEG_M
 from odohil.science.robot_description import RobotDescription
-from odohil.session.engine import (
-    StartCheck,
-)
+from odohil.session.engine import StartCheck
 from odohil.session.events import Finished, MotionStart, Solved, Void
 from odohil.session.interrupts import Interrupts, wait_readable
 from odohil.session.journal import Record
@@ -68,12 +62,13 @@ from odohil.session.lifecycle import (
     PreflightCheck,
     PreflightFailed,
     SessionSpec,
+    default_session_folder,
     final_estimate,
     open_session,
     preflight,
-    require,
     run_session,
 )
+from odohil.session.outcome_text import export_refusal_lines, outcome_line
 from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
 from odohil.session.signals import signal_of, signals_raise
@@ -268,18 +263,8 @@ class WizardObserver:
 
 
 def wizard(
-    port: Annotated[
-        str | None,
-        typer.Option(
-            "--port",
-            help="Serial port (or pyserial URL) of the robot "
-            "(default: the session's, else robot.toml \\[serial] port).",
-        ),
-    ] = None,
-    robot_file: Annotated[
-        Path | None,
-        typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP + " For new sessions."),
-    ] = None,
+    port: PortOption = None,
+    robot_file: Annotated[Path | None, robot_option(" For new sessions.")] = None,
     plan_text: Annotated[
         str | None,
         typer.Option("--plan", help=f'Designs and trial counts (default "{DEFAULT_PLAN}").'),
@@ -291,14 +276,14 @@ def wizard(
     baud: BaudOption = None,
     max_leg_m: Annotated[
         float,
-        typer.Option(
+        option(
             "--max-leg-m",
-            callback=bounded("max_leg_m"),
+            bound="max_leg_m",
             help="Longest leg the floor allows, m (the same option as plan's).",
         ),
     ] = DEFAULT_MAX_LEG_M,
     units_choice: UnitsOption = UNITS_DEFAULT,
-    allow_turns: Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)] = False,
+    allow_turns: AllowTurnsOption = False,
 ) -> None:
     """Guide a calibration session beside the robot, one trial at a time."""
     console = Console(highlight=False)
@@ -326,33 +311,24 @@ def wizard(
     raise typer.Exit(code)
 
 
-def _tick(console: Console, check: PreflightCheck) -> None:
-    console.print(check_line(check))
-
-
 def _guided(
     console: Console, spec: SessionSpec, interrupts: Interrupts, system: units.UnitSystem
 ) -> int:
     """Pre-flight (each check a tick), open the session (resume or start it:
-    locked, connected), then run; any pre-flight failure exits 2."""
-    checked = preflight(spec)
-    for check in checked.checks:
-        _tick(console, check)
+    locked, connected), then run; a pre-flight failure exits by its class."""
+
+    def tick(check: PreflightCheck) -> None:
+        console.print(check_line(check))
+
     try:
-        prepared = require(checked)
-        for warning in prepared.warnings:
-            console.print(f"[yellow]warning:[/] {escape(warning)}", soft_wrap=True)
-        register_fake_urls(prepared.line.port)
-        with open_session(prepared, lambda check: _tick(console, check)) as opened:
+        prepared = prepared_or_exit(preflight(spec), console, tick)
+        with open_session(prepared, tick) as opened:
             if opened.torn is not None:
                 console.print(f"[yellow]warning:[/] {opened.torn.describe()}")
             interrupts.robot = opened.robot
             return _run(console, opened, interrupts, system)
     except PreflightFailed as exc:
-        if exc.check not in checked.checks:
-            _tick(console, exc.check)
-        console.print("[red]Pre-flight failed: nothing was moved.[/]")
-        raise typer.Exit(exit_for_check(exc.check)) from None
+        refuse(console, exc.check, tick)
     except KeyboardInterrupt as exc:
         return exit_for_signal(signal_of(exc))
 
@@ -371,22 +347,17 @@ def _run(console: Console, opened: Opened, interrupts: Interrupts, system: units
         progress.stop()
     if outcome.status == "finished":
         return final_screen(console, outcome.state)
-    report_run(console, outcome, _again(opened), interrupted="Interrupted")
+    # the command that continues a wizard session (`odohil resume` refuses them)
+    again = f"odohil wizard --session {opened.journal.folder}"
+    report_run(console, outcome, again, interrupted="Interrupted")
     return exit_for_run(outcome)
-
-
-def _again(opened: Opened) -> str:
-    """The command that continues a wizard session (``odohil resume`` refuses them)."""
-    return f"odohil wizard --session {opened.journal.folder}"
 
 
 def final_screen(console: Console, state: SessionState) -> int:
     """The wizard's last words: the session's verdict by the one recipe
     (odohil/session/outcome.py), why it may not be exported, and the exit status."""
     outcome = final_estimate(state)
-    console.print(outcome_line(outcome), soft_wrap=True, markup=False)
-    for line in export_refusal_lines(outcome):
-        console.print(line, soft_wrap=True, markup=False)
+    print_lines(console, [outcome_line(outcome), *export_refusal_lines(outcome)])
     return exit_for_outcome(outcome)
 
 

@@ -290,6 +290,27 @@ def _observation(trial: Trial, position: int) -> Observation:
     return Observation(trial.design, trial.pose_change, cov, line=trial.line, trial=number)
 
 
+def parse_exclude(text: str | None) -> frozenset[int]:
+    """The trial numbers of ``--exclude`` (empty for None or "").
+
+    Raises:
+        MeasurementError: not a comma-separated list of positive integers
+            (the message names ``--exclude``).
+    """
+    if text is None or not text.strip():
+        return frozenset()
+    numbers: set[int] = set()
+    for part in text.split(","):
+        item = part.strip()
+        if not item.isdigit() or int(item) < 1:
+            raise MeasurementError(
+                f"--exclude: {item!r} is not a trial number; give positive integers "
+                "separated by commas, e.g. --exclude 3,17"
+            )
+        numbers.add(int(item))
+    return frozenset(numbers)
+
+
 def check_exclude(numbers: Iterable[int], available: Iterable[int]) -> None:
     """Every excluded number must be a trial's.
 

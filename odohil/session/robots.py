@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from importlib.metadata import entry_points
 from typing import Any, Protocol, cast
 
-from odohil.errors import InitError, ParameterError, RobotDescriptionError
+from odohil.errors import InitError, OdohilError, ParameterError, RobotDescriptionError
 from odohil.science.limits import RANGES
 from odohil.science.robot_description import (
     RobotDescription,
@@ -202,3 +202,31 @@ def fake_url_schemes() -> tuple[str, ...]:
         if hooks is not None:
             schemes.append(hooks.url_scheme)
     return tuple(schemes)
+
+
+def emulated_backends() -> tuple[RobotFacts, ...]:
+    """The facts of every registered backend that declares a fake robot for
+    ``odohil emulate`` (a backend that cannot load is left out)."""
+    found = []
+    for name in backend_names():
+        try:
+            facts = robot_facts(name)
+        except OdohilError:
+            continue
+        if facts.fake is not None and facts.fake.emulator:
+            found.append(facts)
+    return tuple(found)
+
+
+def emulator(protocol: str) -> tuple[RobotFacts, FakeHooks, Any]:
+    """The facts, the fake and the emulator function (which ``odohil emulate``
+    calls to serve the fake on a pty) of the backend ``protocol``.
+
+    Raises:
+        RobotDescriptionError, InitError: no such backend, or it declares no
+            fake robot to emulate, or the emulator cannot be imported.
+    """
+    facts, hooks = robot_facts(protocol), fake_hooks(protocol)
+    if hooks is None or not hooks.emulator:
+        raise InitError(f"the {protocol} backend declares no fake robot to emulate")
+    return facts, hooks, hooks.emulator_function()

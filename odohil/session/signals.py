@@ -202,3 +202,23 @@ def signals_held() -> Iterator[list[int]]:
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+
+
+def _ctrl_c(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt("Ctrl-C")
+
+
+@contextlib.contextmanager
+def ctrl_c_in_words() -> Iterator[None]:
+    """Within: Ctrl-C raises a KeyboardInterrupt that says "Ctrl-C", so what the
+    engine journals and what the operator reads name the key, not a class
+    (main thread only; the previous handler comes back afterwards)."""
+    try:
+        previous = signal.signal(signal.SIGINT, _ctrl_c)
+    except ValueError:  # not the main thread
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 from odohil import units
-from odohil.cli.demo import DEMO_TRUTH
 from odohil.session import state as ev
+from odohil.session.demo import DEMO_TRUTH
 from odohil.session.journal import read_journal
 from tests.session.test_safety import ODOHIL
 

@@ -33,7 +33,7 @@ def test_help_imports_no_fake(args: list[str]) -> None:
 def test_a_fake_port_registers_the_handler_when_asked() -> None:
     probe = (
         "import serial\n"
-        "from odohil.cli.line import register_fake_urls\n"
+        "from odohil.cli.session_view import register_fake_urls\n"
         "register_fake_urls('/dev/ttyUSB0')\n"
         "assert 'fakes' not in serial.protocol_handler_packages\n"
         "register_fake_urls('fakerobot://?seed=1')\n"

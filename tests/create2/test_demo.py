@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from odohil.cli.demo import DEMO_TRUTH, TURN_FREE_PLAN
 from odohil.science.parameters import PARAMETER_NAMES
+from odohil.session.demo import DEMO_TRUTH, TURN_FREE_PLAN
 from odohil.session.plan import parse_plan
 
 ODOHIL = shutil.which("odohil") or "odohil"

@@ -15,12 +15,11 @@ from typer.testing import CliRunner
 
 import fakes
 from odohil.cli.app import app
-from odohil.cli.line import resolve_line
-from odohil.cli.robot_option import builtin_names, builtin_path
 from odohil.driver.create2.robot import Create2Robot
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.diff_drive import DiffDriveGeometry
-from odohil.session.robot_file import load_robot_description
+from odohil.session.line import resolve_line
+from odohil.session.robot_file import builtin_names, builtin_path, load_robot_description
 from odohil.session.robots import open_robot
 from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.state import load_session

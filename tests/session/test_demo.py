@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from odohil.cli.demo import DEMO_PLAN, DEMO_TRUTH
 from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS
+from odohil.session.demo import DEMO_PLAN, DEMO_TRUTH
 from odohil.session.plan import parse_plan
 from odohil.session.state import load_session
 

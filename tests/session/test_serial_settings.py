@@ -12,11 +12,11 @@ from pathlib import Path
 import pytest
 
 from fakes.nomad.process import EmulatorProcess
-from odohil.cli.line import resolve_line
 from odohil.errors import ParameterError
 from odohil.science.robot_description import parse_robot_description
 from odohil.session import state as ev
 from odohil.session.journal import read_journal
+from odohil.session.line import resolve_line
 from odohil.session.robots import open_robot
 from tests.session.helpers import ROBOT_TOML
 

@@ -26,9 +26,10 @@ from odohil.session.lifecycle.running import (
     RunOutcome,
     final_estimate,
     interrupt_text,
+    interrupted_before_run,
     run_session,
 )
-from odohil.session.lifecycle.spec import SessionSpec
+from odohil.session.lifecycle.spec import SessionSpec, default_session_folder
 
 __all__ = [
     "Opened",
@@ -39,8 +40,10 @@ __all__ = [
     "RunOutcome",
     "SessionSpec",
     "connect",
+    "default_session_folder",
     "final_estimate",
     "interrupt_text",
+    "interrupted_before_run",
     "open_session",
     "preflight",
     "require",

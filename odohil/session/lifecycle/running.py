@@ -93,6 +93,17 @@ def interrupt_text(exc: BaseException) -> str:
     return str(exc) or f"{signal_name(signum)} received"
 
 
+def interrupted_before_run(exc: BaseException) -> dict[str, Any]:
+    """For ``--json``: a signal ended the command before the session ran."""
+    return {
+        "status": "interrupted",
+        "signal": signal_name(signal_of(exc)),
+        "message": interrupt_text(exc) + " before the session ran: nothing moved",
+        "stop_confirmed": None,
+        "partial_estimate": None,
+    }
+
+
 def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateOutcome:
     """A session's estimate and verdict by the one recipe
     (odohil/session/outcome.py): every solved trial but the ambiguous ones and

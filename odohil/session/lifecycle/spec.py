@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -67,3 +68,9 @@ class SessionSpec:
     allow_few_trials: bool = False
     settings: Mapping[str, Any] = field(default_factory=dict)
     note: Mapping[str, Any] = field(default_factory=dict)
+
+
+def default_session_folder() -> Path:
+    """``odohil-session-YYYYmmdd-HHMMSS`` in the current directory: the folder
+    of a new session given no ``--session``."""
+    return Path(f"odohil-session-{time.strftime('%Y%m%d-%H%M%S')}")
