@@ -1,7 +1,8 @@
 """The ``odohil`` command: one typer app; each command lives in its own module.
 
-A command module defines ``register(app: typer.Typer) -> None``; add its name
-to ``COMMAND_MODULES`` to expose it. The console script running one command
+A command module defines the command as a function of the module's name (the
+command's name, but for :data:`_COMMAND_NAMES`); add the module's name to
+``COMMAND_MODULES`` to expose it. The console script running one command
 imports that command's module only (``odohil emulate`` loads no estimator and
 no scipy.stats); an import from elsewhere (tests, ``--help``) registers all.
 """
@@ -95,6 +96,7 @@ def _root(
 
 _COMMAND_NAMES = {"import": "import_log"}
 """Command names that differ from their module's name."""
+_MODULE_COMMANDS = {module: command for command, module in _COMMAND_NAMES.items()}
 
 
 def _modules_to_register(argv: list[str]) -> tuple[str, ...]:
@@ -109,7 +111,8 @@ def _modules_to_register(argv: list[str]) -> tuple[str, ...]:
 
 
 for _name in _modules_to_register(sys.argv):
-    importlib.import_module(f"odohil.cli.{_name}").register(app)
+    _command = getattr(importlib.import_module(f"odohil.cli.{_name}"), _name)
+    app.command(_MODULE_COMMANDS.get(_name, _name))(_command)
 
 
 def main() -> None:

@@ -106,8 +106,3 @@ def covariance(
     sds = f"{sd[0] * 1e3:.4g}, {sd[1] * 1e3:.4g}; {math.degrees(sd[2]):.4g}"
     table.add_row("sd x, y (mm); sd Delta (deg)", sds, *([""] if sim is not None else []))
     Console().print(table)
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``covariance`` to the ``odohil`` app."""
-    app.command("covariance")(covariance)

@@ -67,8 +67,3 @@ def demo(
         outcome = drive(console, made.spec, system, json_out, say)
     extra = {"truth": {name: {"value": v, "unit": SI_UNITS[name]} for name, v in truth.items()}}
     finish(outcome, json_out, console, extra=extra, truth=truth, system=system)
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``demo`` to the ``odohil`` app."""
-    app.command("demo")(demo)

@@ -108,8 +108,3 @@ def emulate(
         serve(options)
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``emulate`` to the ``odohil`` app."""
-    app.command("emulate")(emulate)

@@ -105,8 +105,3 @@ def estimate(
         out = Console(width=max(120, Console().width))
         print_outcome(out, outcome, unit_system(units_choice), title)
     raise typer.Exit(exit_for_outcome(outcome))
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``estimate`` to the app."""
-    app.command("estimate")(estimate)

@@ -104,8 +104,3 @@ def export(
         err.print(f"wrote {out} ({fmt.value})", highlight=False)
     if not outcome.exportable:
         err.print("exported with --force although refused without it", highlight=False)
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``export`` to the ``odohil`` app."""
-    app.command("export")(export)

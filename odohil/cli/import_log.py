@@ -68,8 +68,3 @@ def import_log(
     console.print(
         f"wrote {units.plural(written, 'trial')} ({total:.3f} m driven) to {out}", highlight=False
     )
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``import`` to the ``odohil`` app."""
-    app.command("import")(import_log)

@@ -64,8 +64,3 @@ def predict(
         unit, meaning = OBSERVABLES[key]
         shown.add_row(key, meaning, f"{value:.6g}", unit, degrees.get(key, ""))
     Console().print(shown)
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``predict`` to the ``odohil`` app."""
-    app.command("predict")(predict)

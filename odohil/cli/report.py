@@ -77,8 +77,3 @@ def report(
     if not outcome.exportable:
         console.print("written with --force although refused without it")
     console.print(f"wrote {len(files)} files; open {out / 'index.html'}")
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``report`` to the ``odohil`` app."""
-    app.command("report")(report)

@@ -85,8 +85,3 @@ def resume(
     )
     outcome = drive(console, spec, system, json_out, say, start_check)
     finish(outcome, json_out, console, system=system, code=EXIT_BAD_INPUT if refused else None)
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``resume`` to the ``odohil`` app."""
-    app.command("resume")(resume)

@@ -92,8 +92,3 @@ def run(
     )  # fmt: skip
     outcome = drive(console, spec, system, json_out, say)
     finish(outcome, json_out, console, system=system)
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``run`` to the ``odohil`` app."""
-    app.command("run")(run)

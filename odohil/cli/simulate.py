@@ -99,8 +99,3 @@ def simulate(
     err.print(
         f"wrote {units.plural(trials, 'trial')} of {design.label()} to {out}", highlight=False
     )
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``simulate`` to the ``odohil`` app."""
-    app.command("simulate")(simulate)

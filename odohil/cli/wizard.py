@@ -359,8 +359,3 @@ def final_screen(console: Console, state: SessionState) -> int:
     outcome = final_estimate(state)
     print_lines(console, [outcome_line(outcome), *export_refusal_lines(outcome)])
     return exit_for_outcome(outcome)
-
-
-def register(app: typer.Typer) -> None:
-    """Add ``wizard`` to the ``odohil`` app."""
-    app.command("wizard")(wizard)
