@@ -4,13 +4,11 @@ path (odohil/session/design_tools.py computes)."""
 from __future__ import annotations
 
 import json
-import math
 from enum import StrEnum
 from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.table import Table
 
 from odohil import units
 from odohil.cli.options import (
@@ -27,12 +25,11 @@ from odohil.cli.options import (
     parameters_option,
     unit_system,
 )
-from odohil.errors import OdohilError
+from odohil.cli.render import table, usage_errors
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.session.design_tools import (
-    COMPONENT_UNITS,
-    COMPONENTS,
     covariance_document,
+    covariance_rows,
     named_path,
     path_moments,
 )
@@ -72,37 +69,19 @@ def covariance(
     Closed form, and simulated if asked. Parameters in the paper's units
     (default: Nomad 150).
     """
-    try:
+    with usage_errors():
         kind = None if path_kind is None else path_kind.value
         path = named_path(kind, k, l_m, variant.value, side)
         exact, sim = path_moments(path, params, n_simulate, seed, segment_m)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc)) from exc
     if as_json:
         typer.echo(json.dumps(covariance_document(path, params, exact, sim), indent=2))
         return
-    table = Table(
-        title=f"Pose change after {path.name} ({path.distance_m:g} m driven)",
-        caption=parameters_line(params.to_si_dict(), unit_system(units_choice)),
+    title = f"Pose change after {path.name} ({path.distance_m:g} m driven)"
+    caption = parameters_line(params.to_si_dict(), unit_system(units_choice))
+    simulated = (
+        [] if sim is None else [f"simulated ({units.plural(sim.n_trials, 'trial')}) +- MC se"]
     )
-    table.add_column("quantity")
-    table.add_column("closed form", justify="right")
-    if sim is not None:
-        trials = units.plural(sim.n_trials, "trial")
-        table.add_column(f"simulated ({trials}) +- MC se", justify="right")
-    for i, (name, unit) in enumerate(zip(COMPONENTS, COMPONENT_UNITS, strict=True)):
-        simulated = [] if sim is None else [f"{sim.mean[i]:.6g} +- {sim.mean_se[i]:.2g}"]
-        table.add_row(f"mean {name} ({unit})", f"{exact.mean[i]:.6g}", *simulated)
-    for i in range(3):
-        for j in range(i, 3):
-            unit = units.product_unit(COMPONENT_UNITS[i], COMPONENT_UNITS[j])
-            simulated = [] if sim is None else [f"{sim.cov[i, j]:.6g} +- {sim.cov_se[i, j]:.2g}"]
-            table.add_row(
-                f"cov({COMPONENTS[i]}, {COMPONENTS[j]}) ({unit})",
-                f"{exact.cov[i, j]:.6g}",
-                *simulated,
-            )
-    sd = [math.sqrt(max(exact.cov[i, i], 0.0)) for i in range(3)]
-    sds = f"{sd[0] * 1e3:.4g}, {sd[1] * 1e3:.4g}; {math.degrees(sd[2]):.4g}"
-    table.add_row("sd x, y (mm); sd Delta (deg)", sds, *([""] if sim is not None else []))
-    Console().print(table)
+    shown = table(title, ["quantity", "closed form", *simulated], ("quantity",), caption)
+    for quantity, closed, by_simulation in covariance_rows(exact, sim):
+        shown.add_row(quantity, closed, *([by_simulation] if sim is not None else []))
+    Console().print(shown)

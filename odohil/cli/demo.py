@@ -16,9 +16,9 @@ import typer
 from rich.console import Console
 
 from odohil.cli.options import UNITS_DEFAULT, UnitsOption, option, unit_system
+from odohil.cli.render import usage_errors
 from odohil.cli.robot_option import robot_protocol
 from odohil.cli.session_view import drive, finish
-from odohil.errors import OdohilError
 from odohil.science.parameters import SI_UNITS
 from odohil.session.demo import demo_session
 from odohil.session.lifecycle import Opened
@@ -54,10 +54,8 @@ def demo(
     protocol = robot_protocol(robot_name)
     console = Console(stderr=True)
     with tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
-        try:
+        with usage_errors("--robot"):
             made = demo_session(protocol, seed, session or Path(tmp) / "session")
-        except OdohilError as exc:
-            raise typer.BadParameter(str(exc), param_hint="--robot") from None
         truth = made.truth
 
         def say(opened: Opened) -> None:

@@ -17,8 +17,8 @@ from typing import Annotated
 import typer
 
 from odohil.cli.options import Parameters, option, parameters_option
+from odohil.cli.render import usage_errors
 from odohil.cli.robot_option import robot_protocol
-from odohil.errors import OdohilError
 from odohil.science.robot_description import DEFAULT_PROTOCOL
 from odohil.science.robot_facts import RobotFacts
 from odohil.session.line import check_socket_path
@@ -79,17 +79,13 @@ def emulate(
     """
     from fakes.launch import EmulateOptions
 
-    try:
-        if truth_socket is not None:
+    if truth_socket is not None:
+        with usage_errors("--truth-socket"):
             check_socket_path(truth_socket)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--truth-socket") from None
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
     protocol = robot_protocol(robot)
-    try:
+    with usage_errors("--robot"):
         facts, hooks, serve = emulator(protocol)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc), param_hint="--robot") from exc
     if baud is not None and not facts.speaks(baud):
         raise typer.BadParameter(
             f"the {facts.label} speaks {facts.rates_text()} baud, got {baud}", param_hint="--baud"
@@ -104,7 +100,5 @@ def emulate(
         faults=tuple(fault or ()),
         truth_socket=truth_socket,
     )
-    try:
+    with usage_errors():
         serve(options)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc)) from exc

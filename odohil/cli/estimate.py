@@ -16,9 +16,8 @@ from odohil import units
 from odohil.cli.exit_codes import exit_for_outcome
 from odohil.cli.options import UNITS_DEFAULT, JsonOption, UnitsOption, unit_system
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, print_outcome, torn_warning
+from odohil.cli.render import bad_inputs, print_outcome, torn_warning
 from odohil.cli.robot_option import robot_option
-from odohil.errors import OdohilError
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome import EstimateOutcome, Selection, estimate_source
 from odohil.session.robot_file import load_robot_description
@@ -50,11 +49,9 @@ def load_outcome(
     """The one recipe's outcome of a source (session folder, trial file or
     recording: :func:`odohil.session.outcome.estimate_source`); a torn last
     journal record is reported on ``err``; any bad input exits 2 (said on ``err``)."""
-    try:
+    with bad_inputs(err):
         description = load_robot_description(robot) if robot is not None else None
         outcome = estimate_source(sources, description, exclude, method, recording, selection)
-    except (OdohilError, OSError) as exc:
-        raise bad_input(exc, err) from None
     torn_warning(outcome, err)
     return outcome
 

@@ -12,9 +12,8 @@ from rich.console import Console
 from odohil.cli.estimate import SOURCES_HELP, load_outcome
 from odohil.cli.options import option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, verdict_or_refuse
+from odohil.cli.render import bad_inputs, verdict_or_refuse
 from odohil.cli.robot_option import robot_option
-from odohil.errors import OdohilError
 from odohil.science.exports import (
     DEFAULT_RATE_HZ,
     DEFAULT_UPDATE_MIN_A_RAD,
@@ -92,12 +91,10 @@ def export(
     verdict_or_refuse(err, outcome, force, None if outcome.result is None else "export it")
     result = outcome.result
     assert result is not None
-    try:
+    with bad_inputs(err):
         text = export_text(fmt.value, result, lin, source=sources[0].name)
         if out is not None:
             out.write_text(text, encoding="utf-8")
-    except (OdohilError, OSError) as exc:
-        raise bad_input(exc, err) from None
     if out is None:
         typer.echo(text, nl=False)
     else:

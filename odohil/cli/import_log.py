@@ -12,9 +12,8 @@ from rich.console import Console
 
 from odohil import units
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, table
+from odohil.cli.render import bad_inputs, table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.errors import OdohilError
 from odohil.session.logs import ImportOptions, guess_format, read_recording
 from odohil.session.path_trial_file import summary_rows, write_path_trials
 from odohil.session.robot_file import load_robot_description
@@ -51,12 +50,10 @@ def import_log(
     """
     console = Console()
     err = Console(stderr=True)
-    try:
+    with bad_inputs(err):
         description = load_robot_description(robot)
         trials = read_recording(logs, description, recording)
         written = write_path_trials(out, trials, robot=robot.stem)
-    except (OdohilError, OSError) as exc:
-        raise bad_input(exc, err) from None
     read_as = recording.format or guess_format(logs)
     title = f"{units.plural(written, 'trial')} from {units.plural(len(logs), 'log path')}"
     columns = ("family", "direction", "trials", "distance (m)")

@@ -21,8 +21,7 @@ from odohil.cli.options import (
     parameters_option,
     unit_system,
 )
-from odohil.cli.render import table
-from odohil.errors import OdohilError
+from odohil.cli.render import table, usage_errors
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.paths import Design
 from odohil.session.design_tools import OBSERVABLES, predict_document
@@ -43,10 +42,8 @@ def predict(
 
     Parameters are in the paper's units and default to the Nomad 150 values.
     """
-    try:
+    with usage_errors():
         design = Design(k, l_m, variant.value)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc)) from exc
     means = forth_and_back_means(design, params)
     if as_json:
         typer.echo(json.dumps(predict_document(design, params, means), indent=2))

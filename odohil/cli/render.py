@@ -4,7 +4,8 @@ are the session's (odohil/session/outcome_text.py)."""
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import contextlib
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Literal
 
 import typer
@@ -17,6 +18,7 @@ from rich.text import Text
 from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
 from odohil.driver.odometry import OdometrySample
+from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
 from odohil.science.paths import Design
@@ -58,6 +60,24 @@ def bad_input(exc: BaseException | str, console: Console | None = None) -> typer
         f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True, highlight=False
     )
     return typer.Exit(EXIT_BAD_INPUT)
+
+
+@contextlib.contextmanager
+def usage_errors(param_hint: str | None = None) -> Iterator[None]:
+    """Within: an odohil error is a usage error (exit 2), naming ``param_hint``."""
+    try:
+        yield
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc), param_hint=param_hint) from exc
+
+
+@contextlib.contextmanager
+def bad_inputs(console: Console) -> Iterator[None]:
+    """Within: an odohil or OS error is bad input (:func:`bad_input`, exit 2)."""
+    try:
+        yield
+    except (OdohilError, OSError) as exc:
+        raise bad_input(exc, console) from None
 
 
 def torn_warning(outcome: EstimateOutcome, console: Console) -> None:

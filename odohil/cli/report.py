@@ -11,9 +11,8 @@ from rich.console import Console
 
 from odohil.cli.estimate import SOURCES_HELP, load_outcome
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, verdict_or_refuse
+from odohil.cli.render import bad_inputs, verdict_or_refuse
 from odohil.cli.robot_option import robot_option
-from odohil.errors import OdohilError
 from odohil.session.exports import export_files
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome import Selection, source_kind
@@ -54,11 +53,9 @@ def report(
     """
     console = Console(stderr=True)
     data: SessionReport | None = None
-    try:
+    with bad_inputs(console):
         if source_kind(sources, recording) == "session" and not selection.chosen:
             data = load_report(sources[0], exclude)
-    except (OdohilError, OSError) as exc:
-        raise bad_input(exc, console) from None
     if data is not None:
         assert data.outcome is not None  # load_report always sets it
         outcome = data.outcome
@@ -66,14 +63,12 @@ def report(
         outcome = load_outcome(sources, robot, exclude, console, "robust", recording, selection)
     verdict_or_refuse(console, outcome, force, "write the report")
     result = outcome.result
-    try:
+    with bad_inputs(console):
         extra = () if result is None else export_files(result, source=sources[0].name)
         if data is not None:
             files = write_report(data, out, extra)
         else:
             files = write_path_report(outcome, out, extra)
-    except OSError as exc:
-        raise bad_input(exc, console) from None
     if not outcome.exportable:
         console.print("written with --force although refused without it")
     console.print(f"wrote {len(files)} files; open {out / 'index.html'}")

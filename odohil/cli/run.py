@@ -27,10 +27,9 @@ from odohil.cli.options import (
     option,
     unit_system,
 )
-from odohil.cli.render import bad_input
+from odohil.cli.render import bad_inputs
 from odohil.cli.robot_option import robot_option
 from odohil.cli.session_view import drive, finish
-from odohil.errors import OdohilError
 from odohil.session.lifecycle import Opened, SessionSpec, default_session_folder
 from odohil.session.outcome import parse_exclude
 
@@ -81,10 +80,8 @@ def run(
         console.print(f"session {folder}")
         console.print(f"robot: {opened.prepared.line.describe()}", soft_wrap=True, markup=False)
 
-    try:
+    with bad_inputs(console):
         exclude = parse_exclude(exclude_text)
-    except OdohilError as exc:
-        raise bad_input(exc, console) from None
     spec = SessionSpec(
         folder, "new", robot_file, plan=plan_text, measure=measure, port=port, baud=baud,
         truth_socket=truth_socket, seed=seed, exclude=exclude, allow_turns=allow_turns,

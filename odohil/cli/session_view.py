@@ -81,8 +81,9 @@ def prepared_or_exit(
     """The prepared session; else the first failed check's message and its exit
     status (nothing moved). With ``tick`` (the wizard) every check is shown
     through it. Registers the fakes' URL handlers for its port."""
-    for check in checked.checks if tick else ():
-        tick(check)
+    if tick is not None:
+        for check in checked.checks:
+            tick(check)
     try:
         prepared = require(checked)
     except PreflightFailed as exc:

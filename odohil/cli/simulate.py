@@ -23,7 +23,7 @@ from odohil.cli.options import (
     option,
     parameters_option,
 )
-from odohil.errors import OdohilError
+from odohil.cli.render import usage_errors
 from odohil.science.paths import Design
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.science.simulator import simulate as run_simulation
@@ -77,11 +77,9 @@ def simulate(
     Nomad 150 values.
     """
     err = Console(stderr=True)
-    try:
+    with usage_errors():
         design = Design(k, l_m, variant.value)
         check_simulation(design, trials, segment_m, out)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc)) from exc
     if seed is None:
         seed = int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
         err.print(f"seed {seed}", highlight=False)

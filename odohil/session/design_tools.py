@@ -1,14 +1,17 @@
 """What the design tools (``odohil predict``, ``covariance``, ``simulate``)
 compute beyond calling science: the path their options name, their JSON
-documents (SI), and the simulated trials written as a trial file."""
+documents (SI), the covariance table's rows, and the simulated trials written
+as a trial file."""
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from pathlib import Path
 from typing import Any
 
+from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.closed_forms import ObservableMeans, forth_and_back_means
 from odohil.science.covariance import SimulatedMoments, predicted_moments, simulated_moments
@@ -85,6 +88,27 @@ def path_moments(
 
 def _matrix(matrix: FloatArray) -> list[list[float]]:
     return [[float(v) for v in row] for row in matrix]
+
+
+def covariance_rows(exact: PoseMoments, sim: SimulatedMoments | None) -> list[tuple[str, str, str]]:
+    """The rows of ``odohil covariance``'s table for people: (quantity and its
+    unit, closed form, simulated +- its Monte Carlo standard error or "" when
+    not simulated) for the means, the covariance entries and the standard
+    deviations (mm, deg)."""
+    rows = []
+    for i, (name, unit) in enumerate(zip(COMPONENTS, COMPONENT_UNITS, strict=True)):
+        simulated = "" if sim is None else f"{sim.mean[i]:.6g} +- {sim.mean_se[i]:.2g}"
+        rows.append((f"mean {name} ({unit})", f"{exact.mean[i]:.6g}", simulated))
+    for i in range(3):
+        for j in range(i, 3):
+            unit = units.product_unit(COMPONENT_UNITS[i], COMPONENT_UNITS[j])
+            simulated = "" if sim is None else f"{sim.cov[i, j]:.6g} +- {sim.cov_se[i, j]:.2g}"
+            quantity = f"cov({COMPONENTS[i]}, {COMPONENTS[j]}) ({unit})"
+            rows.append((quantity, f"{exact.cov[i, j]:.6g}", simulated))
+    sd = [math.sqrt(max(exact.cov[i, i], 0.0)) for i in range(3)]
+    sds = f"{sd[0] * 1e3:.4g}, {sd[1] * 1e3:.4g}; {math.degrees(sd[2]):.4g}"
+    rows.append(("sd x, y (mm); sd Delta (deg)", sds, ""))
+    return rows
 
 
 def covariance_document(
