@@ -96,13 +96,18 @@ def print_lines(console: Console, lines: Sequence[str]) -> None:
         console.print(line, soft_wrap=True, markup=False, highlight=False)
 
 
+def print_verdict(console: Console, outcome: EstimateOutcome) -> None:
+    """The verdict line, and why the estimate may not be exported."""
+    print_lines(console, [outcome_line(outcome), *export_refusal_lines(outcome)])
+
+
 def print_refusal(
     console: Console, outcome: EstimateOutcome, force: str | None, undone: str
 ) -> None:
     """Why an estimate is not used: the verdict line, why it is not precise
     enough to export, and how to go on (``force``: what --force does, e.g.
     "export it", None when it does not help; ``undone``: "nothing written")."""
-    print_lines(console, [outcome_line(outcome), *export_refusal_lines(outcome)])
+    print_verdict(console, outcome)
     line = escape(refusal_line(outcome, force, undone))
     console.print(f"[red]refused:[/red] {line}", highlight=False)
 

@@ -26,7 +26,7 @@ from odohil.cli.exit_codes import (
     exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.render import parameters_table, print_lines
+from odohil.cli.render import parameters_table, print_verdict
 from odohil.errors import (
     JournalError,
     OdohilError,
@@ -55,7 +55,6 @@ from odohil.session.lifecycle import (
     run_session,
 )
 from odohil.session.lifecycle.opening import CheckSeen
-from odohil.session.outcome_text import export_refusal_lines, outcome_line
 from odohil.session.robots import fake_url_schemes
 from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
 from odohil.session.start_pose import StartPose
@@ -142,17 +141,11 @@ def drive(
 class ProgressObserver:
     """A rich progress bar of completed trials, on stderr, with notes."""
 
-    def __init__(
-        self,
-        console: Console,
-        state: SessionState,
-        system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
-        measurer: str = "the simulated operator",
-    ) -> None:
+    def __init__(self, console: Console, state: SessionState, system: units.UnitSystem) -> None:
         assert state.plan is not None
         self.console = console
         self.system = system
-        self.measurer = measurer
+        self.measurer = "the simulated operator"
         self.remeasured: dict[int, None] = {}  # trial numbers, in order
         self.progress = Progress(
             TextColumn("[bold]trials"),
@@ -248,8 +241,7 @@ def report_run(
     command that continues the session (``continue_with``; default ``odohil
     resume FOLDER``)."""
     if outcome.status == "finished":
-        estimate = outcome.estimate
-        print_lines(console, [outcome_line(estimate), *export_refusal_lines(estimate)])
+        print_verdict(console, outcome.estimate)
         return
     if outcome.status == "stop unconfirmed":
         console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
@@ -297,11 +289,7 @@ def finish(
     code = exit_for_run(outcome) if code is None else code
     result = outcome.estimate.result if outcome.status == "finished" else None
     if json_out:
-        if result is not None:
-            document = {"status": outcome.status, **result.to_json_dict()}
-        else:
-            document = {"status": outcome.status, "exit_code": code, **outcome.details()}
-        typer.echo(json.dumps({**document, **(extra or {})}))
+        typer.echo(json.dumps({**outcome.to_json_dict(code), **(extra or {})}))
     elif result is not None:
         title = f"estimate ({result.method}, {units.plural(result.n_trials, 'trial')})"
         table = parameters_table(result, system, title, truth)

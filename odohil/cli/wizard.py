@@ -45,7 +45,7 @@ from odohil.cli.options import (
     option,
     unit_system,
 )
-from odohil.cli.render import MotionProgress, check_line, estimate_panel, print_lines
+from odohil.cli.render import MotionProgress, check_line, estimate_panel, print_verdict
 from odohil.cli.robot_option import robot_option
 from odohil.cli.session_view import MAY_STILL_MOVE, prepared_or_exit, refuse, report_run
 from odohil.driver.odometry import OdometrySample
@@ -68,7 +68,6 @@ from odohil.session.lifecycle import (
     preflight,
     run_session,
 )
-from odohil.session.outcome_text import export_refusal_lines, outcome_line
 from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
 from odohil.session.signals import signal_of, signals_raise
@@ -357,5 +356,5 @@ def final_screen(console: Console, state: SessionState) -> int:
     """The wizard's last words: the session's verdict by the one recipe
     (odohil/session/outcome.py), why it may not be exported, and the exit status."""
     outcome = final_estimate(state)
-    print_lines(console, [outcome_line(outcome), *export_refusal_lines(outcome)])
+    print_verdict(console, outcome)
     return exit_for_outcome(outcome)

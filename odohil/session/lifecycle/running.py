@@ -61,6 +61,14 @@ class RunOutcome:
     cause: str = ""
     signal: int | None = None
 
+    def to_json_dict(self, exit_code: int) -> dict[str, Any]:
+        """The ``--json`` object of a session command: the status with the
+        final estimate (SI) when it finished with one, else with the exit
+        status and :meth:`details`."""
+        if self.status == "finished" and self.estimate.result is not None:
+            return {"status": self.status, **self.estimate.result.to_json_dict()}
+        return {"status": self.status, "exit_code": exit_code, **self.details()}
+
     def details(self) -> dict[str, Any]:
         """For ``--json``: a finished run without an estimate, its verdict;
         a run that did not finish, how it ended and its partial estimate."""
