@@ -14,7 +14,6 @@ the same ``--session`` continues where the journal stops.
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 from dataclasses import dataclass
@@ -68,6 +67,19 @@ from odohil.session.lifecycle import (
     preflight,
     run_session,
 )
+from odohil.session.operator_words import (
+    END_MARKS,
+    HERE,
+    encoders_at_end,
+    entered_so_far,
+    extra_distance_prompt,
+    measure_again,
+    put_back_prompt,
+    remeasure_prompt,
+    solved,
+    start_marks,
+    trial_header,
+)
 from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
 from odohil.session.signals import signal_of, signals_raise
@@ -83,7 +95,8 @@ _STYLE = {"refused": "[red]refused:[/] ", "check": "[yellow]check:[/] ", "no_bac
 @dataclass
 class WizardPrompts:
     """The :class:`~odohil.session.sources.OperatorPrompts` of the wizard: it reads
-    lines and renders; what they mean is odohil/session/tape_entry.py's."""
+    lines and renders; what they mean and say is odohil/session/tape_entry.py's
+    and odohil/session/operator_words.py's."""
 
     console: Console
     description: RobotDescription
@@ -93,9 +106,9 @@ class WizardPrompts:
     def __post_init__(self) -> None:
         self.entries = TapeEntries(self.description)
 
-    def _input(self, prompt: str) -> str:
+    def _input(self, prompt: str, style: str | None = None) -> str:
         try:
-            self.console.print(prompt, end="")
+            self.console.print(prompt, end="", style=style)
             wait_readable(sys.stdin)
             return input()
         except EOFError:
@@ -105,26 +118,14 @@ class WizardPrompts:
         """The trial's header once per attempt; on a resumed one also what was entered."""
         if not self.entries.first_sight(ctx):
             return
-        note = " [bold](resumed: the motion is done, its marks are on the floor)[/]"
-        self.console.print(
-            f"\n[bold]Trial {ctx.trial}/{ctx.n_trials}[/] (attempt {ctx.attempt}): "
-            f"{ctx.design.label()}, {ctx.design.distance_m:g} m of driving"
-            f"{note if resumed else ''}."
-        )
-        if resumed and ctx.measurements:
-            values = zip(ctx.labels, ctx.measurements, strict=False)
-            entered = ", ".join(f"{label} = {value:.4f} m" for label, value in values)
-            left = units.plural(len(ctx.labels) - len(ctx.measurements), "distance")
-            self.console.print(f"Already entered and saved: {entered}; {left} to go.")
+        self.console.print("\n" + trial_header(ctx, resumed), style="bold", markup=False)
+        if resumed and (entered := entered_so_far(ctx)) is not None:
+            self.console.print(entered, markup=False)
 
     def confirm_start_marks(self, ctx: TrialContext) -> None:
         """Ask for the start marks."""
         self._context(ctx, resumed=False)
-        names = ", ".join(self.description.screw_names)
-        self._input(
-            f"Mark the floor at the {len(self.description.screws)} screws ({names}), "
-            "keep clear of the robot, then press Enter to start the motion: "
-        )
+        self._input(start_marks(self.description))
 
     def confirm_end_marks(self, ctx: TrialContext) -> None:
         """The motion is over: ask for the end marks."""
@@ -133,11 +134,8 @@ class WizardPrompts:
         self.interrupts.check()
         self._context(ctx)
         if (pose := ctx.encoder_end_pose) is not None:
-            self.console.print(
-                f"Motion done; encoders say x={pose[0]:+.4f} m y={pose[1]:+.4f} m "
-                f"heading {math.degrees(pose[2]):+.2f} deg from the start."
-            )
-        self._input("Mark the floor at the screws again (end marks), then press Enter: ")
+            self.console.print(encoders_at_end(pose))
+        self._input(END_MARKS)
 
     def ask_distance(self, ctx: TrialContext, index: int) -> float:
         """Distance ``index``, metres, as the attempt's :class:`TapeEntry` hands it over."""
@@ -164,16 +162,13 @@ class WizardPrompts:
 
     def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
         """The slip check doubts the trial: ask for the suspect distance again."""
-        label, typed = ctx.labels[index], ctx.measurements[index]
-        keep = f"you typed {typed:.4f}; press Enter to keep it"
-        prompt = f"Re-measure {label}, metres ({keep}): "
-        return self._optional(ctx, f"[yellow]check the marks:[/] {reason}", prompt, label)
+        doubt = f"[yellow]check the marks:[/] {reason}"
+        return self._optional(ctx, doubt, remeasure_prompt(ctx, index), ctx.labels[index])
 
     def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
         """The trial is ambiguous: ask for one more cross distance, named by its screws."""
-        skip = "press Enter if you cannot; the trial is then left out"
-        prompt = f"Measure one more distance, {label}, metres ({skip}): "
-        return self._optional(ctx, f"[yellow]two poses fit these marks:[/] {reason}", prompt, label)
+        doubt = f"[yellow]two poses fit these marks:[/] {reason}"
+        return self._optional(ctx, doubt, extra_distance_prompt(label), label)
 
     def start_check(self, robot: Robot) -> StartCheck:
         """Show where the robot stands; off the next trial's start, ask the
@@ -183,12 +178,7 @@ class WizardPrompts:
             self.console.print(f"Robot: {start.describe()}")
             if start.ok or start.expected is None:
                 return
-            answer = self._input(
-                f"[bold]Put the robot back where trial {start.trial} starts[/] (the end marks "
-                "of the last trial, or this trial's start marks), then press Enter; or type "
-                "'here' to start the trial where it stands: "
-            )
-            if answer.strip().lower() == "here":
+            if self._input(put_back_prompt(start.trial), "bold").strip().lower() == HERE:
                 self.console.print("The trial starts where the robot stands.")
                 return
             robot.zero(start.expected)
@@ -198,12 +188,8 @@ class WizardPrompts:
 
     def show_rejection(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
         """Say why; only the distances the rejection names are asked for again."""
-        kept = self.entries.rejected(ctx, rejection)
-        again = ", ".join(label for i, label in enumerate(ctx.labels) if i not in kept)
-        what = f"only {again} (the other distances are kept)" if kept else "all its distances"
-        self.console.print(
-            f"[red]These distances fit no rigid motion:[/] {rejection}\nMeasure again {what}."
-        )
+        again = measure_again(ctx, self.entries.rejected(ctx, rejection))
+        self.console.print(f"[red]These distances fit no rigid motion:[/] {rejection}\n{again}")
 
 
 @dataclass
@@ -242,13 +228,7 @@ class WizardObserver:
 
     def _solved(self, state: SessionState) -> None:
         """The solved pose, then the session's estimate and verdict by the one recipe."""
-        trial = state.completed[-1]
-        x, y, theta = trial.pose_change
-        self.console.print(
-            f"[green]Trial {trial.trial} solved:[/] dx={1e3 * x:+.1f} mm "
-            f"dy={1e3 * y:+.1f} mm dtheta={math.degrees(theta):+.3f} deg"
-            + ("" if trial.clear_cut else f" [yellow](not clear-cut: {trial.note})")
-        )
+        self.console.print(solved(state.completed[-1]), style="green", markup=False)
         assert state.plan is not None
         outcome = final_estimate(state)
         if outcome.result is None:
