@@ -15,8 +15,7 @@ from enum import StrEnum
 from typing import Any
 
 from odohil.cli.options import EXCLUDE_HELP, Command, add_options, keyword
-from odohil.cli.render import bad_input
-from odohil.errors import OdohilError
+from odohil.cli.render import bad_inputs
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome import Selection, parse_exclude
 
@@ -77,7 +76,7 @@ def _parameters(format_flags: tuple[str, ...], selection: bool) -> list[inspect.
 
 def _resolve(values: dict[str, Any]) -> dict[str, Any]:
     log_format = values.pop("log_format")
-    try:
+    with bad_inputs():
         typed: dict[str, Any] = {
             "recording": ImportOptions(
                 format=None if log_format is None else log_format.value,
@@ -88,8 +87,6 @@ def _resolve(values: dict[str, Any]) -> dict[str, Any]:
         }
         if "exclude" in values:
             typed["exclude"] = parse_exclude(values.pop("exclude"))
-    except OdohilError as exc:
-        raise bad_input(exc) from None
     if "family" in values:
         typed["selection"] = Selection(values.pop("family"), values.pop("direction"))
     return typed

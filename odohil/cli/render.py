@@ -72,7 +72,7 @@ def usage_errors(param_hint: str | None = None) -> Iterator[None]:
 
 
 @contextlib.contextmanager
-def bad_inputs(console: Console) -> Iterator[None]:
+def bad_inputs(console: Console | None = None) -> Iterator[None]:
     """Within: an odohil or OS error is bad input (:func:`bad_input`, exit 2)."""
     try:
         yield
