@@ -1,7 +1,8 @@
 """The ``odohil`` command: one typer app; each command lives in its own module.
 
 A command module defines the command as a function of the module's name (the
-command's name, but for :data:`_COMMAND_NAMES`); add the module's name to
+command's name, but for :data:`_COMMAND_NAMES`), or a ``register(app)`` that
+adds it otherwise (validate's help text); add the module's name to
 ``COMMAND_MODULES`` to expose it. The console script running one command
 imports that command's module only (``odohil emulate`` loads no estimator and
 no scipy.stats); an import from elsewhere (tests, ``--help``) registers all.
@@ -111,8 +112,11 @@ def _modules_to_register(argv: list[str]) -> tuple[str, ...]:
 
 
 for _name in _modules_to_register(sys.argv):
-    _command = getattr(importlib.import_module(f"odohil.cli.{_name}"), _name)
-    app.command(_MODULE_COMMANDS.get(_name, _name))(_command)
+    _module = importlib.import_module(f"odohil.cli.{_name}")
+    if hasattr(_module, "register"):
+        _module.register(app)
+    else:
+        app.command(_MODULE_COMMANDS.get(_name, _name))(getattr(_module, _name))
 
 
 def main() -> None:
