@@ -26,7 +26,7 @@ from odohil.cli.exit_codes import (
     exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.render import parameters_table, print_verdict
+from odohil.cli.render import parameters_table, print_lines, print_verdict
 from odohil.errors import (
     JournalError,
     OdohilError,
@@ -55,6 +55,7 @@ from odohil.session.lifecycle import (
     run_session,
 )
 from odohil.session.lifecycle.opening import CheckSeen
+from odohil.session.operator_words import measured_again, remeasured
 from odohil.session.robots import fake_url_schemes
 from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
 from odohil.session.start_pose import StartPose
@@ -169,14 +170,7 @@ class ProgressObserver:
         finally:
             self.progress.stop()
             if self.remeasured:
-                trials = list(self.remeasured)
-                self.console.print(
-                    f"In {units.plural(len(trials), 'trial')} ({', '.join(map(str, trials))}) "
-                    f"the slip check doubted a distance and {self.measurer} measured it again: "
-                    "the check at work; nothing is lost and each trial counts once.",
-                    soft_wrap=True,
-                    highlight=False,
-                )
+                print_lines(self.console, [remeasured(list(self.remeasured), self.measurer)])
 
     def show_start(self, start: StartPose) -> None:
         """The start check: print where the encoders read (with the heading)."""
@@ -192,13 +186,7 @@ class ProgressObserver:
                 f"trial {event.trial} attempt {event.attempt} void: {event.reason}"
             )
         elif isinstance(event, MeasurementsRejected):
-            self.progress.console.print(
-                f"trial {event.trial}: the distances {self.measurer} took fit no "
-                f"rigid motion, so {self.measurer} measured them again: the check at work; "
-                "nothing is lost and the trial counts once (the reason is in the journal).",
-                soft_wrap=True,
-                highlight=False,
-            )
+            print_lines(self.progress.console, [measured_again(event.trial, self.measurer)])
         elif isinstance(event, Remeasured) and not event.kept:
             self.remeasured.setdefault(event.trial, None)
 

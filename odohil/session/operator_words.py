@@ -3,12 +3,13 @@ trial's header and what was already entered, the marks to make, where the
 encoders put the robot, the questions to measure again or once more, putting
 the robot back, a rejection and a solved trial. The wizard styles and prints
 them; what the operator must do is the session's (beside
-odohil/session/tape_entry.py, which asks for the distances themselves)."""
+odohil/session/tape_entry.py, which asks for the distances themselves). Also
+what ``run`` says of its simulated operator measuring again."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 
 from odohil import units
 from odohil.science.robot_description import RobotDescription
@@ -94,4 +95,22 @@ def solved(trial: CompletedTrial) -> str:
         f"Trial {trial.trial} solved: dx={1e3 * x:+.1f} mm dy={1e3 * y:+.1f} mm "
         f"dtheta={math.degrees(theta):+.3f} deg"
         + ("" if trial.clear_cut else f" (not clear-cut: {trial.note})")
+    )
+
+
+def measured_again(trial: int, who: str) -> str:
+    """The distances ``who`` took in ``trial`` fit no rigid motion and were taken again."""
+    return (
+        f"trial {trial}: the distances {who} took fit no rigid motion, so {who} measured "
+        "them again: the check at work; nothing is lost and the trial counts once (the "
+        "reason is in the journal)."
+    )
+
+
+def remeasured(trials: Sequence[int], who: str) -> str:
+    """The slip check had ``who`` take a doubted distance again in ``trials``."""
+    return (
+        f"In {units.plural(len(trials), 'trial')} ({', '.join(map(str, trials))}) the slip "
+        f"check doubted a distance and {who} measured it again: the check at work; nothing "
+        "is lost and each trial counts once."
     )
