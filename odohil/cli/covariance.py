@@ -24,8 +24,9 @@ from odohil.cli.options import (
     option,
     parameters_option,
     unit_system,
+    usage_errors,
 )
-from odohil.cli.render import table, usage_errors
+from odohil.cli.render import table
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.session.design_tools import (
     covariance_document,

@@ -5,9 +5,10 @@ session (port, baud, truth socket, --json, --exclude, --allow-turns)."""
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import inspect
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from enum import StrEnum
 from typing import Annotated, Any, TypeVar
 
@@ -48,6 +49,15 @@ def add_options(
         return wrapper
 
     return decorate
+
+
+@contextlib.contextmanager
+def usage_errors(param_hint: str | None = None) -> Iterator[None]:
+    """Within: an odohil error is a usage error (exit 2), naming ``param_hint``."""
+    try:
+        yield
+    except OdohilError as exc:
+        raise typer.BadParameter(str(exc), param_hint=param_hint) from exc
 
 
 def keyword(name: str, kind: Any, default: Any, *flags: str, help: str) -> inspect.Parameter:

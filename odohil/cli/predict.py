@@ -20,8 +20,9 @@ from odohil.cli.options import (
     VariantOption,
     parameters_option,
     unit_system,
+    usage_errors,
 )
-from odohil.cli.render import table, usage_errors
+from odohil.cli.render import table
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.paths import Design
 from odohil.session.design_tools import OBSERVABLES, predict_document

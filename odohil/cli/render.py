@@ -63,15 +63,6 @@ def bad_input(exc: BaseException | str, console: Console | None = None) -> typer
 
 
 @contextlib.contextmanager
-def usage_errors(param_hint: str | None = None) -> Iterator[None]:
-    """Within: an odohil error is a usage error (exit 2), naming ``param_hint``."""
-    try:
-        yield
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc), param_hint=param_hint) from exc
-
-
-@contextlib.contextmanager
 def bad_inputs(console: Console | None = None) -> Iterator[None]:
     """Within: an odohil or OS error is bad input (:func:`bad_input`, exit 2)."""
     try:

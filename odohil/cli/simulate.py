@@ -22,8 +22,8 @@ from odohil.cli.options import (
     VariantOption,
     option,
     parameters_option,
+    usage_errors,
 )
-from odohil.cli.render import usage_errors
 from odohil.science.paths import Design
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.science.simulator import simulate as run_simulation
