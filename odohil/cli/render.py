@@ -21,7 +21,7 @@ from odohil.driver.odometry import OdometrySample
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
-from odohil.science.paths import Design
+from odohil.science.paths import Drivable
 from odohil.session.design_observables import observables_by_design
 from odohil.session.lifecycle import PreflightCheck
 from odohil.session.motion_steps import MotionSteps, pose_text
@@ -220,7 +220,7 @@ class MotionProgress:
         self._task: TaskID | None = None
         self._steps: MotionSteps | None = None
 
-    def start(self, design: Design) -> None:
+    def start(self, design: Drivable) -> None:
         """Show a new motion of ``design``."""
         self.stop()
         self._steps = MotionSteps(design)

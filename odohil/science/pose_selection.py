@@ -69,6 +69,7 @@ from odohil.science.floor_marks import (
     solve_marks,
 )
 from odohil.science.parameters import ErrorParameters
+from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
 from odohil.science.robot_description import ParameterPriors, RobotDescription
 from odohil.units import wrap_angle
@@ -224,7 +225,7 @@ class PoseSelection:
 
 
 def predictive_pose(
-    design: Design,
+    design: Design | PathDesign,
     belief: ParameterBelief,
     encoder_end_pose: Sequence[float] | FloatArray | None = None,
 ) -> PosePrior:
@@ -247,7 +248,7 @@ def _key(cov: FloatArray) -> tuple[float, ...]:
 
 @lru_cache(maxsize=256)
 def _moments(
-    design: Design,
+    design: Design | PathDesign,
     values: tuple[float, ...],
     cov_key: tuple[float, ...],
     floor: tuple[float, float],

@@ -63,6 +63,7 @@ from odohil.errors import (
 )
 from odohil.science.estimators import EstimateResult, IncrementalEstimator, Observation
 from odohil.science.floor_marks import PosePrior
+from odohil.science.paths import Design
 from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.science.robot_description import RobotDescription
 from odohil.session.events import (
@@ -84,7 +85,7 @@ from odohil.session.events import (
     Void,
 )
 from odohil.session.journal import Journal, Record, TornRecord
-from odohil.session.plan import Plan
+from odohil.session.plan import Plan, driven_backward
 from odohil.session.plausibility import far_window, judge
 from odohil.session.pose_source import MeasuredPose, PoseSource, TrialContext
 from odohil.session.robot import Robot, SampleCallback
@@ -291,7 +292,8 @@ class IncrementalLiveEstimator:
     def add(self, trial: CompletedTrial) -> EstimateResult | None:
         """Fold the trial in (unless its number is in ``exclude``); the current
         result, or None."""
-        if trial.trial in self.exclude:
+        if trial.trial in self.exclude or not isinstance(trial.design, Design):
+            # a general path's trial: the design estimator cannot fold it in
             return None if self.inner.fit is None else self.inner.result()
         observation = Observation(
             design=trial.design,
@@ -544,7 +546,7 @@ class SessionEngine:
                 trial,
                 attempt,
                 design=design_index,
-                backward=design.backward,
+                backward=driven_backward(design),
                 zeroed=_sample_json(zeroed),
                 start=start,
             )

@@ -8,7 +8,7 @@ import math
 
 from odohil import units
 from odohil.driver.odometry import OdometrySample
-from odohil.science.paths import Design, Leg, Turn
+from odohil.science.paths import Drivable, Leg, Turn
 
 
 def step_fraction(item: Leg | Turn, start: OdometrySample, sample: OdometrySample) -> float:
@@ -29,7 +29,7 @@ class MotionSteps:
     taken before the first step; a step ends at the first sample that shows
     the robot at rest."""
 
-    def __init__(self, design: Design) -> None:
+    def __init__(self, design: Drivable) -> None:
         self.steps: tuple[Leg | Turn, ...] = design.path().steps
         self.step = 0
         self.start: OdometrySample | None = None

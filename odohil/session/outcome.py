@@ -31,7 +31,7 @@ planner's minimum, is no honest configuration for a fusion stack.
 from __future__ import annotations
 
 from collections.abc import Collection, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -56,6 +56,7 @@ from odohil.session.state import (
     SessionState,
     description_of_header,
     load_session,
+    session_path_trials,
     session_trials,
 )
 from odohil.session.trial_files import Trial, TrialSet, read_trials
@@ -210,16 +211,48 @@ def estimate_state(
     torn: TornRecord | None = None,
 ) -> EstimateOutcome:
     """The outcome of a session's completed trials (``turns_exact`` from its
-    journaled robot description).
+    journaled robot description). A session whose plan names a general path
+    is estimated by the general-path estimator (every trial, forth-and-back
+    ones as their design's encoder path; ambiguous ones left out).
 
     Raises:
         JournalError: the session holds no robot description.
         MeasurementError: an excluded number that is no completed trial's.
     """
     turns_exact = description_of_header(state).robot.turns_exact
+    if state.plan is not None and state.plan.has_paths:
+        return _session_paths_outcome(state, turns_exact, exclude, method, source, torn)
     return estimate_trials(
         session_trials(state, source=source), turns_exact, exclude, method, source, torn
     )
+
+
+def _session_paths_outcome(
+    state: SessionState,
+    turns_exact: bool,
+    exclude: Collection[int],
+    method: str,
+    source: str,
+    torn: TornRecord | None,
+) -> EstimateOutcome:
+    """:func:`estimate_path_trials` of a session with general paths, its
+    ambiguous trials and torn record named."""
+    trials = session_path_trials(state, source=source)
+    ambiguous = tuple(t.trial for t in state.completed if t.ambiguous)
+    if not trials:
+        problem = "no trials to estimate from" + (
+            f" ({units.plural(len(ambiguous), 'ambiguous trial')} left out)" if ambiguous else ""
+        )
+        empty = TrialSet((), "pose", source)
+        return EstimateOutcome(
+            source, empty, (), ambiguous, tuple(sorted(exclude)), None, problem, torn=torn
+        )
+    if method == "paper":
+        raise ParameterError(
+            "--method paper: a session with general paths is fitted by " + " or ".join(PATH_METHODS)
+        )
+    outcome = estimate_path_trials(trials, turns_exact, exclude, method, source)
+    return replace(outcome, ambiguous=ambiguous, torn=torn)
 
 
 def estimate_path(

@@ -1,9 +1,10 @@
-"""A calibration plan: which forth-and-back designs, how many trials of each.
+"""A calibration plan: which designs (forth-and-back, or general paths), how
+many trials of each.
 
 Text syntax (``--plan``): designs separated by ``;``, each a comma-separated
 list of ``key=value``::
 
-    k=1,l=6,n=30;k=20,l=0.5,n=30,variant=reverse
+    k=1,l=6,n=30;k=20,l=0.5,n=30,variant=reverse;path=square:1.0,cw,n=10
 
 - ``k``: forth-and-back pairs, a multiple of 1/2 (``k=0.5`` is one straight run);
 - ``l``: leg length, metres;
@@ -16,7 +17,10 @@ Trials are numbered 1, 2, ... in plan order: the n trials of the first design,
 then those of the second, and so on. Each trial's direction (forwards, or every
 leg reversed) follows :func:`odohil.science.paths.floor_choreography`, so that
 one-way trials come back over the same floor; journals written before this
-(plans without ``"alternate"``) were driven forwards and are read so.
+(plans without ``"alternate"``) were driven forwards and are read so. A
+general path is closed (it starts and ends at the same place, facing the same
+way): it leaves the line's choreography where it found it, and needs the floor
+of its bounding box (:func:`path_floor_m`) around its start.
 """
 
 from __future__ import annotations
@@ -30,10 +34,35 @@ from typing import Any
 from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.limits import RANGES
+from odohil.science.path_designs import PathDesign, parse_path_design
 from odohil.science.paths import VARIANTS, Design, FloorChoreography, floor_choreography
 from odohil.session.robots import check_leg
 
-_KEYS = ("k", "l", "n", "variant")
+_KEYS = ("k", "l", "n", "variant", "path")
+
+TrialShape = Design | PathDesign
+"""What one trial of a plan drives: a forth-and-back design or a general path."""
+
+
+def driven_backward(design: TrialShape) -> bool:
+    """Whether a trial of ``design`` (as driven) runs every leg reversed (a
+    general path: never)."""
+    return isinstance(design, Design) and design.backward
+
+
+def path_floor_m(design: PathDesign) -> tuple[float, float]:
+    """The bounding box (along, across the start heading) of one trial of a
+    closed path as the encoders drive it, metres: the floor it needs around
+    its start mark."""
+    x, y = 0.0, 0.0
+    xs, ys = [0.0], [0.0]
+    legs = design.path().legs
+    for heading, sign, length in zip(legs.heading_rad, legs.sign, legs.length_m, strict=True):
+        x += float(sign * length * math.cos(heading))
+        y += float(sign * length * math.sin(heading))
+        xs.append(x)
+        ys.append(y)
+    return (max(xs) - min(xs), max(ys) - min(ys))
 
 
 @dataclass(frozen=True)
@@ -41,11 +70,12 @@ class PlanItem:
     """One design and how many trials of it.
 
     Attributes:
-        design: the forth-and-back design (k, l metres, variant).
+        design: the forth-and-back design (k, l metres, variant) or the
+            general path (:class:`~odohil.science.path_designs.PathDesign`).
         n_trials: number of trials, at least 1.
     """
 
-    design: Design
+    design: TrialShape
     n_trials: int
 
     def __post_init__(self) -> None:
@@ -55,7 +85,16 @@ class PlanItem:
     def to_text(self) -> str:
         """This item in the ``--plan`` syntax."""
         d = self.design
+        if isinstance(d, PathDesign):
+            return f"path={d.to_text()},n={self.n_trials}"
         return f"k={d.k:g},l={d.l_m:g},n={self.n_trials},variant={d.variant}"
+
+    def to_json(self) -> dict[str, Any]:
+        """The plan record's entry: ``{"k", "l_m", "variant", "n"}`` or ``{"path", "n"}``."""
+        d = self.design
+        if isinstance(d, PathDesign):
+            return {"path": d.to_text(), "n": self.n_trials}
+        return {"k": d.k, "l_m": d.l_m, "variant": d.variant, "n": self.n_trials}
 
 
 @dataclass(frozen=True)
@@ -96,39 +135,79 @@ class Plan:
             remaining -= item.n_trials
         raise AssertionError("unreachable")
 
-    def design_of(self, trial: int) -> Design:
+    def design_of(self, trial: int) -> TrialShape:
         """The design that trial number ``trial`` (1-based) runs, as driven
-        (``backward`` set by the choreography)."""
-        self.design_index(trial)  # range check
-        return self.choreography.trial(trial)[0]
+        (a forth-and-back design's ``backward`` set by the choreography; a
+        general path as planned)."""
+        item = self.items[self.design_index(trial)]
+        if isinstance(item.design, PathDesign):
+            return item.design
+        return self.choreography.trial(self._line_number(trial))[0]
+
+    def _line_number(self, trial: int) -> int:
+        """Trial ``trial``'s number among the forth-and-back trials (the
+        choreography's): closed paths leave the robot where they found it."""
+        number, remaining = 0, trial
+        for item in self.items:
+            count = min(remaining, item.n_trials)
+            if isinstance(item.design, Design):
+                number += count
+            remaining -= count
+            if remaining <= 0:
+                break
+        return number
+
+    @property
+    def has_paths(self) -> bool:
+        """Whether any design is a general path."""
+        return any(isinstance(item.design, PathDesign) for item in self.items)
+
+    @property
+    def line_items(self) -> tuple[tuple[Design, int], ...]:
+        """The forth-and-back designs and their trial counts, in order."""
+        return tuple(
+            (item.design, item.n_trials) for item in self.items if isinstance(item.design, Design)
+        )
 
     @cached_property
     def choreography(self) -> FloorChoreography:
-        """Each trial's direction and where it takes the robot on the floor."""
-        pairs = [(item.design, item.n_trials) for item in self.items]
-        return floor_choreography(pairs, alternate=self.alternate)
+        """Each forth-and-back trial's direction and where it takes the robot
+        on the floor (numbered among the forth-and-back trials only)."""
+        return floor_choreography(self.line_items, alternate=self.alternate)
 
     @property
     def excursion_m(self) -> float:
-        """Length of free floor the plan needs along the line of travel, metres."""
-        return self.choreography.excursion_m
+        """Length of free floor the plan needs along the line of travel, metres
+        (the forth-and-back trials'; a general path's, its bounding box's
+        length along the start heading, when longer)."""
+        line = self.choreography.excursion_m if self.line_items else 0.0
+        boxes = [
+            path_floor_m(item.design)[0]
+            for item in self.items
+            if isinstance(item.design, PathDesign)
+        ]
+        return max([line, *boxes])
+
+    @property
+    def width_m(self) -> float:
+        """Width of free floor across the line of travel the plan's general
+        paths need (their bounding boxes'), metres; 0 for forth-and-back only."""
+        boxes = [
+            path_floor_m(item.design)[1]
+            for item in self.items
+            if isinstance(item.design, PathDesign)
+        ]
+        return max([0.0, *boxes])
 
     def to_text(self) -> str:
         """The plan in the ``--plan`` syntax."""
         return ";".join(item.to_text() for item in self.items)
 
     def to_json(self) -> dict[str, Any]:
-        """A JSON object: ``{"designs": [{"k", "l_m", "variant", "n"}, ...]}``."""
+        """A JSON object: ``{"designs": [{"k", "l_m", "variant", "n"} or
+        {"path", "n"}, ...]}``."""
         return {
-            "designs": [
-                {
-                    "k": item.design.k,
-                    "l_m": item.design.l_m,
-                    "variant": item.design.variant,
-                    "n": item.n_trials,
-                }
-                for item in self.items
-            ],
+            "designs": [item.to_json() for item in self.items],
             "alternate": self.alternate,
         }
 
@@ -146,8 +225,14 @@ class Plan:
             if not isinstance(entry, dict):
                 raise ParameterError(f"a plan design must be an object, got {entry!r}")
             try:
-                design = Design(float(entry["k"]), float(entry["l_m"]), entry["variant"])
-                items.append(PlanItem(design, int(entry["n"])))
+                shape: TrialShape
+                if "path" in entry:
+                    if not isinstance(entry["path"], str):
+                        raise TypeError("path must be text")
+                    shape = parse_path_design(entry["path"])
+                else:
+                    shape = Design(float(entry["k"]), float(entry["l_m"]), entry["variant"])
+                items.append(PlanItem(shape, int(entry["n"])))
             except (KeyError, TypeError, ValueError, OverflowError) as exc:
                 if isinstance(exc, ParameterError):
                     raise
@@ -158,7 +243,7 @@ class Plan:
         return cls(tuple(items), alternate=alternate)
 
     @classmethod
-    def of(cls, designs: Sequence[tuple[Design, int]]) -> Plan:
+    def of(cls, designs: Sequence[tuple[TrialShape, int]]) -> Plan:
         """A plan from (design, n_trials) pairs, e.g. from the planner."""
         return cls(tuple(PlanItem(design, n) for design, n in designs))
 
@@ -175,7 +260,11 @@ def check_session_plan(plan: Plan, protocol: str | None) -> Plan:
     """
     for number, item in enumerate(plan.items, start=1):
         try:
-            check_leg(protocol, item.design.l_m, "l")
+            design = item.design
+            if isinstance(design, PathDesign):
+                check_leg(protocol, design.side_m, "side")
+            else:
+                check_leg(protocol, design.l_m, "l")
             RANGES["plan_n"].check("n", item.n_trials)
         except ParameterError as exc:
             raise ParameterError(f"plan design {number} ({item.to_text()}): {exc}") from None
@@ -212,9 +301,13 @@ def parse_plan(text: str, default_variant: str = "turn") -> Plan:
 
 def _parse_item(text: str, default_variant: str) -> PlanItem:
     values: dict[str, str] = {}
+    key = ""
     for field in text.split(","):
-        key, sep, value = field.partition("=")
-        key, value = key.strip().lower(), value.strip()
+        name, sep, value = field.partition("=")
+        if not sep and key == "path" and field.strip():
+            values["path"] += "," + field.strip()  # the path's own commas
+            continue
+        key, value = name.strip().lower(), value.strip()
         if not sep or not key or not value:
             raise ParameterError(f"expected key=value, got {field.strip()!r}")
         if key not in _KEYS:
@@ -222,19 +315,30 @@ def _parse_item(text: str, default_variant: str) -> PlanItem:
         if key in values:
             raise ParameterError(f"{key} is given twice")
         values[key] = value
+    if "path" in values:
+        others = [k for k in ("k", "l", "variant") if k in values]
+        if others:
+            raise ParameterError(f"a path design takes path and n only, not {', '.join(others)}")
+        if "n" not in values:
+            raise ParameterError("missing n")
+        return PlanItem(parse_path_design(values["path"]), _whole(values["n"]))
     missing = [key for key in ("k", "l", "n") if key not in values]
     if missing:
         raise ParameterError(f"missing {', '.join(missing)}")
     k = _number(values["k"], "k")
     l_m = _number(values["l"], "l")
-    try:
-        n = int(values["n"])
-    except ValueError:
-        raise ParameterError(f"n must be a whole number, got {values['n']!r}") from None
+    n = _whole(values["n"])
     variant = values.get("variant", default_variant).lower()
     if variant not in VARIANTS:
         raise ParameterError(f"variant must be one of {', '.join(VARIANTS)}, got {variant!r}")
     return PlanItem(Design(k, l_m, variant), n)
+
+
+def _whole(text: str) -> int:
+    try:
+        return int(text)
+    except ValueError:
+        raise ParameterError(f"n must be a whole number, got {text!r}") from None
 
 
 def _number(text: str, key: str) -> float:

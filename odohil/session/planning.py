@@ -127,9 +127,14 @@ def make_plan(request: PlanRequest) -> PlannedExperiment:
             written = parse_plan(request.evaluate, default_variant(description))
         except OdohilError as exc:
             raise ParameterError(f"--evaluate: {exc}") from None
+        if written.has_paths:
+            raise ParameterError(
+                f"--evaluate {written.to_text()}: the planner scores forth-and-back designs; "
+                "a plan with general paths (path=...) is run as given"
+            )
         turns = turn_designs(written, description)
         plan = evaluate_plan(
-            [(item.design, item.n_trials) for item in written.items],
+            list(written.line_items),
             prior,
             description=description,
             targets=targets,

@@ -38,6 +38,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 from odohil.science.floor_marks import PosePrior
+from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
 
 if TYPE_CHECKING:
@@ -60,7 +61,7 @@ class TrialContext:
         trial: trial number in the plan (1-based).
         attempt: attempt number (1-based).
         n_trials: trials in the plan.
-        design: the design driven.
+        design: the design driven (forth-and-back, or a general path).
         labels: names of the tape distances, in the order they are asked for.
         start: the data ``at_start`` returned (journaled).
         end: the data ``at_end`` returned (journaled; empty before).
@@ -84,7 +85,7 @@ class TrialContext:
     trial: int
     attempt: int
     n_trials: int
-    design: Design
+    design: Design | PathDesign
     labels: tuple[str, ...]
     start: Mapping[str, Any] = field(default_factory=dict)
     end: Mapping[str, Any] = field(default_factory=dict)

@@ -25,6 +25,8 @@ import numpy as np
 from odohil.errors import JournalError, OdohilError, ParameterError
 from odohil.science.estimators import Observation
 from odohil.science.limits import RANGES
+from odohil.science.path_designs import PathDesign
+from odohil.science.path_trials import Direction, PathTrial
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription
 from odohil.session.events import (
@@ -50,7 +52,7 @@ from odohil.session.events import (
 )
 from odohil.session.journal import Record, TornRecord, read_journal
 from odohil.session.mocap.stream import parse_tcp_url
-from odohil.session.plan import Plan, check_session_plan
+from odohil.session.plan import Plan, TrialShape, check_session_plan, driven_backward
 from odohil.session.pose_sources import OPERATOR, kind_names
 from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.trial_files import Trial, TrialSet
@@ -131,7 +133,7 @@ class CompletedTrial:
     Attributes:
         trial: trial number in the plan (1-based).
         attempt: the attempt that completed it.
-        design: its design.
+        design: its design as driven (forth-and-back, or a general path).
         design_index: index of the design in the plan.
         encoder_end_pose: (x m, y m, theta rad) the encoders reported.
         pose_change: solved (dx m, dy m, dtheta rad).
@@ -150,7 +152,7 @@ class CompletedTrial:
 
     trial: int
     attempt: int
-    design: Design
+    design: TrialShape
     design_index: int
     encoder_end_pose: tuple[float, float, float]
     pose_change: tuple[float, float, float]
@@ -424,7 +426,7 @@ def _trial_start(state: SessionState, event: TrialStart, seq: int) -> SessionSta
             f"record {seq}: trial {trial} runs design {design_index}, the plan says "
             f"{plan.design_index(trial)}"
         )
-    if event.backward is not None and event.backward != plan.design_of(trial).backward:
+    if event.backward is not None and event.backward != driven_backward(plan.design_of(trial)):
         raise JournalError(
             f"record {seq}: trial {trial} was driven "
             f"{'backward' if event.backward else 'forward'}, the plan says "
@@ -525,7 +527,8 @@ def _current(state: SessionState, event: Any, seq: int, phase: Phase | None = No
 
 
 def session_trials(state: SessionState, source: str = "session") -> TrialSet:
-    """The completed trials as a trial set (raw-marks kind), in completion order.
+    """The completed forth-and-back trials as a trial set (raw-marks kind), in
+    completion order (a general path's trials are :func:`session_path_trials`').
 
     Each trial's ``line`` is the journal line of its ``solved`` record;
     ``flagged``/``note`` say when the floor-mark solution was not clear-cut or
@@ -533,9 +536,10 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
     listed in ``ambiguous``.
     """
     description = description_of_header(state)
+    line = [t for t in state.completed if isinstance(t.design, Design)]
     as_trials = [
         Trial(
-            design=t.design,
+            design=cast(Design, t.design),
             pose_change=np.array(t.pose_change, dtype=np.float64),
             pose_cov=np.array(t.cov, dtype=np.float64),
             marks=t.readings.marks(description) if t.readings is not None else None,
@@ -545,11 +549,44 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
             line=t.seq,
             number=t.trial,
         )
-        for t in state.completed
+        for t in line
     ]
-    used = tuple(x for x, t in zip(as_trials, state.completed, strict=True) if not t.ambiguous)
-    left_out = tuple(x for x, t in zip(as_trials, state.completed, strict=True) if t.ambiguous)
+    used = tuple(x for x, t in zip(as_trials, line, strict=True) if not t.ambiguous)
+    left_out = tuple(x for x, t in zip(as_trials, line, strict=True) if t.ambiguous)
     return TrialSet(trials=used, kind="marks", source=source, ambiguous=left_out)
+
+
+def session_path_trials(state: SessionState, source: str = "session") -> list[PathTrial]:
+    """Every completed, unambiguous trial as a general-path trial (a
+    forth-and-back trial as its design's encoder path), in completion order,
+    numbered by its trial number, grouped for the model checks by design
+    (a general path: its kind and direction; a forth-and-back design: its
+    label, forward or backward)."""
+    out = []
+    for t in state.completed:
+        if t.ambiguous:
+            continue
+        design = t.design
+        direction: Direction
+        family: str
+        if isinstance(design, PathDesign):
+            family = design.kind
+            direction = "ccw" if design.counter_clockwise else "cw"
+        else:
+            family = design.forward.label()  # one group a design, as the design recipe's
+            direction = "mixed"
+        out.append(
+            PathTrial(
+                path=design.path(),
+                pose_change=np.array(t.pose_change, dtype=np.float64),
+                measurement_cov=np.array(t.cov, dtype=np.float64),
+                source=source,
+                trial=t.trial,
+                family=family,
+                direction=direction,
+            )
+        )
+    return out
 
 
 def session_observations(state: SessionState) -> list[Observation]:

@@ -24,6 +24,7 @@ import numpy as np
 from odohil import units
 from odohil.errors import InconsistentMeasurementError, MeasurementError
 from odohil.science.floor_marks import PosePrior, marks_from_pose
+from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription
 from odohil.session.sources import TrialContext, check_distance, prediction
@@ -93,7 +94,7 @@ class ExpectedRange:
 
 
 def expected_ranges(
-    description: RobotDescription, design: Design, predicted: PosePrior, seed: int = 0
+    description: RobotDescription, design: Design | PathDesign, predicted: PosePrior, seed: int = 0
 ) -> tuple[ExpectedRange, ...]:
     """Per distance, the range the model expects: :data:`SAMPLES` poses drawn
     (seeded) from ``predicted`` through the forward model."""

@@ -25,7 +25,7 @@ import csv
 import math
 import re
 from collections.abc import Collection, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Literal
 
@@ -63,7 +63,12 @@ from odohil.session.outcome import (
     source_kind,
 )
 from odohil.session.plan import Plan
-from odohil.session.state import SessionState, load_session, session_trials
+from odohil.session.state import (
+    SessionState,
+    load_session,
+    session_path_trials,
+    session_trials,
+)
 from odohil.session.trial_files import (
     MAX_ANGLE_RAD,
     MAX_POSE_M,
@@ -221,7 +226,7 @@ def check_not_fitted(plan: Plan | None, designs: Sequence[Design]) -> None:
     """
     if plan is None:
         return
-    fitted = {(i.design.k, i.design.l_m, i.design.variant) for i in plan.items}
+    fitted = {(d.k, d.l_m, d.variant) for d, _ in plan.line_items}
     for design in designs:
         if (design.k, design.l_m, design.variant) in fitted:
             raise ParameterError(
@@ -299,7 +304,14 @@ def _from_trial_set(trials: TrialSet) -> ValidationTrials:
 
 def trials_of_session(state: SessionState, source: str = "session") -> ValidationTrials:
     """The solved, unambiguous trials of a (validation) session, with the
-    floor-mark solver's covariance as measurement covariance."""
+    floor-mark solver's covariance as measurement covariance (a session of
+    general paths: each trial's own path, labelled by its design)."""
+    if state.plan is not None and state.plan.has_paths:
+        trials = session_path_trials(state, source=source)
+        out = trials_of_paths(trials, source)
+        labels = tuple(t.design.label() for t in state.completed if not t.ambiguous)
+        left_out = tuple(t.trial for t in state.completed if t.ambiguous)
+        return replace(out, labels=labels, left_out=left_out)
     return _from_trial_set(session_trials(state, source=source))
 
 

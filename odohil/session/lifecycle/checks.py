@@ -199,7 +199,7 @@ def _prepare(spec: SessionSpec, done: _List) -> Prepared:
     if option is None or option.floor_marks:  # the cross distances must tell the designs apart
         done.check(
             "cross distances",
-            lambda: check_redundancy(description, [i.design for i in plan.items]),
+            lambda: check_redundancy(description, [d for d, _ in plan.line_items]),
             lambda _: "enough for every design",
         )
     done.check(
@@ -324,7 +324,11 @@ def _plan(spec: SessionSpec, state: SessionState | None, description: RobotDescr
     except ParameterError as exc:
         raise ParameterError(f"--plan: {exc}") from None
     if spec.max_leg_m is not None:
-        long = [i.design.label() for i in plan.items if i.design.l_m > spec.max_leg_m]
+        long = [
+            i.design.label()
+            for i in plan.items
+            if max(i.design.path().legs.length_m) > spec.max_leg_m
+        ]
         if long:
             raise ParameterError(
                 f"--plan: legs of {', '.join(long)} exceed --max-leg-m {spec.max_leg_m:g} m "
