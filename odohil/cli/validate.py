@@ -38,10 +38,6 @@ from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.lifecycle import SessionSpec, open_session, preflight
 from odohil.session.logs import ImportOptions
 from odohil.session.plan import Plan
-from odohil.session.pose_kinds import TrialFileSettings
-from odohil.session.pose_sources import (
-    parse_measure,
-)
 from odohil.session.robot_file import load_robot_description
 from odohil.session.state import load_session
 from odohil.session.validation import (
@@ -57,6 +53,7 @@ from odohil.session.validation_steps import (
     calibration_robot,
     check_alpha,
     drive_folder,
+    drives,
     first_trials,
     measured_trials,
     validation_document,
@@ -70,13 +67,15 @@ _HELP = (
     "--robot and import's recording options); file:HELDOUT is likewise a trial file or a "
     "recording. A general-path calibration (turns_exact = false) predicts with its turn "
     "errors.\n\n"
-    "A forth-back path is driven (--trials N, --measure fake|FILE, the port from --port or "
-    "robot.toml \\[serial]) and journaled as its own validation session, by default "
-    "SESSION/validation/<path>/, never mixed into the calibration; when that folder already "
-    "holds a finished validation of the path, its trials are tested again without driving.\n\n"
-    "A square has in-place turns and the robot protocol drives forth-and-back designs only: "
-    "give the square's measured poses with --measure FILE (columns dx_m,dy_m,dtheta_rad and "
-    "optionally sigma_x_m,sigma_y_m,sigma_theta_rad). file:CSV reads a trial file (pose rows, "
+    "A forth-back design or a general path (square, polygon, circle; cw or ccw) is driven "
+    "(--trials N, --measure fake|tcp://HOST:PORT|FILE, the port from --port or robot.toml "
+    "\\[serial]; `odohil wizard --plan path=...` drives one with the tape) and journaled as its "
+    "own validation session, by default SESSION/validation/<path>/, never mixed into the "
+    "calibration; when that folder already holds a finished validation of the path, its trials "
+    "are tested again without driving.\n\n"
+    "A general path driven by another program: give its measured poses with --measure FILE "
+    "and no --port (columns dx_m,dy_m,dtheta_rad and optionally "
+    "sigma_x_m,sigma_y_m,sigma_theta_rad). file:CSV reads a trial file (pose rows, "
     "or raw distances solved with the session's robot description).\n\n"
     "Each trial's predicted mean and covariance (the measurement covariance and, by the delta "
     "method, the estimate's own covariance included) are tested by a NEES and a bias "
@@ -96,7 +95,8 @@ def validate(
                       "(forth-back), or to use from a file (default: all rows).")] = None,
     measure: Annotated[str | None, option("--measure", help="`fake` (the fake robot's true "
                        "pose), `tcp://HOST:PORT` (motion capture) or a file: a trial file for a "
-                       "driven path (as run), a pose file for a square.")] = None,
+                       "driven path (as run), a pose file for a general path without "
+                       "--port.")] = None,
     port: Annotated[str | None, option("--port", help="Serial device, pty path or pyserial "
                     "URL.")] = None,
     robot_file: Annotated[Path | None, typer.Option("--robot", callback=robot_callback,
@@ -136,10 +136,11 @@ def validate(
     try:
         if vpath.kind == "file":
             _no_robot(vpath, port, measure)
-        if vpath.kind != "forth-back":
+        if not drives(vpath, port, measure):
             measured = measured_trials(
                 vpath, calibration, robot.description, recording, port, measure
             )
+            measured = first_trials(measured, trials)
         else:
             folder = drive_folder(vpath, calibration, session, out)
             measured = _drive_or_reload(
@@ -157,7 +158,8 @@ def validate(
                 session,
                 console,
             )
-        measured = first_trials(measured, trials)
+            # a driven trial the tape found ambiguous is left out, not redone
+            measured = first_trials(measured, min(trials or len(measured), len(measured)))
         tested = check_trials(measured, result, alpha)
     except bad as exc:
         raise bad_input(exc, console) from None
@@ -176,13 +178,8 @@ def _no_robot(vpath: ValidationPath, port: str | None, measure: str | None) -> N
     if port is not None or measure is not None:
         raise ParameterError(
             f"--path {vpath.text} reads its trials from the file: --port and --measure "
-            "are not used (to drive, give --path forth-back:K,L)"
+            "are not used (to drive, give --path forth-back:K,L or square:SIDE)"
         )
-
-
-def _file_measure(measure: str | None) -> bool:
-    """Whether ``--measure`` names a trial file (of a square's measured poses)."""
-    return measure is not None and isinstance(parse_measure(measure).settings, TrialFileSettings)
 
 
 def _drive_or_reload(
@@ -200,8 +197,9 @@ def _drive_or_reload(
     session: Path,
     console: Console,
 ) -> ValidationTrials:
-    """Drive a forth-back validation session in ``folder``, or re-read a finished one."""
-    assert vpath.design is not None
+    """Drive a validation session of ``vpath`` in ``folder``, or re-read a finished one."""
+    drivable = vpath.drivable
+    assert drivable is not None
     if (folder / "journal.jsonl").is_file():
         state = load_session(folder).state
         settings = state.header.get("settings", {})
@@ -221,7 +219,7 @@ def _drive_or_reload(
         )
     spec = SessionSpec(
         folder, "new", Path(robot_path) if robot_path else None, robot_toml=toml,
-        plan=Plan.of([(vpath.design, trials)]), measure=measure, port=port, baud=baud,
+        plan=Plan.of([(drivable, trials)]), measure=measure, port=port, baud=baud,
         truth_socket=truth_socket, seed=seed, purpose="validate",
         settings={"validation_of": str(session.resolve()), "validation_path": vpath.text},
     )  # fmt: skip

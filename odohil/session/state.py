@@ -56,6 +56,7 @@ from odohil.session.plan import Plan, TrialShape, check_session_plan, driven_bac
 from odohil.session.pose_sources import OPERATOR, kind_names
 from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.trial_files import Trial, TrialSet
+from odohil.units import wrap_angle
 
 FORMAT = 1
 """Version of the journal's event schema."""
@@ -561,12 +562,21 @@ def session_path_trials(state: SessionState, source: str = "session") -> list[Pa
     forth-and-back trial as its design's encoder path), in completion order,
     numbered by its trial number, grouped for the model checks by design
     (a general path: its kind and direction; a forth-and-back design: its
-    label, forward or backward)."""
+    label).
+
+    Each pose change is referred to the design's nominal encoder path: the
+    encoders' departure from its nominal end pose (each leg and turn stops
+    within the driver's tolerance of its target, and a robot's turns may stop
+    short or long systematically) is taken off, to first order, as the
+    predictive pose adds it (odohil/science/pose_selection.py); otherwise it
+    would be read as a turn or distance error."""
     out = []
     for t in state.completed:
         if t.ambiguous:
             continue
         design = t.design
+        departure = np.array(t.encoder_end_pose) - np.array(design.path().encoder_end_pose())
+        departure[2] = wrap_angle(float(departure[2]))
         direction: Direction
         family: str
         if isinstance(design, PathDesign):
@@ -578,7 +588,7 @@ def session_path_trials(state: SessionState, source: str = "session") -> list[Pa
         out.append(
             PathTrial(
                 path=design.path(),
-                pose_change=np.array(t.pose_change, dtype=np.float64),
+                pose_change=np.array(t.pose_change, dtype=np.float64) - departure,
                 measurement_cov=np.array(t.cov, dtype=np.float64),
                 source=source,
                 trial=t.trial,

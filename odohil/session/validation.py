@@ -11,10 +11,14 @@ unambiguous trials). The validation trials come from:
   journal never sees these trials, so they are never mixed into its fit;
 - a trial file in the existing format (``--path file:CSV``,
   odohil/session/trial_files.py), its rows naming their designs;
-- a file of pose changes for a named path (``--path square:SIDE``, which the
-  ``Robot`` protocol cannot drive): columns ``dx_m,dy_m,dtheta_rad`` and
-  optionally ``sigma_x_m,sigma_y_m,sigma_theta_rad`` (measurement standard
-  deviations; 0 when absent).
+- a validation session of a general path (``--path square:SIDE[,cw|ccw]``,
+  ``polygon:N,SIDE[,cw|ccw]``, ``circle:RADIUS,N[,cw|ccw]``;
+  odohil/science/path_designs.py) driven by the engine likewise, in
+  ``SESSION/validation/<slug>/``;
+- a file of pose changes for such a path, driven by another program
+  (``--path square:SIDE --measure FILE``, no ``--port``): columns
+  ``dx_m,dy_m,dtheta_rad`` and optionally ``sigma_x_m,sigma_y_m,sigma_theta_rad``
+  (measurement standard deviations; 0 when absent).
 
 The test itself is :func:`odohil.science.validation.validation_test`.
 """
@@ -23,7 +27,6 @@ from __future__ import annotations
 
 import csv
 import math
-import re
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -41,8 +44,9 @@ from odohil.errors import (
 from odohil.science.estimators import EstimateResult
 from odohil.science.limits import RANGES
 from odohil.science.parameters import PARAMETER_NAMES
+from odohil.science.path_designs import PATH_KINDS, PathDesign, parse_path_design
 from odohil.science.path_trials import PathTrial
-from odohil.science.paths import Design, EncoderPath, FloatArray, Variant, square
+from odohil.science.paths import Design, EncoderPath, FloatArray, Variant
 from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import (
     DEFAULT_ALPHA,
@@ -80,11 +84,14 @@ from odohil.session.trial_files import (
 
 VALIDATION_FOLDER = "validation"
 """Sub-folder of a calibration session that holds its validation sessions."""
-PATH_SYNTAX = "square:SIDE, forth-back:K,L[,turn|reverse] or file:CSV"
+PATH_SYNTAX = (
+    "square:SIDE[,cw|ccw], polygon:N,SIDE[,cw|ccw], circle:RADIUS,N[,cw|ccw], "
+    "forth-back:K,L[,turn|reverse] or file:CSV"
+)
 POSE_COLUMNS = ("dx_m", "dy_m", "dtheta_rad")
 SIGMA_COLUMNS = ("sigma_x_m", "sigma_y_m", "sigma_theta_rad")
 
-PathKind = Literal["square", "forth-back", "file"]
+PathKind = Literal["path", "forth-back", "file"]
 
 
 @dataclass(frozen=True)
@@ -92,11 +99,12 @@ class ValidationPath:
     """What ``--path`` names.
 
     Attributes:
-        kind: ``square``, ``forth-back`` or ``file``.
+        kind: ``path`` (a square, polygon or circle), ``forth-back`` or ``file``.
         text: the option's text.
         design: the forth-and-back design (``forth-back``), else None.
-        path: the encoder path (``square`` and ``forth-back``), else None.
+        path: the encoder path (``path`` and ``forth-back``), else None.
         file: the trial file (``file``), else None.
+        shape: the general path (``path``), else None.
     """
 
     kind: PathKind
@@ -104,14 +112,21 @@ class ValidationPath:
     design: Design | None = None
     path: EncoderPath | None = None
     file: Path | None = None
+    shape: PathDesign | None = None
+
+    @property
+    def drivable(self) -> Design | PathDesign | None:
+        """What a validation session drives: the design or the general path
+        (None for a file)."""
+        return self.design if self.design is not None else self.shape
 
     def slug(self) -> str:
-        """A folder name for it, e.g. ``forth-back-k2-l1.5-turn``, ``square-2``."""
+        """A folder name for it, e.g. ``forth-back-k2-l1.5-turn``, ``square-2-ccw``."""
         if self.design is not None:
             d = self.design
             return f"forth-back-k{d.k:g}-l{d.l_m:g}-{d.variant}"
-        if self.kind == "square" and self.path is not None:
-            return re.sub(r"[^A-Za-z0-9.]+", "-", self.text).strip("-")
+        if self.shape is not None:
+            return self.shape.slug()
         return "file-" + (self.file.stem if self.file is not None else "trials")
 
 
@@ -123,11 +138,18 @@ def parse_validation_path(text: str) -> ValidationPath:
     """
     kind, _, rest = text.strip().partition(":")
     kind = kind.strip().lower()
+    if kind in PATH_KINDS and kind != "square":
+        try:
+            shape = parse_path_design(text)
+        except ParameterError as exc:  # it names the text and the accepted paths
+            raise ParameterError(f"--path {exc}; or forth-back:K,L or file:CSV") from None
+        return ValidationPath("path", text, path=shape.path(), shape=shape)
     try:
         if kind == "square":
-            side = _number(rest, "SIDE")
-            RANGES["side"].check("SIDE", side)
-            return ValidationPath("square", text, path=square(side))
+            # the side's range named as the option gives it, then the rest
+            RANGES["side"].check("SIDE", _number(rest.partition(",")[0], "SIDE"))
+            shape = parse_path_design(text)
+            return ValidationPath("path", text, path=shape.path(), shape=shape)
         if kind in ("forth-back", "forth-and-back"):
             parts = [p.strip() for p in rest.split(",")]
             if len(parts) not in (2, 3):
@@ -218,7 +240,7 @@ def load_calibration(
     return Calibration(estimate_state(state, exclude, source=str(source)), state)
 
 
-def check_not_fitted(plan: Plan | None, designs: Sequence[Design]) -> None:
+def check_not_fitted(plan: Plan | None, designs: Sequence[Design | PathDesign]) -> None:
     """A validation design must not be one the calibration was fitted on.
 
     Raises:
@@ -227,7 +249,15 @@ def check_not_fitted(plan: Plan | None, designs: Sequence[Design]) -> None:
     if plan is None:
         return
     fitted = {(d.k, d.l_m, d.variant) for d, _ in plan.line_items}
+    paths = {item.design for item in plan.items if isinstance(item.design, PathDesign)}
     for design in designs:
+        if isinstance(design, PathDesign):
+            if design in paths:
+                raise ParameterError(
+                    f"--path: {design.label()} is a path of the calibration's plan; "
+                    "validate on a path the fit did not use"
+                )
+            continue
         if (design.k, design.l_m, design.variant) in fitted:
             raise ParameterError(
                 f"--path: {design.forward.label()} is a design of the calibration's plan; "

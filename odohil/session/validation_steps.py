@@ -82,6 +82,17 @@ def calibration_robot(calibration: Calibration, robot: Path | None) -> Calibrati
     return CalibrationRobot(parse_robot_description(toml, str(robot)), toml, str(robot))
 
 
+def drives(vpath: ValidationPath, port: str | None, measure: str | None) -> bool:
+    """Whether ``--path`` is driven and journaled as a validation session (a
+    forth-and-back design; a general path unless its measured poses are
+    given with ``--measure FILE`` and no ``--port``), else read from a file."""
+    if vpath.kind == "file":
+        return False
+    if vpath.kind == "path":
+        return port is not None or not _file_measure(measure)
+    return True
+
+
 def measured_trials(
     vpath: ValidationPath,
     calibration: Calibration,
@@ -90,12 +101,14 @@ def measured_trials(
     port: str | None,
     measure: str | None,
 ) -> ValidationTrials:
-    """The held-out trials of ``--path file:HELDOUT`` or ``--path square:SIDE``
-    (its measured poses in ``--measure FILE``); nothing is driven.
+    """The held-out trials of ``--path file:HELDOUT`` or of a general path
+    whose measured poses are in ``--measure FILE`` (no ``--port``; see
+    :func:`drives`); nothing is driven.
 
     Raises:
-        ParameterError: a square without a pose file (or with ``--port``), a
-            file design the calibration was fitted on.
+        ParameterError: a general path without a pose file (or with
+            ``--port``: it is driven), a file design the calibration was
+            fitted on.
         TrialFileError, RecordingError, MeasurementError: unusable trials.
     """
     if vpath.kind == "file":
@@ -104,12 +117,11 @@ def measured_trials(
         plan = None if calibration.state is None else calibration.state.plan
         check_not_fitted(plan, [d.forward for d in measured.designs])
         return measured
-    assert vpath.path is not None  # a square
-    if port is not None or not _file_measure(measure):
+    assert vpath.path is not None  # a general path
+    if drives(vpath, port, measure):
         raise ParameterError(
-            f"--path {vpath.text}: a square has in-place turns and the robot protocol "
-            "drives forth-and-back designs only; give the square's measured poses "
-            "with --measure FILE (no --port)"
+            f"--path {vpath.text} is driven with --port and --measure fake|tcp://|FILE; "
+            "its measured poses are read from --measure FILE only without --port"
         )
     return read_path_poses(Path(str(measure)), vpath.path, vpath.text)
 
@@ -117,20 +129,21 @@ def measured_trials(
 def drive_folder(
     vpath: ValidationPath, calibration: Calibration, session: Path, out: Path | None
 ) -> Path:
-    """The folder a driven (forth-back) validation is journaled in: ``out``,
-    else SESSION/validation/<path>.
+    """The folder a driven validation (a forth-and-back design or a general
+    path) is journaled in: ``out``, else SESSION/validation/<path slug>.
 
     Raises:
         ParameterError: the calibration is no session, or was fitted on the design.
     """
-    assert vpath.design is not None
+    drivable = vpath.drivable
+    assert drivable is not None
     if calibration.state is None:
         raise ParameterError(
             f"--path {vpath.text} drives the robot and journals a validation session "
             f"beside the calibration's: {session} is no session; give the held-out "
             "trials with --path file:HELDOUT"
         )
-    check_not_fitted(calibration.state.plan, [vpath.design])
+    check_not_fitted(calibration.state.plan, [drivable])
     return out or default_folder(session, vpath)
 
 
