@@ -64,7 +64,7 @@ from odohil.errors import (
 from odohil.science.estimators import EstimateResult, IncrementalEstimator, Observation
 from odohil.science.floor_marks import PosePrior
 from odohil.science.paths import Design
-from odohil.science.pose_selection import ParameterBelief, predictive_pose
+from odohil.science.pose_selection import SCALE_FLOOR_M, ParameterBelief, predictive_pose
 from odohil.science.robot_description import RobotDescription
 from odohil.session.events import (
     Estimate,
@@ -605,8 +605,14 @@ class SessionEngine:
             measured = self.source.pose_change(ctx, self._source_log)
         finally:
             self._predicted = None
+        nominal_end = design.path().encoder_end_pose()
         judged = judge(
-            opened.trial, measured, predicted, opened.encoder_end_pose, opened.trajectory
+            opened.trial,
+            measured,
+            predicted,
+            opened.encoder_end_pose,
+            opened.trajectory,
+            closed=math.hypot(nominal_end[0], nominal_end[1]) < SCALE_FLOOR_M,
         )
         if judged.refusal:  # void: the trial is redone once the measurement is fixed
             self._log(Void(opened.trial, opened.attempt, reason=judged.refusal))

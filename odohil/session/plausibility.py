@@ -102,14 +102,20 @@ def judge(
     predicted: PoseDistribution,
     encoder_end_pose: Pose,
     trajectory: Sequence[Sequence[float]] = (),
+    closed: bool = False,
 ) -> Judgement:
-    """Judge one measured pose change (see the module docstring)."""
+    """Judge one measured pose change (see the module docstring). ``closed``:
+    the path ends where it started (a square, a circle, a two-way design), so
+    its end's distance from the start is noise on both sides and not judged
+    for scale (its farthest point still is, when the source saw the path)."""
     if measured.ambiguous or measured.flagged:
         return Judgement(measured)
     excursion = None
     if measured.excursion_m is not None and trajectory:
         excursion = (measured.excursion_m, encoder_excursion(trajectory, encoder_end_pose))
     check = pose_check(measured.pose, measured.covariance, predicted, encoder_end_pose, excursion)
+    if closed and check.scales and check.scales[0].off:
+        check = replace(check, scales=(replace(check.scales[0], off=False), *check.scales[1:]))
     kept = replace(measured, details={**measured.details, "check": check.to_json()})
     if check.implausible:
         return Judgement(kept, refusal=_refusal(trial, check, measured, predicted))
