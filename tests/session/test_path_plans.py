@@ -8,17 +8,21 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import fakes
 from odohil.errors import ParameterError
 from odohil.robots import __file__ as robots_init
+from odohil.science.floor_marks import PosePrior
 from odohil.science.path_designs import PathDesign, parse_path_design
 from odohil.science.paths import Design
 from odohil.session.floor_space import check_floor
 from odohil.session.lifecycle import SessionSpec, open_session, preflight, require, run_session
 from odohil.session.outcome import estimate_state
 from odohil.session.plan import Plan, parse_plan, path_floor_m
+from odohil.session.plausibility import judge
+from odohil.session.pose_source import MeasuredPose
 from odohil.session.robots import parse_description
 from odohil.session.start_pose import StartPose
 from odohil.session.state import load_session, session_path_trials
@@ -147,3 +151,23 @@ def test_a_session_of_squares_is_driven_journaled_and_estimated(
     if recipe.result is not None:
         names = [p.name for p in recipe.result.parameters]
         assert ("e_turn" in " ".join(names)) == (backend == "create2")
+
+
+def test_a_closed_paths_end_distance_is_not_judged_for_scale() -> None:
+    """The finding: a 1 m square on the fake Create 2 ended 0.068 m from its
+    start by the encoders (each turn within its tolerance) and 0.013 m by the
+    truth; both are noise around the start, and the trial was refused as
+    implausible ("displacement 0.013 m where the encoders say 0.068 m")."""
+    sd = 0.03
+    predicted = PosePrior(mean=np.array([0.05, -0.04, 0.03]), cov=np.diag([sd**2, sd**2, 0.04**2]))
+    measured = MeasuredPose(
+        pose=(0.010, -0.008, 0.02),
+        covariance=((1e-6, 0.0, 0.0), (0.0, 1e-6, 0.0), (0.0, 0.0, 1e-6)),
+    )
+    encoders = (0.055, -0.042, 0.03)
+    refused = judge(7, measured, predicted, encoders)
+    assert "implausible" in refused.refusal
+    assert "displacement 0.013 m where the encoders say 0.069 m" in refused.refusal
+    kept = judge(7, measured, predicted, encoders, closed=True)
+    assert kept.refusal == ""
+    assert kept.measured.details["check"]["displacement_m"] == pytest.approx(0.0128, abs=1e-4)

@@ -433,3 +433,28 @@ def test_the_wizard_connects_with_robot_toml_serial_and_says_so(tmp_path: Path) 
     assert child.exitstatus == 130
     header = read_journal(tmp_path / "s").records[0].data
     assert (header["settings"]["port"], header["settings"]["baud"]) == (emulator.device, 9600)
+
+
+def test_the_wizard_drives_a_plan_of_squares(tmp_path: Path) -> None:
+    """Issue 19: a plan may name general paths; the operator marks the floor
+    as for a forth-and-back trial, the wizard drives the square and takes the
+    tape's distances; the session estimates with the general-path recipe."""
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT_TOML)
+    folder = tmp_path / "session"
+    args = ["--seed", "6", "--time-scale", "20", "--no-pacing"]
+    with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
+        child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan",
+                        "path=square:0.5,cw,n=2", "--session", str(folder)])  # fmt: skip
+        for trial in (1, 2):
+            child.expect(re.escape(f"Trial {trial}/2") + r".*square 0\.5 m cw, 2 m of driving")
+            values = _marks(child, truth)
+            child.expect(_prompt(0))
+            _type_all(child, values, f"Trial {trial} (solved|left out)")
+        child.expect(r"Session complete:\S* 2 trials")
+        child.expect(pexpect.EOF)
+        child.close()
+    state = replay(read_journal(folder).records)
+    assert [t.design.label() for t in state.completed] == ["square 0.5 m cw"] * 2
+    assert state.plan is not None
+    assert state.plan.to_text() == "path=square:0.5,cw,n=2"
