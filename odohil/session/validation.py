@@ -476,20 +476,22 @@ def read_path_poses(file: Path, path: EncoderPath, label: str) -> ValidationTria
 def predictions_of(trials: ValidationTrials, calibration: EstimateResult) -> list[PathPrediction]:
     """Each trial's prediction at the calibration's parameters (with its turn
     errors when it fitted any), one per trial (trials of one path share one)."""
-    names = [p.name for p in calibration.parameters]
-    values = [p.value for p in calibration.parameters]
-    general = len(names) > len(PARAMETER_NAMES)
     cache: dict[EncoderPath, PathPrediction] = {}
     out = []
     for path in trials.paths:
         if path not in cache:
-            cache[path] = (
-                predict_fitted(path, names, values)
-                if general
-                else predict_path(path, calibration.params)
-            )
+            cache[path] = predict_calibrated(path, calibration)
         out.append(cache[path])
     return out
+
+
+def predict_calibrated(path: EncoderPath, calibration: EstimateResult) -> PathPrediction:
+    """One path's prediction at the calibration's parameters (with its turn
+    errors when it fitted any: the Jacobian then spans every fitted parameter)."""
+    names = [p.name for p in calibration.parameters]
+    if len(names) > len(PARAMETER_NAMES):
+        return predict_fitted(path, names, [p.value for p in calibration.parameters])
+    return predict_path(path, calibration.params)
 
 
 def parameter_covariance(calibration: EstimateResult) -> FloatArray | None:
@@ -558,8 +560,7 @@ def plot_data(trials: ValidationTrials, calibration: EstimateResult) -> list[Val
         groups.setdefault(label, []).append(i)
     plots = []
     for label, rows in groups.items():
-        reference = trials.paths[rows[0]]
-        prediction = predict_path(reference, calibration.params)
+        prediction = predict_calibrated(trials.paths[rows[0]], calibration)
         mirror = np.array([-1.0, 1.0, -1.0])
         first = trials.backward[rows[0]]
         points = np.array(

@@ -126,6 +126,12 @@ def test_a_square_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(
     # a finished validation is tested again without a robot
     again, _, err = odohil("validate", str(session), "--path", "square:1.0,cw", "--json")
     assert again == 0, err
+    # the report shows the four validations against their predicted ellipses
+    # (a calibration with turn errors predicts with all its parameters)
+    code, _, err = odohil("report", str(session), "--out", str(tmp_path / "report"), "--force")
+    assert code == 0, err
+    page = (tmp_path / "report" / "index.html").read_text(encoding="utf-8")
+    assert page[page.index('id="validation"') :].count('<figure id="validation-') == 4
     # the calibration's journal never saw the 1 m squares
     log = (session / "journal.jsonl").read_text(encoding="utf-8")
     assert "square:1," not in log
