@@ -35,7 +35,8 @@ from odohil.session.outcome import parse_exclude
 
 _PLAN_HELP = (
     'Designs and trial counts, e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30" '
-    "(k pairs, l metres, n trials, optional variant=turn|reverse)."
+    "(k pairs, l metres, n trials, optional variant=turn|reverse), or general paths, e.g. "
+    '"path=square:1.0,cw,n=10" (square:SIDE, polygon:N,SIDE, circle:RADIUS,N; cw|ccw).'
 )
 _ALLOW_FEW_HELP = (
     "Run a plan with fewer trials a design than the planner's minimum (10); "
