@@ -30,7 +30,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from tests.cli.test_validate_paths import ROBOTS  # noqa: E402
+from tests.cli.test_validate_paths import MAX_RESUMES, ROBOTS  # noqa: E402
 from tests.session.test_trust_runs import readme_robot  # noqa: E402
 
 DIRECTIONS = ("cw", "ccw")
@@ -46,6 +46,21 @@ def odohil(*args: str) -> tuple[int, str, str]:
         cwd=ROOT,
     )
     return done.returncode, done.stdout, done.stderr
+
+
+def resumed(code: int, err: str, folder: Path) -> tuple[int, str, int]:
+    """Resume a run cut off by an error (exit 1, its session journaled) as its
+    user would; (exit status, stderr, resumes)."""
+    resumes = 0
+    while code == 1 and "odohil resume" in err and resumes < MAX_RESUMES:
+        resumes += 1
+        code, _, err = odohil("resume", str(folder), "--from-here", "--json")
+    return code, err, resumes
+
+
+def last_error(err: str) -> str:
+    lines = [line for line in err.splitlines() if line.startswith("error")]
+    return lines[-1] if lines else (err.strip().splitlines() or [""])[-1]
 
 
 def robot_option(robot: str, folder: Path) -> str:
@@ -68,10 +83,12 @@ def one_seed(robot: str, seed: int, root: Path) -> list[dict[str, object]]:
         "--robot", option, "--plan", ROBOTS[robot]["plan"], "--measure", "fake",
         "--seed", str(seed), "--session", str(session), "--json",
     )  # fmt: skip
+    first_error = last_error(err) if code == 1 else ""
+    code, err, calibration_resumes = resumed(code, err, session)
     rows: list[dict[str, object]] = []
     if code != 0:
-        last = err.strip().splitlines()[-1] if err.strip() else ""
-        return [{"robot": robot, "seed": seed, "cell": "calibration", "exit": code, "note": last}]
+        note = last_error(err)
+        return [{"robot": robot, "seed": seed, "cell": "calibration", "exit": code, "note": note}]
     calibrated_s = time.monotonic() - started
     other = seed + 100
     for direction in DIRECTIONS:
@@ -79,11 +96,19 @@ def one_seed(robot: str, seed: int, root: Path) -> list[dict[str, object]]:
             url = ROBOTS[robot]["url"].format(seed=other)
             url += ROBOTS[robot]["wrong"] if fake == "wrong" else ""
             started = time.monotonic()
-            code, out, err = odohil(
+            out_folder = folder / f"{direction}-{fake}"
+            args = [
                 "validate", str(session), "--port", url, "--robot", option,
                 "--path", f"square:1.0,{direction}", "--trials", "15", "--measure", "fake",
-                "--seed", str(other), "--out", str(folder / f"{direction}-{fake}"), "--json",
-            )  # fmt: skip
+                "--seed", str(other), "--out", str(out_folder), "--json",
+            ]  # fmt: skip
+            code, out, err = odohil(*args)
+            resumes, error = 0, ""
+            if code == 1:
+                error = last_error(err)
+                code, err, resumes = resumed(code, err, out_folder)
+                if code in (0, 3):
+                    code, out, err = odohil(*args)
             row: dict[str, object] = {
                 "robot": robot,
                 "seed": seed,
@@ -91,7 +116,11 @@ def one_seed(robot: str, seed: int, root: Path) -> list[dict[str, object]]:
                 "exit": code,
                 "seconds": round(time.monotonic() - started, 1),
                 "calibration_s": round(calibrated_s, 1),
+                "resumes": resumes,
+                "calibration_resumes": calibration_resumes,
             }
+            if error or first_error:
+                row["cut_off_by"] = error or first_error
             try:
                 data = json.loads(out)
                 verdict = data["verdict"]
@@ -127,8 +156,8 @@ def main() -> None:
         print(json.dumps(row))
     print(f"\nload average before: {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}; "
           f"wall time {time.monotonic() - started:.0f} s\n")  # fmt: skip
-    print("| robot | direction | fake | seeds | exit 0 (pass) | exit 3 (fail) | other |")
-    print("|---|---|---|---|---|---|---|")
+    print("| robot | direction | fake | seeds | exit 0 (pass) | exit 3 (fail) | other | resumed |")
+    print("|---|---|---|---|---|---|---|---|")
     for robot in robots:
         for direction in DIRECTIONS:
             for fake in ("calibrated", "wrong"):
@@ -142,7 +171,7 @@ def main() -> None:
                     f"| {robot} | {direction} | {fake} | {len(codes)} | {codes.count(0)} | "
                     f"{codes.count(3)} | {other}"
                     + (f" ({broken} calibration(s) failed)" if broken else "")
-                    + " |"
+                    + f" | {sum(int(str(r['resumes'])) for r in cell)} |"
                 )
 
 
