@@ -26,6 +26,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from validate_paths import odohil, resumed, seeds_of  # noqa: E402
+
 from tests.cli.test_turn_scale_paths import PLAN, TURN_SCALE, URL  # noqa: E402
 
 
