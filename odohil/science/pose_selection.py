@@ -68,7 +68,7 @@ from odohil.science.floor_marks import (
     pose_covariance,
     solve_marks,
 )
-from odohil.science.parameters import ErrorParameters
+from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
 from odohil.science.robot_description import ParameterPriors, RobotDescription
@@ -162,11 +162,15 @@ class ParameterBelief:
     @classmethod
     def from_result(cls, result: EstimateResult, priors: ParameterPriors) -> ParameterBelief:
         """An estimate's values, standard errors and correlation (see
-        :meth:`from_estimate`)."""
+        :meth:`from_estimate`): its four parameters (a general-path fit's turn
+        errors left out: the belief is of the four-parameter model)."""
+        names = [p.name for p in result.parameters]
+        rows = [names.index(name) for name in PARAMETER_NAMES]
+        correlation = result.correlation
         return cls.from_estimate(
-            [p.value for p in result.parameters],
-            [p.stderr for p in result.parameters],
-            result.correlation,
+            [result.parameters[i].value for i in rows],
+            [result.parameters[i].stderr for i in rows],
+            None if correlation is None else [[correlation[i][j] for j in rows] for i in rows],
             priors,
         )
 

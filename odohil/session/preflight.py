@@ -45,7 +45,7 @@ def turn_designs(plan: Plan, description: RobotDescription) -> list[str]:
     paths with the turn errors (:func:`estimability`), its turn designs too."""
     if description.robot.turns_exact or not designs_only(plan_items(plan)):
         return []
-    return [i.design.label() for i in plan.items if i.design.variant == "turn"]
+    return [d.label() for d, _ in plan.line_items if d.variant == "turn"]
 
 
 def turn_warning(plan: Plan, description: RobotDescription) -> str | None:

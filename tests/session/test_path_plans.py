@@ -114,7 +114,7 @@ def test_a_session_of_squares_is_driven_journaled_and_estimated(
     spec = SessionSpec(
         tmp_path / "session",
         robot_path=ROBOTS / f"{backend}.toml",
-        plan="path=square:0.5,cw,n=3;path=square:0.5,ccw,n=3",
+        plan="path=square:0.5,cw,n=4;path=square:0.5,ccw,n=4",
         measure="fake",
         port=BACKENDS[backend],
         seed=1,
@@ -125,15 +125,15 @@ def test_a_session_of_squares_is_driven_journaled_and_estimated(
     assert outcome.status == "finished", outcome.message
     state = load_session(spec.folder).state
     assert state.finished
-    assert [t.design.label() for t in state.completed] == ["square 0.5 m cw"] * 3 + [
+    assert [t.design.label() for t in state.completed] == ["square 0.5 m cw"] * 4 + [
         "square 0.5 m ccw"
-    ] * 3
+    ] * 4
     # the tape's floor marks may leave a near-zero pose change ambiguous
     kept = [t for t in state.completed if not t.ambiguous]
     trials = session_path_trials(state)
     assert [t.trial for t in trials] == [t.trial for t in kept]
     assert [(t.family, t.direction) for t in trials] == [
-        ("square", "cw" if t.trial <= 3 else "ccw") for t in kept
+        ("square", "cw" if t.trial <= 4 else "ccw") for t in kept
     ]
     # every square ends about where it started, by the encoders (each leg and
     # turn within the driver's tolerance of its target)
