@@ -358,7 +358,7 @@ def test_resume_after_ctrl_c_mid_motion_asks_to_put_the_robot_back(tmp_path: Pat
         child.expect(pexpect.EOF)
         child.close()
         # the two trials of the emulator at seed 3, typed exactly: trusted (too few to
-        # export, the verdict line says); the interrupted motion is void, its draws unused
+        # export, the verdict line says; the same in three runs)
         assert child.exitstatus == 0, child.before
     kinds = [r.kind for r in read_journal(folder).records]
     assert kinds.count(ev.START_POSE) == 2
