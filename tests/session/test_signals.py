@@ -381,7 +381,7 @@ def fake(
         with Create2Process(args, use_cli=True) as create2:
             yield Fake(
                 "create2", create2, "create2", "k=0.5,l=0.5,n=2", 0.0, _create2_stops,
-                "fakecreate2://?seed=7&time_scale=20", (3, "failed"),
+                "fakecreate2://?seed=7&time_scale=20&max_gap_ms=15", (3, "failed"),
             )  # fmt: skip
 
 
