@@ -22,6 +22,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import subprocess
 import sys
 import threading
 import time
@@ -178,3 +179,10 @@ def run(args: list[str], timeout_s: float = 120.0) -> tuple[int, str, str]:
         deadline = time.monotonic() + timeout_s
         out, err = process.communicate(max(0.0, deadline - time.monotonic()))
         return process.wait(), out, err
+
+
+def completed(command: list[str], timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
+    """``subprocess.run(command, capture_output=True, text=True, timeout=...)`` for
+    ``command = [the odohil console script, *ARGS]``, forked (module docstring)."""
+    code, out, err = run(command[1:], timeout)
+    return subprocess.CompletedProcess(command, code, out, err)
