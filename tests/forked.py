@@ -44,8 +44,14 @@ _CONTEXT = multiprocessing.get_context("forkserver")
 _CONTEXT.set_forkserver_preload(PRELOAD)
 
 
-def _child(args: list[str], out: reduction.DupFd, err: reduction.DupFd) -> None:
-    """In the forked process: stdout and stderr to the pipes, then the console script."""
+def _child(
+    args: list[str], out: reduction.DupFd, err: reduction.DupFd, env: dict[str, str] | None
+) -> None:
+    """In the forked process: the environment, stdout and stderr to the pipes, then
+    the console script."""
+    if env is not None:
+        os.environ.clear()
+        os.environ.update(env)
     for fd, pipe in ((1, out), (2, err)):
         write_end = pipe.detach()
         os.dup2(write_end, fd)
@@ -88,15 +94,17 @@ class Forked:
 
     Args:
         args: the command line after ``odohil``.
+        env: its environment (default: the fork server's, which is the test
+            process's when the server started).
     """
 
-    def __init__(self, args: list[str]) -> None:
+    def __init__(self, args: list[str], env: dict[str, str] | None = None) -> None:
         out_r, out_w = os.pipe()
         err_r, err_w = os.pipe()
         try:
             self._process = _CONTEXT.Process(
                 target=_child,
-                args=(list(args), reduction.DupFd(out_w), reduction.DupFd(err_w)),
+                args=(list(args), reduction.DupFd(out_w), reduction.DupFd(err_w), env),
             )
             self._process.start()
         finally:
@@ -168,21 +176,25 @@ class Forked:
         self.close()
 
 
-def start(args: list[str]) -> Forked:
+def start(args: list[str], env: dict[str, str] | None = None) -> Forked:
     """``odohil ARGS`` forked from the server (module docstring)."""
-    return Forked(args)
+    return Forked(args, env)
 
 
-def run(args: list[str], timeout_s: float = 120.0) -> tuple[int, str, str]:
+def run(
+    args: list[str], timeout_s: float = 120.0, env: dict[str, str] | None = None
+) -> tuple[int, str, str]:
     """``odohil ARGS`` to its end: exit status, stdout, stderr."""
-    with start(args) as process:
+    with start(args, env) as process:
         deadline = time.monotonic() + timeout_s
         out, err = process.communicate(max(0.0, deadline - time.monotonic()))
         return process.wait(), out, err
 
 
-def completed(command: list[str], timeout: float = 120.0) -> subprocess.CompletedProcess[str]:
-    """``subprocess.run(command, capture_output=True, text=True, timeout=...)`` for
-    ``command = [the odohil console script, *ARGS]``, forked (module docstring)."""
-    code, out, err = run(command[1:], timeout)
+def completed(
+    command: list[str], timeout: float = 120.0, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """``subprocess.run(command, capture_output=True, text=True, timeout=..., env=...)``
+    for ``command = [the odohil console script, *ARGS]``, forked (module docstring)."""
+    code, out, err = run(command[1:], timeout, env)
     return subprocess.CompletedProcess(command, code, out, err)
