@@ -44,16 +44,31 @@ _CONTEXT = multiprocessing.get_context("forkserver")
 _CONTEXT.set_forkserver_preload(PRELOAD)
 
 
-def _child(
-    args: list[str], out: reduction.DupFd, err: reduction.DupFd, env: dict[str, str] | None
-) -> None:
+class _PassFd:
+    """A descriptor handed to the child when the process object is pickled for
+    the fork server (which passes it with the request, SCM_RIGHTS): the child
+    gets its own copy, and no other copy stays behind in this process (as
+    ``reduction.DupFd`` made outside pickling would, in its resource sharer)."""
+
+    def __init__(self, fd: int) -> None:
+        self.fd = fd
+
+    def __reduce__(self) -> tuple[object, tuple[object]]:
+        return (_received, (reduction.DupFd(self.fd),))
+
+
+def _received(dup: reduction.DupFd) -> int:
+    """In the child: the descriptor the fork server passed."""
+    return int(dup.detach())
+
+
+def _child(args: list[str], out: int, err: int, env: dict[str, str] | None) -> None:
     """In the forked process: the environment, stdout and stderr to the pipes, then
     the console script."""
     if env is not None:
         os.environ.clear()
         os.environ.update(env)
-    for fd, pipe in ((1, out), (2, err)):
-        write_end = pipe.detach()
+    for fd, write_end in ((1, out), (2, err)):
         os.dup2(write_end, fd)
         os.close(write_end)
     sys.argv = ["odohil", *args]
@@ -104,7 +119,7 @@ class Forked:
         try:
             self._process = _CONTEXT.Process(
                 target=_child,
-                args=(list(args), reduction.DupFd(out_w), reduction.DupFd(err_w), env),
+                args=(list(args), _PassFd(out_w), _PassFd(err_w), env),
             )
             self._process.start()
         finally:
