@@ -12,14 +12,24 @@ The journal's fsync calls still run: only where the bytes land changes.
 
 The signals the signal tests send get their default dispositions, whatever
 the shell that started pytest left ignored.
+
+typer's test runner builds the click command of the whole ``odohil`` app
+again on every ``invoke`` (every command's signature and help read anew:
+60 ms of CPU on a loaded machine, more than a parse error's whole run).
+:func:`_cached_get_command` builds it once per app and set of registered
+commands; each invocation still gets a fresh click context, as the console
+script does once per process.
 """
 
 from __future__ import annotations
 
 import os
 import signal
+from typing import Any
 
 import pytest
+import typer.main
+import typer.testing
 
 RAM_ROOT = "/dev/shm"
 """Where test folders go when it is usable (Linux's tmpfs)."""
@@ -55,3 +65,25 @@ def pytest_configure(config: pytest.Config) -> None:
         return
     if _usable(RAM_ROOT):
         os.environ["PYTEST_DEBUG_TEMPROOT"] = RAM_ROOT
+
+
+_COMMANDS: dict[tuple[int, int, int, int], Any] = {}
+_BUILD = typer.main.get_command
+
+
+def _cached_get_command(typer_instance: typer.Typer) -> Any:
+    """typer's ``get_command``, built once per app and registration state."""
+    key = (
+        id(typer_instance),
+        len(typer_instance.registered_commands),
+        len(typer_instance.registered_groups),
+        id(typer_instance.registered_callback),
+    )
+    command = _COMMANDS.get(key)
+    if command is None:
+        command = _COMMANDS[key] = _BUILD(typer_instance)
+    return command
+
+
+if hasattr(typer.testing, "_get_command"):  # the runner's only use of it
+    typer.testing._get_command = _cached_get_command

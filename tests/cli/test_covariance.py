@@ -13,19 +13,15 @@ import pytest
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import Design, square
+from tests import forked
 
 ODOHIL = shutil.which("odohil") or "odohil"
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [ODOHIL, "covariance", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-        env={**os.environ, "COLUMNS": "160", "NO_COLOR": "1"},
-    )
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    env = {**os.environ, "COLUMNS": "160", "NO_COLOR": "1"}
+    return forked.completed([ODOHIL, "covariance", *args], 120, env)
 
 
 def test_forth_and_back_closed_form_json() -> None:

@@ -5,10 +5,7 @@ dict on stderr); a re-measure by the simulated operator said in plain words
 
 from __future__ import annotations
 
-import os
 import re
-import subprocess
-from pathlib import Path
 
 import pytest
 
@@ -16,7 +13,7 @@ from odohil import units
 from odohil.session import state as ev
 from odohil.session.demo import DEMO_TRUTH
 from odohil.session.journal import read_journal
-from tests.session.test_safety import ODOHIL
+from tests.demo_run import demo_run
 
 
 def _row(table: str, name: str) -> list[str]:
@@ -25,14 +22,10 @@ def _row(table: str, name: str) -> list[str]:
 
 
 @pytest.mark.slow
-def test_demo_shows_the_truth_in_its_table_and_says_who_measured_again(tmp_path: Path) -> None:
-    done = subprocess.run(
-        [ODOHIL, "demo", "--session", str(tmp_path / "s")],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env={**os.environ, "COLUMNS": "160"},
-    )
+def test_demo_shows_the_truth_in_its_table_and_says_who_measured_again(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> None:
+    done, session = demo_run(tmp_path_factory)  # the run test_backward_prediction reads too
     assert done.returncode == 0, done.stderr
     header = _row(done.stdout, "parameter")
     assert header[-2:] == ["truth", "truth inside"]
@@ -44,7 +37,7 @@ def test_demo_shows_the_truth_in_its_table_and_says_who_measured_again(tmp_path:
         assert row[header.index("unit")] == units.unit_column(name, "paper")
     assert "{'" not in done.stderr  # no raw dict
     assert "E_R = -1 deg/m, E_T = -0.05, K_theta = 0.3 deg^2/m" in " ".join(done.stderr.split())
-    records = read_journal(tmp_path / "s").records
+    records = read_journal(session).records
     rejected = [r.data["trial"] for r in records if r.kind == ev.MEASUREMENTS_REJECTED]
     remeasured = [r.data["trial"] for r in records if r.kind == ev.REMEASURED]
     assert rejected or remeasured, "the default seed has the simulated operator measure again"

@@ -10,12 +10,12 @@ from pathlib import Path
 import pytest
 
 from odohil.science.parameters import NOMAD150
+from tests import forked
 
 
 def run(*args: str | Path) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        ["odohil", *map(str, args)], capture_output=True, text=True, timeout=120, check=False
-    )
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    return forked.completed(["odohil", *map(str, args)], timeout=120)
 
 
 @pytest.fixture(scope="module")

@@ -16,6 +16,7 @@ from odohil.science.parameters import NOMAD150, PARAMETER_NAMES
 from odohil.science.paths import Design
 from odohil.science.planner import expected_standard_errors
 from odohil.session.robot_file import load_robot_description
+from tests import forked
 
 ODOHIL = shutil.which("odohil") or "odohil"
 
@@ -31,14 +32,9 @@ cross = [["A", "B"], ["B", "C"]]
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [ODOHIL, "plan", *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=False,
-        env={**os.environ, "COLUMNS": "160", "NO_COLOR": "1"},
-    )
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    env = {**os.environ, "COLUMNS": "160", "NO_COLOR": "1"}
+    return forked.completed([ODOHIL, "plan", *args], 300, env)
 
 
 def _designs(document: dict[str, object]) -> list[tuple[Design, int]]:

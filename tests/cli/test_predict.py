@@ -13,19 +13,15 @@ import pytest
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import Design
+from tests import forked
 
 ODOHIL = shutil.which("odohil") or "odohil"
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [ODOHIL, "predict", *args],
-        capture_output=True,
-        text=True,
-        timeout=60,
-        check=False,
-        env={**os.environ, "COLUMNS": "160", "NO_COLOR": "1"},
-    )
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    env = {**os.environ, "COLUMNS": "160", "NO_COLOR": "1"}
+    return forked.completed([ODOHIL, "predict", *args], 60, env)
 
 
 def test_json_defaults_are_the_nomad150_closed_forms() -> None:

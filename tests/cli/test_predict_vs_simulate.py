@@ -14,7 +14,6 @@ import json
 import math
 import os
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +23,7 @@ import pytest
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design, Variant
 from odohil.science.simulator import discrete_means
+from tests import forked
 
 ODOHIL = shutil.which("odohil") or "odohil"
 ENV = {**os.environ, "COLUMNS": "160", "NO_COLOR": "1"}
@@ -43,9 +43,8 @@ KEYS = ("phi1", "phi2", "phi3", "phi4", "phi5", "x", "y")
 
 
 def odohil(*args: str) -> str:
-    result = subprocess.run(
-        [ODOHIL, *args], capture_output=True, text=True, timeout=300, check=False, env=ENV
-    )
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    result = forked.completed([ODOHIL, *args], 300, ENV)
     assert result.returncode == 0, result.stderr
     return result.stdout
 

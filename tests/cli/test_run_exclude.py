@@ -1,21 +1,23 @@
 """``odohil run --exclude``: the named trials are left out of the live and the
-final estimate, the journal keeps them; a number outside the plan exits 2."""
+final estimate, the journal keeps them; a number outside the plan exits 2.
+
+In process (typer's CliRunner on odohil.cli.app's app: the same parsing,
+session and rendering as the console script) against the emulator on its pty."""
 
 from __future__ import annotations
 
 import json
-import shutil
-import subprocess
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
+from typer.testing import CliRunner, Result
 
 from fakes.nomad.process import EmulatorProcess
+from odohil.cli.app import app
 from odohil.session.state import ambiguous_trials, load_session
 from tests.session.helpers import write_robot
 
-ODOHIL = shutil.which("odohil") or "odohil"
 PLAN = "k=1,l=0.5,n=4;k=0.5,l=0.5,n=4"
 
 
@@ -26,11 +28,9 @@ def emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
         yield process
 
 
-def _run(
-    emulator: EmulatorProcess, tmp_path: Path, exclude: str
-) -> subprocess.CompletedProcess[str]:
+def _run(emulator: EmulatorProcess, tmp_path: Path, exclude: str) -> Result:
     command = [
-        ODOHIL, "run", "--allow-few-trials",
+        "run", "--allow-few-trials",
         "--port", emulator.device,
         "--truth-socket", emulator.truth_socket,
         "--robot", str(write_robot(tmp_path)),
@@ -38,22 +38,20 @@ def _run(
         "--measure", "fake",
         "--session", str(tmp_path / "session"),
         "--exclude", exclude,
+        "--seed", "2",
         "--json",
     ]  # fmt: skip
-    return subprocess.run(
-        command,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
+    return CliRunner().invoke(app, command)
 
 
 def test_excluded_trials_are_left_out_but_journaled(
     emulator: EmulatorProcess, tmp_path: Path
 ) -> None:
     done = _run(emulator, tmp_path, "2,7")
-    assert done.returncode in (0, 3), done.stderr
+    # the six trials left at these seeds (emulator 5, tape 2): trusted
+    assert (done.exit_code, json.loads(done.stdout)["verdict"]["status"]) == (0, "trusted"), (
+        done.stderr
+    )
     result = json.loads(done.stdout)
     assert result["excluded"] == [2, 7]
     state = load_session(tmp_path / "session").state
@@ -65,7 +63,7 @@ def test_excluded_trials_are_left_out_but_journaled(
 
 def test_exclude_outside_the_plan_exits_2(emulator: EmulatorProcess, tmp_path: Path) -> None:
     done = _run(emulator, tmp_path, "9")
-    assert done.returncode == 2
+    assert done.exit_code == 2
     assert "--exclude" in done.stderr
     assert "1..8" in done.stderr
     assert not (tmp_path / "session").exists()

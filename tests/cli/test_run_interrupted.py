@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 import signal
-import subprocess
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -16,8 +15,9 @@ import pytest
 from fakes.nomad.process import EmulatorProcess
 from odohil.session import state as ev
 from odohil.session.journal import journal_path, read_journal
+from tests import forked
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML
-from tests.session.test_safety import ODOHIL, PARAMS
+from tests.session.test_safety import PARAMS
 
 CLASS_NAMES = ("KeyboardInterrupt", "SignalReceived", "Traceback")
 
@@ -45,9 +45,9 @@ def test_an_interrupted_json_run_prints_its_status_and_partial_estimate(
     robot = tmp_path / "robot.toml"
     robot.write_text(FINE_TAPE_ROBOT_TOML)
     folder = tmp_path / "session"
-    process = subprocess.Popen(
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    process = forked.start(
         [
-            ODOHIL,
             "run",
             "--allow-few-trials",
             "--port",
@@ -64,9 +64,6 @@ def test_an_interrupted_json_run_prints_its_status_and_partial_estimate(
             str(folder),
             "--json",
         ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
     )
     deadline = time.monotonic() + 60
     while _solved(folder) < 3:
@@ -75,6 +72,7 @@ def test_an_interrupted_json_run_prints_its_status_and_partial_estimate(
         time.sleep(0.01)
     process.send_signal(signum)
     out, err = process.communicate(timeout=30)
+    process.close()
     assert process.returncode == 128 + signum, err
     # before: nothing at all on stdout
     document = json.loads(out)  # one object, nothing else

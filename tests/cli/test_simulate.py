@@ -17,6 +17,7 @@ import pexpect
 import pytest
 
 from odohil.science.parameters import NOMAD150
+from tests import forked
 
 ODOHIL = shutil.which("odohil") or "odohil"
 ENV = {**os.environ, "COLUMNS": "160", "NO_COLOR": "1"}
@@ -24,14 +25,8 @@ Z = 4.0
 
 
 def run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [ODOHIL, "simulate", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-        env=ENV,
-    )
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    return forked.completed([ODOHIL, "simulate", *args], 120, ENV)
 
 
 def read_rows(path: Path) -> tuple[list[dict[str, str]], npt.NDArray[np.float64]]:

@@ -15,6 +15,7 @@ import typer
 
 from odohil import units
 from odohil.cli.app import app
+from tests import forked
 
 ROOT = Path(__file__).resolve().parents[2]
 PRINTS_PARAMETERS = ("estimate", "run", "resume", "demo", "wizard", "predict", "covariance")
@@ -84,9 +85,8 @@ def test_no_message_counts_trials_by_hand() -> None:
 
 def _odohil(*args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "COLUMNS": "200"}
-    return subprocess.run(
-        ["odohil", *args], capture_output=True, text=True, timeout=60, check=False, env=env
-    )
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    return forked.completed(["odohil", *args], 60, env)
 
 
 def test_the_readme_covariance_call_works() -> None:

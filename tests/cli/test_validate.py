@@ -19,9 +19,6 @@ alpha = 1 %.
 from __future__ import annotations
 
 import json
-import os
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -51,8 +48,9 @@ class Done:
 
 
 def in_process(*args: str) -> Done:
-    """The command in this process (typer's runner): quicker for commands
-    that drive nothing."""
+    """``odohil ARGS`` in this process (typer's CliRunner on odohil.cli.app's app:
+    the same parsing, session and rendering as the console script, without a
+    process start; the fake robot of ``fakerobot://`` runs in process either way)."""
     result = CliRunner().invoke(app, list(args))
     assert result.exception is None or isinstance(result.exception, SystemExit), repr(
         result.exception
@@ -60,15 +58,8 @@ def in_process(*args: str) -> Done:
     return Done(result.exit_code, result.stdout, result.stderr)
 
 
-def odohil(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "odohil", *args],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env=dict(os.environ),
-        check=False,
-    )
+odohil = in_process
+"""Every command of these tests runs in process (they were processes before)."""
 
 
 def calibrate(folder: Path, seed: int) -> Path:

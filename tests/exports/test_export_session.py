@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +15,7 @@ from odohil.science.estimators import EstimateResult
 from odohil.science.exports import Linearisation
 from odohil.session.exports import FILE_NAMES, export_files, export_text, write_exports
 from odohil.session.outcome import estimate_path
+from tests import forked
 from tests.report.session_factory import build_session
 
 PLAN = "k=1,l=2,n=6;k=4,l=0.5,n=6"
@@ -45,13 +45,8 @@ def estimate_of_session(session: Path) -> EstimateResult:
 
 
 def _export(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "odohil", "export", *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
+    # a process of its own, forked from a server that imported odohil once (tests/forked.py)
+    return forked.completed(["odohil", "export", *args], timeout=120)
 
 
 def _psd_matrix(values: list[Any], size: int) -> np.ndarray:

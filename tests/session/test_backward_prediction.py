@@ -12,29 +12,18 @@ it about 0.02 times.
 
 from __future__ import annotations
 
-import os
-import subprocess
-from pathlib import Path
-
 import pytest
 
 from odohil.session import state as ev
 from odohil.session.journal import read_journal
-from tests.session.test_safety import ODOHIL
+from tests.demo_run import demo_run
 
 
 @pytest.mark.slow
-def test_backward_trials_are_not_called_slips(tmp_path: Path) -> None:
-    done = subprocess.run(
-        [ODOHIL, "demo", "--session", str(tmp_path / "s")],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=dict(os.environ),
-        check=False,
-    )
+def test_backward_trials_are_not_called_slips(tmp_path_factory: pytest.TempPathFactory) -> None:
+    done, session = demo_run(tmp_path_factory)  # the run test_demo_table reads too
     assert done.returncode == 0, done.stderr
-    records = read_journal(tmp_path / "s").records
+    records = read_journal(session).records
     backward = {
         r.data["trial"] for r in records if r.kind == ev.TRIAL_START and r.data.get("backward")
     }

@@ -1,7 +1,9 @@
 """``odohil run`` and ``odohil resume`` against the fake robot on a real
 pseudo-terminal (``python -m fakes.nomad``).
 
-As console processes where the process is the point (kill -9 anywhere, Ctrl-C);
+As processes of their own where the process is the point (kill -9 anywhere,
+Ctrl-C), forked from a server that imported odohil once (tests/forked.py: the
+console script's entry point in a real process, without the 2 s start-up);
 in process (typer's CliRunner on odohil.cli.app's app: the same parsing,
 session and rendering) where only the session's numbers, journal and exit
 status are (the estimate printed, a failing robot, a refused resume).
@@ -12,7 +14,6 @@ from __future__ import annotations
 import json
 import shutil
 import signal
-import subprocess
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -32,6 +33,7 @@ from odohil.session.state import (
     replay,
     trials_to_observations,
 )
+from tests import forked
 from tests.session.helpers import write_robot
 
 ODOHIL = shutil.which("odohil") or "odohil"
@@ -141,6 +143,14 @@ def slow_emulator(tmp_path: Path) -> Iterator[EmulatorProcess]:
         yield process
 
 
+SESSION_EXIT = 0
+"""The verdict of the 24-trial session however the kills cut it: trusted. Which
+attempts are voided and redone depends on where the kills land, so the draws
+vary from run to run; at E_R -1 deg/m, K_theta 0.3 deg^2/m and K_rho 0.9 mm
+over 24 trials every parameter is far above its precision target (see
+the figures in docs/ci-time.md), so a flip to "not trusted" is a finding."""
+
+
 @pytest.mark.slow
 def test_sigkill_anywhere_then_resume_counts_every_trial_once(
     slow_emulator: EmulatorProcess, tmp_path: Path
@@ -159,9 +169,7 @@ def test_sigkill_anywhere_then_resume_counts_every_trial_once(
     while kills < 21:
         before = _records(tmp_path)
         wanted = kill_after[kills % len(kill_after)]
-        log = tmp_path / f"run-{kills}.stderr"
-        with log.open("wb") as stderr:
-            process = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=stderr)
+        process = forked.start(command[1:])
         deadline = time.monotonic() + 60
         # a record of the wanted kind since this process started: kill now (on a
         # busy machine the poll may see it only after a few more records, but
@@ -170,10 +178,13 @@ def test_sigkill_anywhere_then_resume_counts_every_trial_once(
             assert time.monotonic() < deadline, "the session made no progress"
             time.sleep(0.001)
         if process.poll() is not None:
-            assert process.returncode in (0, 3), log.read_text()  # 3: estimate not trusted
+            out, err = process.communicate(30)
+            process.close()
+            assert process.returncode == _exit_of(out) == SESSION_EXIT, err
             break  # the session finished before this kill
         process.send_signal(signal.SIGKILL)
-        process.wait()
+        process.wait(30)
+        process.close()
         if _last_kind(tmp_path) == "finished":
             break  # the session completed just before this kill: not a kill point
         kills += 1
@@ -189,10 +200,10 @@ def test_sigkill_anywhere_then_resume_counts_every_trial_once(
 
     if _last_kind(tmp_path) != "finished":
         final = _in_process(_resume_args(tmp_path))
-        assert final.exit_code == _exit_of(final.stdout), final.stderr
+        assert final.exit_code == _exit_of(final.stdout) == SESSION_EXIT, final.stderr
         assert json.loads(final.stdout)["n_trials"] == n_trials
     offline = _in_process([ODOHIL, "estimate", str(tmp_path / "session"), "--json"])
-    assert offline.exit_code == _exit_of(offline.stdout), offline.stderr
+    assert offline.exit_code == _exit_of(offline.stdout) == SESSION_EXIT, offline.stderr
     assert json.loads(offline.stdout)["n_trials"] == n_trials
     records = read_journal(tmp_path / "session").records
     solved = [r.data["trial"] for r in records if r.kind == ev.SOLVED]
@@ -207,19 +218,14 @@ def test_sigkill_anywhere_then_resume_counts_every_trial_once(
 
 
 def test_ctrl_c_stops_journals_and_exits_130(emulator: EmulatorProcess, tmp_path: Path) -> None:
-    process = subprocess.Popen(
-        _run_args(emulator, tmp_path, "k=1,l=0.5,n=8"),
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    deadline = time.monotonic() + 60
-    while _records(tmp_path) < 12 and process.poll() is None:
-        assert time.monotonic() < deadline
-        time.sleep(0.002)
-    process.send_signal(signal.SIGINT)
-    _, err = process.communicate(timeout=30)
-    assert process.returncode == 130, err
+    with forked.start(_run_args(emulator, tmp_path, "k=1,l=0.5,n=8")[1:]) as process:
+        deadline = time.monotonic() + 60
+        while _records(tmp_path) < 12 and process.poll() is None:
+            assert time.monotonic() < deadline
+            time.sleep(0.002)
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=30)
+        assert process.returncode == 130, err
     assert "odohil resume" in err
     records = read_journal(tmp_path / "session").records
     assert records[-1].kind == ev.STOPPED

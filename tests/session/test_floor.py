@@ -2,14 +2,14 @@
 respected, and a resumed session starts where its next trial should.
 
 Against the fake robot on a real pseudo-terminal (``python -m fakes.nomad``),
-through the console commands."""
+through the console commands, each a process of its own forked from a server
+that imported odohil once (tests/forked.py)."""
 
 from __future__ import annotations
 
 import math
 import shutil
 import signal
-import subprocess
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -21,6 +21,7 @@ from odohil.errors import JournalError
 from odohil.session import state as ev
 from odohil.session.journal import read_journal
 from odohil.session.state import load_session_trials
+from tests import forked
 from tests.session.helpers import write_robot
 
 ODOHIL = shutil.which("odohil") or "odohil"
@@ -53,9 +54,7 @@ def test_one_way_trials_come_back_over_the_same_floor(
 ) -> None:
     # before: four one-way trials of 1 m ended 4 m from where the first started
     start = emulator.truth()
-    done = subprocess.run(
-        _run(emulator, tmp_path, "k=0.5,l=1,n=4"), capture_output=True, text=True, timeout=120
-    )
+    done = forked.completed(_run(emulator, tmp_path, "k=0.5,l=1,n=4"), timeout=120)
     assert done.returncode == 0, done.stderr
     end = emulator.truth()
     away = math.hypot(end.true_x_m - start.true_x_m, end.true_y_m - start.true_y_m)
@@ -88,12 +87,7 @@ def test_resume_after_ctrl_c_mid_motion_refuses_unless_from_here(
     slow_emulator: EmulatorProcess, tmp_path: Path
 ) -> None:
     emulator = slow_emulator
-    process = subprocess.Popen(
-        _run(emulator, tmp_path, "k=0.5,l=2,n=2"),
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
+    process = forked.start(_run(emulator, tmp_path, "k=0.5,l=2,n=2")[1:])
     deadline = time.monotonic() + 60
     while ev.MOTION_START not in _kinds(tmp_path):
         assert process.poll() is None, process.communicate()[1]
@@ -104,6 +98,7 @@ def test_resume_after_ctrl_c_mid_motion_refuses_unless_from_here(
     time.sleep(0.1)  # well into the 2 m leg
     process.send_signal(signal.SIGINT)
     _, err = process.communicate(timeout=30)
+    process.close()
     assert process.returncode == 130, err
     while emulator.truth().moving:
         assert time.monotonic() < deadline
@@ -112,7 +107,7 @@ def test_resume_after_ctrl_c_mid_motion_refuses_unless_from_here(
 
     # before: resume started the trial again from where the robot stood
     resume = [ODOHIL, "resume", str(tmp_path / "session"), "--json"]
-    refused = subprocess.run(resume, capture_output=True, text=True, timeout=60)
+    refused = forked.completed(resume, timeout=60)
     assert refused.returncode == 2, refused.stderr
     assert "not where trial 1 starts" in refused.stderr
     assert "heading=" in refused.stderr
@@ -122,7 +117,7 @@ def test_resume_after_ctrl_c_mid_motion_refuses_unless_from_here(
     assert ev.TRIAL_START not in _kinds(tmp_path)[-3:]
 
     # told to, it goes on from there and completes every trial once
-    done = subprocess.run([*resume, "--from-here"], capture_output=True, text=True, timeout=120)
+    done = forked.completed([*resume, "--from-here"], timeout=120)
     assert done.returncode == 0, done.stderr
     assert "--from-here" in done.stderr
     records = read_journal(tmp_path / "session").records
@@ -139,7 +134,7 @@ def test_run_refuses_a_plan_over_the_floor_before_anything_moves(
     before = emulator.truth()
     args = _run(emulator, tmp_path, "k=1,l=2,n=2;k=0.5,l=12,n=3")
     args[args.index("--robot") + 1] = str(robot)
-    done = subprocess.run(args, capture_output=True, text=True, timeout=60)
+    done = forked.completed(args, timeout=60)
     assert done.returncode == 2, done.stderr
     assert "plan design 2 (k=0.5 l=12 m turn)" in done.stderr
     assert "length_m is 8 m" in done.stderr

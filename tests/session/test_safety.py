@@ -1,7 +1,10 @@
 """Every way out stops the robot, and odohil claims only what it checked.
 
 Through the console commands against ``odohil emulate`` on a real pty; the
-emulator's truth socket shows what the robot really did.
+emulator's truth socket shows what the robot really did. Each command is a
+process of its own, forked from a server that imported odohil once
+(tests/forked.py), except the full-disk case (its file-size limit is set in a
+console process) and the wizard.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from odohil.session.engine import start_session
 from odohil.session.journal import JOURNAL_NAME, read_journal
 from odohil.session.plan import parse_plan
 from odohil.session.state import replay
+from tests import forked
 from tests.session.helpers import write_robot
 
 ODOHIL = shutil.which("odohil") or "odohil"
@@ -60,7 +64,9 @@ def _kinds(folder: Path) -> list[str]:
         return []
 
 
-def _wait_for(process: subprocess.Popen[str], folder: Path, kind: str, timeout_s: float) -> None:
+def _wait_for(
+    process: subprocess.Popen[str] | forked.Forked, folder: Path, kind: str, timeout_s: float
+) -> None:
     deadline = time.monotonic() + timeout_s
     while kind not in _kinds(folder):
         assert process.poll() is None, f"odohil ended before {kind}: {process.communicate()}"
@@ -98,12 +104,7 @@ def test_a_cut_line_is_reported_as_a_robot_that_may_still_move(tmp_path: Path) -
     folder = tmp_path / "session"
     with _emulator(tmp_path, "cut", "--fault", "disconnect:pr@1") as emulator:
         started = time.monotonic()
-        done = subprocess.run(
-            _run_args(emulator, tmp_path, SHORT_PLAN, folder),
-            capture_output=True,
-            text=True,
-            timeout=60,
-        )
+        done = forked.completed(_run_args(emulator, tmp_path, SHORT_PLAN, folder), timeout=60)
         # the robot really drove on: odohil said so rather than "robot stopped"
         assert emulator.truth().moving or time.monotonic() - started > 2.0
     _assert_unconfirmed(done.returncode, done.stderr, folder)
@@ -112,16 +113,12 @@ def test_a_cut_line_is_reported_as_a_robot_that_may_still_move(tmp_path: Path) -
 def test_an_emulator_killed_mid_motion_is_a_robot_that_may_still_move(tmp_path: Path) -> None:
     folder = tmp_path / "session"
     with _emulator(tmp_path, "kill") as emulator:
-        process = subprocess.Popen(
-            _run_args(emulator, tmp_path, SHORT_PLAN, folder),
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        _wait_for(process, folder, ev.MOTION_START, 30)
-        time.sleep(0.2)
-        emulator.stop()
-        _, err = process.communicate(timeout=30)
+        process = forked.start(_run_args(emulator, tmp_path, SHORT_PLAN, folder)[1:])
+        with process:
+            _wait_for(process, folder, ev.MOTION_START, 30)
+            time.sleep(0.2)
+            emulator.stop()
+            _, err = process.communicate(timeout=30)
     _assert_unconfirmed(process.returncode, err, folder)
 
 
@@ -177,7 +174,11 @@ def test_a_busy_session_is_refused_before_anything_is_sent(
     }  # fmt: skip
     with journal:
         for name, command in commands.items():
-            refused = subprocess.run(command, capture_output=True, text=True, timeout=60)
+            refused = (
+                forked.completed(command, timeout=60)
+                if command[0] == ODOHIL
+                else subprocess.run(command, capture_output=True, text=True, timeout=60)
+            )
             output = " ".join((refused.stdout + refused.stderr).split())
             assert refused.returncode == 2, (name, output)
             assert "session in use" in output, (name, output)
@@ -212,20 +213,15 @@ def test_stop_and_confirm_waits_until_the_robot_reports_standing_still(tmp_path:
 def test_a_second_signal_during_the_stop_does_not_skip_it(tmp_path: Path) -> None:
     folder = tmp_path / "session"
     with _emulator(tmp_path, "twice") as emulator:
-        process = subprocess.Popen(
-            _run_args(emulator, tmp_path, "k=0.5,l=0.5,n=2", folder),
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        _wait_for(process, folder, ev.MOTION_START, 30)
-        time.sleep(0.4)
-        assert emulator.truth().moving
-        process.send_signal(signal.SIGTERM)
-        time.sleep(0.05)  # the robot is decelerating: the stop is under way
-        process.send_signal(signal.SIGINT)
-        _, err = process.communicate(timeout=30)
-        exited_at = time.monotonic()
+        with forked.start(_run_args(emulator, tmp_path, "k=0.5,l=0.5,n=2", folder)[1:]) as process:
+            _wait_for(process, folder, ev.MOTION_START, 30)
+            time.sleep(0.4)
+            assert emulator.truth().moving
+            process.send_signal(signal.SIGTERM)
+            time.sleep(0.05)  # the robot is decelerating: the stop is under way
+            process.send_signal(signal.SIGINT)
+            _, err = process.communicate(timeout=30)
+            exited_at = time.monotonic()
         assert process.returncode == 128 + signal.SIGTERM, err  # the first way out's status
         _still_after_exit(emulator, exited_at)
     records = read_journal(folder).records

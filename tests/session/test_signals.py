@@ -6,8 +6,15 @@ through its truth socket: the robot is still within 0.5 s of odohil's exit and
 does not move afterwards, the command exits 128 + N, the journal is
 consistent (the attempt cut off during its motion is void, the one being
 measured stays open), and a resume completes the session with every trial once.
-Motion cases run ``odohil run --measure fake``; measurement cases run the
-wizard in a pseudo-terminal, whose distance prompt really waits.
+Motion cases run ``odohil run --measure fake`` as a process of its own, forked
+from a server that imported odohil once (tests/forked.py: a real process, its
+own signal handlers, without the 2 s start-up); their resume runs in process
+against the same robot's in-process fake, fast-forwarded (the resume's check is
+the journal; the robot's stop is checked on the emulator). Measurement cases
+run the wizard in a pseudo-terminal, whose distance prompt really waits, on an
+emulator of their own, and resume it there. Each of the 12 cells is a test of
+its own, and each resumed session's exit status is asserted exactly: the same
+draws in every cell.
 
 The ends nobody listed (:func:`test_every_other_end_stops_the_robot_within_half_a_second`):
 SIGUSR1, SIGUSR2, SIGALRM and SIGPIPE (caught: odohil's own stop path), SIGTSTP
@@ -17,26 +24,29 @@ middle of a motion, on the fake Nomad (whose own watchdog would stop it after
 2 s: too late) and on the fake Create 2 (which has none). Through the truth
 socket's command log, a stop reaches the robot within 0.5 s of the signal; the
 robot is still once its braking time has passed and does not move afterwards;
-the journal is consistent, and a resume completes the session (after SIGUSR1,
-whose journal the other caught signals share, after SIGTSTP and after kill -9).
+the journal is consistent, and a resume (in process, on the same robot's
+in-process fake) completes the session (after SIGUSR1, whose journal the other
+caught signals share, after SIGTSTP and after kill -9).
 """
 
 from __future__ import annotations
 
 import json
 import signal
-import subprocess
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pexpect
 import pytest
+from typer.testing import CliRunner
 
 from fakes.create2.process import Create2Process
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
+from odohil.cli.app import app
 from odohil.driver.odometry import DriveSettings
 from odohil.protocol.create2.opcodes import Opcode
 from odohil.session import state as ev
@@ -51,8 +61,9 @@ from odohil.session.signals import (
     signals_raise,
 )
 from odohil.session.state import Phase, SessionState, replay
+from tests import forked
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML
-from tests.session.test_safety import ODOHIL, PARAMS, _still_after_exit, _wait_for
+from tests.session.test_safety import PARAMS, _still_after_exit, _wait_for
 from tests.wizard.test_wizard import _marks, _prompt, _spawn, _type_all
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT)
@@ -92,16 +103,43 @@ def _every_trial_once(folder: Path, n_trials: int) -> None:
     assert solved == list(range(1, n_trials + 1))
 
 
+MOMENTS = ("motion start", "mid-motion", "while measuring")
+MATRIX = [(signum, moment) for signum in SIGNALS for moment in MOMENTS]
+"""Every cell a test of its own (12), so that xdist's workers share them out."""
+
+
 @pytest.mark.slow
+@pytest.mark.parametrize(
+    ("signum", "moment"),
+    MATRIX,
+    ids=[f"{signal.Signals(s).name}-{m.replace(' ', '-')}" for s, m in MATRIX],
+)
 def test_every_signal_at_every_step_stops_the_robot_and_resumes(
-    emulator: EmulatorProcess, tmp_path: Path
+    signum: int, moment: str, request: pytest.FixtureRequest, tmp_path: Path
 ) -> None:
     robot = tmp_path / "robot.toml"
     robot.write_text(FINE_TAPE_ROBOT_TOML)
-    for signum in SIGNALS:
-        for moment in ("motion start", "mid-motion"):
-            _motion_case(emulator, tmp_path, robot, signum, moment)
-        _measurement_case(emulator, tmp_path, robot, signum)
+    if moment == "while measuring":
+        _measurement_case(tmp_path, robot, signum)
+    else:
+        _motion_case(request.getfixturevalue("emulator"), tmp_path, robot, signum, moment)
+
+
+TWIN = "fakerobot://?seed=7&time_scale=2000&E_R=-1&K_theta=0.3&K_rho=0.0009"
+"""The emulator's robot in process, fast-forwarded: where a session cut off on
+the emulator is resumed. The resume's check is the journal (every trial once,
+the void attempt redone), not the robot, whose stop the cell has checked; on
+this fake the remaining trials are the same draws in every cell."""
+RESUMED_EXIT = 3
+"""The verdict of those two resumed trials (seed 2 of the fine tape): not trusted,
+as two trials cannot pin four parameters here."""
+
+
+def _resume_in_process(folder: Path, port: str) -> tuple[int, dict[str, Any]]:
+    done = CliRunner().invoke(app, ["resume", str(folder), "--json", "--from-here", "--port", port])
+    assert done.exception is None or isinstance(done.exception, SystemExit), repr(done.exception)
+    assert done.stdout.strip(), (done.exit_code, done.stderr)
+    return done.exit_code, json.loads(done.stdout)
 
 
 def _motion_case(
@@ -110,22 +148,20 @@ def _motion_case(
     case = f"{signal.Signals(signum).name} at {moment}"
     folder = tmp_path / case.replace(" ", "-")
     command = [
-        ODOHIL, "run", "--allow-few-trials",
-                "--port", emulator.device, "--truth-socket", emulator.truth_socket,
-        "--robot", str(robot), "--plan", RUN_PLAN, "--measure", "fake",
+        "run", "--allow-few-trials",
+        "--port", emulator.device, "--truth-socket", emulator.truth_socket,
+        "--robot", str(robot), "--plan", RUN_PLAN, "--measure", "fake", "--seed", "2",
         "--session", str(folder), "--json",
     ]  # fmt: skip
-    process = subprocess.Popen(
-        command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
-    )
-    _wait_for(process, folder, ev.MOTION_START, 30)
-    if moment == "mid-motion":
-        time.sleep(0.3)
-        assert emulator.truth().moving, case
-    process.send_signal(signum)
-    _, err = process.communicate(timeout=30)
-    exited_at = time.monotonic()
-    assert process.returncode == 128 + signum, (case, err)
+    with forked.start(command) as process:
+        _wait_for(process, folder, ev.MOTION_START, 30)
+        if moment == "mid-motion":
+            time.sleep(0.3)
+            assert emulator.truth().moving, case
+        process.send_signal(signum)
+        _, err = process.communicate(timeout=30)
+        exited_at = time.monotonic()
+        assert process.returncode == 128 + signum, (case, err)
     _still_after_exit(emulator, exited_at)
     assert "robot stopped" in err, (case, err)
     state = _consistent(folder, signum)
@@ -134,24 +170,29 @@ def _motion_case(
         (1, 1)
     ], case
     assert state.open_trial is None, case
-    resumed = subprocess.run(
-        [ODOHIL, "resume", str(folder), "--json", "--from-here"],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    # a two-trial session cannot pin four parameters: its estimate may be judged untrusted (3)
-    assert resumed.returncode in (0, 3), (case, resumed.stderr)
-    result = json.loads(resumed.stdout)
+    code, result = _resume_in_process(folder, TWIN)
     assert result["n_trials"] == 2
-    assert resumed.returncode == 0 or result["verdict"]["reasons"], (case, result["verdict"])
+    assert (code, result["verdict"]["status"]) == (RESUMED_EXIT, "failed"), (case, result)
+    assert result["verdict"]["reasons"], (case, result["verdict"])
     _every_trial_once(folder, 2)
 
 
-def _measurement_case(emulator: EmulatorProcess, tmp_path: Path, robot: Path, signum: int) -> None:
+WIZARD_EXIT = 0
+"""The wizard's verdict on the two trials of a fresh emulator at seed 7, typed
+exactly: not trusted (two trials cannot pin four parameters here)."""
+
+
+def _measurement_case(tmp_path: Path, robot: Path, signum: int) -> None:
     case = f"{signal.Signals(signum).name} while measuring"
     folder = tmp_path / case.replace(" ", "-")
-    with TruthClient(emulator.truth_socket) as truth:
+    sock = str(tmp_path / "t.sock")
+    # an emulator of its own: the same draws in every cell, whatever ran before
+    with (
+        EmulatorProcess(
+            [*PARAMS, "--seed", "7", "--time-scale", "1", "--truth-socket", sock]
+        ) as emulator,
+        TruthClient(emulator.truth_socket) as truth,
+    ):
         child = _spawn(["--port", emulator.device, "--robot", str(robot),
                         "--plan", WIZARD_PLAN, "--session", str(folder)])  # fmt: skip
         values = _marks(child, truth)
@@ -174,8 +215,7 @@ def _measurement_case(emulator: EmulatorProcess, tmp_path: Path, robot: Path, si
         _type_all(child, values, "Trial 2 solved")
         child.expect(pexpect.EOF)
         child.wait()
-        # two trials cannot pin four parameters: the estimate may be judged untrusted (3)
-        assert child.exitstatus in (0, 3), (case, child.before)
+        assert child.exitstatus == WIZARD_EXIT, (case, child.before)
     _every_trial_once(folder, 2)
 
 
@@ -287,6 +327,10 @@ class Fake:
     """Longest braking time: top speed over deceleration, s."""
     stops: Callable[[Fake], list[float]]
     """When each stop command reached the robot, on this process's monotonic clock, s."""
+    twin: str
+    """The same robot in process, fast-forwarded: where the cut-off session is resumed."""
+    resumed: tuple[int, str]
+    """The resumed session's exit status and verdict (the same draws in every case)."""
 
     def moving_pose(self) -> tuple[bool, float, float]:
         snap = self.process.truth()
@@ -327,12 +371,18 @@ def fake(
         robot.write_text(FINE_TAPE_ROBOT_TOML)
         args = [*PARAMS, "--seed", "7", "--time-scale", "1", "--truth-socket", sock]
         with EmulatorProcess(args) as nomad:
-            yield Fake("nomad150", nomad, str(robot), RUN_PLAN, braking_s, _nomad_stops)
+            yield Fake(
+                "nomad150", nomad, str(robot), RUN_PLAN, braking_s, _nomad_stops, TWIN,
+                (RESUMED_EXIT, "failed"),
+            )  # fmt: skip
     else:
         # the fake Create 2's wheels stop at once (fakes/create2/body.py): no braking time
         args = ["--seed", "7", "--time-scale", "1", "--truth-socket", sock]
         with Create2Process(args, use_cli=True) as create2:
-            yield Fake("create2", create2, "create2", "k=0.5,l=0.5,n=2", 0.0, _create2_stops)
+            yield Fake(
+                "create2", create2, "create2", "k=0.5,l=0.5,n=2", 0.0, _create2_stops,
+                "fakecreate2://?seed=7&time_scale=20&max_gap_ms=15", (3, "failed"),
+            )  # fmt: skip
 
 
 @pytest.mark.slow
@@ -343,15 +393,12 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
     case = f"{signal.Signals(signum).name} mid-motion on the fake {fake.name}"
     folder = tmp_path / "session"
     command = [
-        ODOHIL, "run", "--allow-few-trials",
+        "run", "--allow-few-trials",
         "--port", fake.process.device, "--truth-socket", fake.process.truth_socket,
-        "--robot", fake.robot, "--plan", fake.plan, "--measure", "fake",
+        "--robot", fake.robot, "--plan", fake.plan, "--measure", "fake", "--seed", "2",
         "--session", str(folder), "--json",
     ]  # fmt: skip
-    process = subprocess.Popen(
-        command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
-    )
-    try:
+    with forked.start(command) as process:
         _wait_for(process, folder, ev.MOTION_START, 30)
         deadline = time.monotonic() + 5
         while not fake.moving_pose()[0]:
@@ -361,11 +408,12 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
         assert fake.moving_pose()[0], case
         signalled = time.monotonic()
         process.send_signal(signum)
-        _, err = process.communicate(timeout=30)
-    finally:
-        if process.poll() is None:  # a suspended odohil (SIGTSTP before): the guardian stops it
-            process.kill()
-            process.wait()
+        try:
+            _, err = process.communicate(timeout=30)
+        finally:
+            if process.poll() is None:  # a suspended odohil (SIGTSTP before): the guardian stops it
+                process.kill()
+                process.wait(30)
     record_property("exit_seen_after_signal_s", round(time.monotonic() - signalled, 4))
     if signum == signal.SIGKILL:
         assert process.returncode == -signal.SIGKILL, (case, err)
@@ -404,13 +452,7 @@ def test_every_other_end_stops_the_robot_within_half_a_second(
         ], case
     if signum not in (signal.SIGUSR1, signal.SIGTSTP, signal.SIGKILL):
         return  # the same journal as SIGUSR1's (and SIGTERM's, resumed above): spare the time
-    resumed = subprocess.run(
-        [ODOHIL, "resume", str(folder), "--json", "--from-here"],
-        capture_output=True,
-        text=True,
-        timeout=60,
-    )
-    # two trials cannot pin four parameters: the estimate may be judged untrusted (3)
-    assert resumed.returncode in (0, 3), (case, resumed.stderr)
-    assert json.loads(resumed.stdout)["n_trials"] == 2, case
+    code, result = _resume_in_process(folder, fake.twin)
+    assert result.get("n_trials") == 2, (case, code, result)
+    assert (code, result["verdict"]["status"]) == fake.resumed, (case, result["verdict"])
     _every_trial_once(folder, 2)

@@ -354,10 +354,12 @@ def test_resume_after_ctrl_c_mid_motion_asks_to_put_the_robot_back(tmp_path: Pat
         child.expect(_prompt(0))
         _type_all(child, values, "Trial 2 solved")
         child.expect(r"Session complete:\S* 2 trials\.")
+        child.expect("verdict: TRUSTED")
         child.expect(pexpect.EOF)
         child.close()
-        # two trials cannot pin four parameters: the estimate may be judged untrusted (3)
-        assert child.exitstatus in (0, 3)
+        # the two trials of the emulator at seed 3, typed exactly: trusted (too few to
+        # export, the verdict line says; the same in three runs)
+        assert child.exitstatus == 0, child.before
     kinds = [r.kind for r in read_journal(folder).records]
     assert kinds.count(ev.START_POSE) == 2
 

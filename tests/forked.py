@@ -1,0 +1,215 @@
+"""``odohil`` as a real OS process, without paying its start-up each time.
+
+Tests where the process is the point (kill -9 anywhere, a signal mid-motion,
+the guardian's stop) need odohil in a process of its own: its own pid, its
+own signal handlers, descriptors the kernel closes when it dies. They do not
+need the interpreter's start and odohil's imports (about 2 CPU seconds per
+command, scipy.stats most of it), which the console script pays on every run.
+
+:func:`start` forks the command from a server process that imported odohil
+once (multiprocessing's ``forkserver``: a fresh single-threaded interpreter
+started from this one, not a fork of the test runner). The child sets
+``sys.argv`` as the console script would and calls the console script's own
+entry point, :func:`odohil.cli.app.main`; its stdout and stderr are pipes,
+and its exit status is the command's (``sys.exit``'s code, or minus the
+signal that killed it), as :class:`subprocess.Popen` reports it. What differs
+from the console script: no ``exec`` and no imports in the child, stdin is
+``/dev/null``, and its parent is the fork server rather than the test.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from multiprocessing import reduction
+from types import TracebackType
+from typing import Self
+
+PRELOAD = [
+    "odohil.cli.app",
+    "odohil.cli.run",
+    "odohil.cli.resume",
+    "odohil.session.outcome",
+    "odohil.science.estimators",
+    "fakes",
+]
+"""What the fork server imports once: the run and resume commands and the science."""
+
+_CONTEXT = multiprocessing.get_context("forkserver")
+_CONTEXT.set_forkserver_preload(PRELOAD)
+
+
+class _PassFd:
+    """A descriptor handed to the child when the process object is pickled for
+    the fork server (which passes it with the request, SCM_RIGHTS): the child
+    gets its own copy, and no other copy stays behind in this process (as
+    ``reduction.DupFd`` made outside pickling would, in its resource sharer)."""
+
+    def __init__(self, fd: int) -> None:
+        self.fd = fd
+
+    def __reduce__(self) -> tuple[object, tuple[object]]:
+        return (_received, (reduction.DupFd(self.fd),))
+
+
+def _received(dup: reduction.DupFd) -> int:
+    """In the child: the descriptor the fork server passed."""
+    return int(dup.detach())
+
+
+def _child(args: list[str], out: int, err: int, env: dict[str, str] | None) -> None:
+    """In the forked process: the environment, stdout and stderr to the pipes, then
+    the console script."""
+    if env is not None:
+        os.environ.clear()
+        os.environ.update(env)
+    for fd, write_end in ((1, out), (2, err)):
+        os.dup2(write_end, fd)
+        os.close(write_end)
+    sys.argv = ["odohil", *args]
+    from odohil.cli.app import main
+
+    main()
+
+
+class _Reader:
+    """Reads a pipe to its end (every writer gone) in a thread, as Popen.communicate does."""
+
+    def __init__(self, fd: int) -> None:
+        self._fd = fd
+        self._chunks: list[bytes] = []
+        self._thread = threading.Thread(target=self._read, daemon=True)
+        self._thread.start()
+
+    def _read(self) -> None:
+        try:
+            while chunk := os.read(self._fd, 65536):
+                self._chunks.append(chunk)
+        finally:
+            os.close(self._fd)
+
+    def join(self, timeout: float | None) -> None:
+        self._thread.join(timeout)
+        if self._thread.is_alive():
+            raise TimeoutError("a process still holds the pipe open")
+
+    def text(self) -> str:
+        return b"".join(self._chunks).decode("utf-8", errors="replace")
+
+
+class Forked:
+    """One forked ``odohil ARGS`` (the subset of :class:`subprocess.Popen` the tests use:
+    its stdout and stderr are read to their end, which comes when every process
+    holding them has gone, the guardian included).
+
+    Args:
+        args: the command line after ``odohil``.
+        env: its environment (default: the fork server's, which is the test
+            process's when the server started).
+    """
+
+    def __init__(self, args: list[str], env: dict[str, str] | None = None) -> None:
+        out_r, out_w = os.pipe()
+        err_r, err_w = os.pipe()
+        try:
+            self._process = _CONTEXT.Process(
+                target=_child,
+                args=(list(args), _PassFd(out_w), _PassFd(err_w), env),
+            )
+            self._process.start()
+        finally:
+            os.close(out_w)
+            os.close(err_w)
+        self._out = _Reader(out_r)
+        self._err = _Reader(err_r)
+        pid = self._process.pid
+        assert pid is not None
+        self.pid: int = pid
+        self._closed_code: int | None = None
+
+    @property
+    def returncode(self) -> int | None:
+        """The exit status (minus the signal number if a signal ended it), None while it runs."""
+        return self.poll()
+
+    def poll(self) -> int | None:
+        """The exit status if it has ended, else None."""
+        if self._closed_code is not None:
+            return self._closed_code
+        return self._process.exitcode
+
+    def wait(self, timeout: float | None = None) -> int:
+        """Wait for the end (TimeoutError after ``timeout`` s); its exit status."""
+        if self._closed_code is not None:
+            return self._closed_code
+        self._process.join(timeout)
+        code = self._process.exitcode
+        if code is None:
+            raise TimeoutError(f"odohil (pid {self.pid}) still runs after {timeout} s")
+        return code
+
+    def send_signal(self, signum: int) -> None:
+        """Send ``signum`` to the process (nothing once it has ended)."""
+        if self.poll() is None:
+            os.kill(self.pid, signum)
+
+    def kill(self) -> None:
+        """SIGKILL."""
+        self.send_signal(signal.SIGKILL)
+
+    def communicate(self, timeout: float | None = None) -> tuple[str, str]:
+        """Wait for the end and for stdout and stderr to close; what was written on them."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        self.wait(timeout)
+        for reader in (self._out, self._err):
+            reader.join(None if deadline is None else max(0.0, deadline - time.monotonic()))
+        return self._out.text(), self._err.text()
+
+    def close(self) -> None:
+        """Kill it if it still runs."""
+        if self._closed_code is not None:
+            return
+        if self._process.exitcode is None:
+            self.kill()
+        self._closed_code = self.wait(30)
+        self._process.close()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+
+def start(args: list[str], env: dict[str, str] | None = None) -> Forked:
+    """``odohil ARGS`` forked from the server (module docstring)."""
+    return Forked(args, env)
+
+
+def run(
+    args: list[str], timeout_s: float = 120.0, env: dict[str, str] | None = None
+) -> tuple[int, str, str]:
+    """``odohil ARGS`` to its end: exit status, stdout, stderr."""
+    with start(args, env) as process:
+        deadline = time.monotonic() + timeout_s
+        out, err = process.communicate(max(0.0, deadline - time.monotonic()))
+        return process.wait(), out, err
+
+
+def completed(
+    command: list[str], timeout: float = 120.0, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    """``subprocess.run(command, capture_output=True, text=True, timeout=..., env=...)``
+    for ``command = [the odohil console script, *ARGS]``, forked (module docstring)."""
+    code, out, err = run(command[1:], timeout, env)
+    return subprocess.CompletedProcess(command, code, out, err)
