@@ -152,6 +152,15 @@ def with_unit(number_text: str, unit: str) -> str:
     return f"{number_text} {unit}" if unit else number_text
 
 
+def paper_text(name: str, value_si: float) -> str:
+    """A value (or standard error) of parameter ``name`` as text in the paper's
+    units, 3 significant digits: ``"0.1 deg/m"``; E_T and turn-scale errors
+    (plain ratios) as percentages, ``"0.19 %"``."""
+    if name == "E_T" or parameter_kind(name) == "e_turn":
+        return f"{100.0 * value_si:.3g} %"
+    return with_unit(f"{parameter_to_paper(name, value_si):.3g}", parameter_unit(name, "paper"))
+
+
 def product_unit(a: str, b: str) -> str:
     """The unit of a product of two quantities: ``m^2`` for m times m, ``m rad``."""
     if a == b:

@@ -933,13 +933,6 @@ def _error_of(score: PlanScore | None, name: str) -> float:
     return math.inf if score is None else score.parameter(name).standard_error
 
 
-def _paper(name: str, value: float) -> str:
-    unit = units.parameter_unit(name, "paper")
-    if name == "E_T" or units.parameter_kind(name) == "e_turn":
-        return f"{100.0 * value:.3g} %"
-    return units.with_unit(f"{units.parameter_to_paper(name, value):.3g}", unit)
-
-
 def _ratio_words(ratio: float) -> str:
     if abs(ratio - 1.0) < 0.05:
         return "about the same"
@@ -977,14 +970,14 @@ def _findings(
         if forth is not None:
             entry = forth.parameter(name)
             if entry.estimable:
-                text = f"forth-and-back SE {_paper(name, gain.forth_and_back)}"
+                text = f"forth-and-back SE {units.paper_text(name, gain.forth_and_back)}"
                 parts.append(text + (f", {entry.note}" if entry.note else ""))
             else:
                 parts.append(f"no forth-and-back plan estimates it: {entry.reason}")
         if mixed is not None:
             entry = mixed.parameter(name)
             if entry.estimable:
-                text = f"with the general paths SE {_paper(name, gain.with_paths)}"
+                text = f"with the general paths SE {units.paper_text(name, gain.with_paths)}"
                 if gain.newly_estimable:
                     text += ": estimable only with them"
                 elif math.isfinite(gain.ratio):
@@ -1028,7 +1021,7 @@ class Estimability:
         """The statement (expected standard errors in paper units), with the
         problems unless ``problems`` is False."""
         found = [
-            f"{name} (SE {_paper(name, se)})"
+            f"{name} (SE {units.paper_text(name, se)})"
             for name, se in zip(self.estimable, self.standard_errors, strict=True)
         ]
         sentences = [f"Estimates {_join(found) or 'nothing'}"]
@@ -1106,7 +1099,9 @@ def _split_note(items: Sequence[tuple[Shape, int]], robot: RobotModel) -> list[s
         for p in split.parameters
         if p.name.startswith("e_turn") and not p.reason.startswith("the plan makes no")
     ]
-    found = [f"{p.name} (SE {_paper(p.name, p.standard_error)})" for p in both if p.estimable]
+    found = [
+        f"{p.name} (SE {units.paper_text(p.name, p.standard_error)})" for p in both if p.estimable
+    ]
     lost = [f"{p.name}: {p.reason}" for p in both if not p.estimable]
     text = "If the data ask for one e_turn per direction, the split fit estimates " + (
         _join(found) or "none of them"
