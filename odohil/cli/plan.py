@@ -35,11 +35,11 @@ from odohil.science.planner import (
 )
 from odohil.science.robot_description import MAX_FLOOR_M
 from odohil.science.targets import TARGET_FRACTIONS
+from odohil.session import path_planning as paths
 from odohil.session.planning import (
     DEFAULT_SIGMA_M,
     PlannedExperiment,
     PlanRequest,
-    make_plan,
     plan_document,
     trial_minutes,
 )
@@ -97,13 +97,31 @@ def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
         console.print(f"[yellow]note:[/yellow] {note}", highlight=False)
 
 
+def _print_paths(found: paths.PathsOutcome, as_json: bool, system: units.UnitSystem) -> None:
+    if as_json:
+        return typer.echo(json.dumps(paths.paths_document(found), indent=2))
+    if isinstance(found, paths.ScoredPaths):
+        shown = table(found.title, ("parameter", "stderr", "target", "unit"),
+                      ("parameter", "unit"), found.measurement)  # fmt: skip
+        for row in found.rows(system):
+            shown.add_row(*row)
+        Console().print(shown)
+    for line in paths.paths_lines(found):
+        Console().print(line, highlight=False, markup=False)
+
+
 @parameters_option
 def plan(
     budget_m: Metres = None,
     budget_min: Annotated[float | None, option("--budget-min", bound="budget_min", help="Most "
         f"operator minutes in all, {RANGES['budget_min'].text()} (see --measure-s).")] = None,
     evaluate: Annotated[str | None, option("--evaluate", help="Score this plan instead of "
-        'searching, e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30".')] = None,
+        'searching, e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30"; with paths (path=square:1,cw,n=10) '
+        "the turn errors too, unless the robot's turns are exact.")] = None,
+    compare: Annotated[str | None, option("--compare-paths", help='What paths (e.g. "square:1,'
+        'cw;square:1,ccw") buy over forth-and-back plans of --budget-min.')] = None,
+    split: Annotated[bool, typer.Option("--split-directions", help="Paths: one turn error "
+        "per kind of turn and direction.")] = False,
     min_trials_per_design: Annotated[int, option("--min-trials-per-design",
         bound="min_trials_per_design", help="Fewest trials of any design, for honest 95 % "
         "intervals (they cover from about 10; 5 is marginal), "
@@ -147,17 +165,21 @@ def plan(
     parameter has a target: those not given default to a fraction of the
     prior (25 % of |E_R| and |E_T|, 50 % of K_theta and K_rho, with floors).
     The plan minimises the largest stderr/target ratio; every design gets at
-    least --min-trials-per-design trials.
+    least --min-trials-per-design trials. A plan naming general paths
+    (--evaluate "path=square:1,cw,n=10;...") is scored with the robot's turn
+    errors; --compare-paths says what paths buy over forth-and-back plans.
     """
     targets = {"E_R": target_e_r, "E_T": target_e_t, "K_theta": target_k_theta,
                "K_rho": target_k_rho}  # fmt: skip
     request = PlanRequest(params, targets, budget_m, budget_min, evaluate,
                           sigma_m, robot, min_trials_per_design, measure_s, speed, max_trials,
-                          max_designs, max_leg_m, floor_m)  # fmt: skip
+                          max_designs, max_leg_m, floor_m, compare, split)  # fmt: skip
     try:
-        planned = make_plan(request)
+        planned = paths.plan_outcome(request)
     except OdohilError as exc:
         raise typer.BadParameter(str(exc)) from exc
+    if not isinstance(planned, PlannedExperiment):
+        return _print_paths(planned, as_json, unit_system(units_choice))
     if planned.turn_designs:
         Console(stderr=True).print(
             "[yellow]warning:[/] turn designs on a robot whose turns carry error "

@@ -43,6 +43,10 @@ class PlanRequest:
         budget_m, budget_min: the budgets (None: not given).
         evaluate: a plan to score instead of searching (``--evaluate``).
         sigma_m, robot: the measurement: a tape sigma or a robot description.
+        compare_paths: general paths to compare with forth-and-back plans of
+            ``budget_min`` (``--compare-paths``; odohil/session/path_planning.py).
+        split_directions: one e_turn per kind of turn and direction (plans
+            with paths, the comparison).
     """
 
     prior: ErrorParameters
@@ -59,6 +63,8 @@ class PlanRequest:
     max_designs: int = 2
     max_leg_m: float = DEFAULT_MAX_LEG_M
     floor_m: float | None = None
+    compare_paths: str | None = None
+    split_directions: bool = False
 
 
 @dataclass(frozen=True)
@@ -83,7 +89,12 @@ class PlannedExperiment:
     turn_designs: tuple[str, ...] = ()
 
 
-def _measurement(request: PlanRequest) -> tuple[RobotDescription, str]:
+def measurement_of(request: PlanRequest) -> tuple[RobotDescription, str]:
+    """The robot description of ``--robot`` or ``--sigma-m``, and the measurement in words.
+
+    Raises:
+        ParameterError: both given, or a bad sigma.
+    """
     if request.sigma_m is not None and request.robot is not None:
         raise ParameterError("give either --sigma-m or --robot, not both")
     if request.robot is not None:
@@ -96,7 +107,8 @@ def _measurement(request: PlanRequest) -> tuple[RobotDescription, str]:
     )
 
 
-def _targets(request: PlanRequest) -> dict[str, float]:
+def targets_of(request: PlanRequest) -> dict[str, float]:
+    """The targets given, SI, by parameter name (ParameterError: one not positive)."""
     for name, value in request.targets_paper.items():
         if value is not None and (not math.isfinite(value) or value <= 0):
             raise ParameterError(f"--target-{name.replace('_', '-')} must be positive")
@@ -112,13 +124,13 @@ def make_plan(request: PlanRequest) -> PlannedExperiment:
             sigma, target, leg, floor or plan (naming the option).
         OdohilError: the planner finds no plan (e.g. no candidate design).
     """
-    description, measurement = _measurement(request)
+    description, measurement = measurement_of(request)
     budget = request.budget_m is not None or request.budget_min is not None
     if request.evaluate is None and not budget:
         raise ParameterError("give --budget-m (metres) or --budget-min, or --evaluate PLAN")
     if request.evaluate is not None and budget:
         raise ParameterError("--evaluate scores a given plan: give no --budget-m/--budget-min")
-    targets = _targets(request)
+    targets = targets_of(request)
     operator = OperatorTime(request.measure_s, request.speed_m_per_s, DEFAULT_TURN_RATE_RAD_PER_S)
     prior = request.prior
     turns: list[str] = []
