@@ -16,7 +16,7 @@ from odohil.cli.app import app
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_OK
 from odohil.robots import __file__ as robots_init
 from odohil.science.path_designs import parse_path_design
-from odohil.science.path_plans import RobotModel, score_plan
+from odohil.science.path_plans import RobotModel, Shape, score_plan
 from odohil.science.paths import Design
 from odohil.session.path_planning import (
     PathComparisonRequest,
@@ -41,7 +41,10 @@ def test_evaluate_scores_a_plan_naming_a_path_with_the_turn_errors() -> None:
     assert list(parameters) == ["E_R", "E_T", "K_theta", "K_rho", "e_turn_spin", "e_turn_arc",
                                 "K_spin"]  # fmt: skip
     robot = RobotModel.of(load_robot_description(CREATE2))
-    items = [(parse_path_design("square:1,cw"), 10), (Design(1.0, 2.0, "reverse"), 10)]
+    items: list[tuple[Shape, int]] = [
+        (parse_path_design("square:1,cw"), 10),
+        (Design(1.0, 2.0, "reverse"), 10),
+    ]
     expected = score_plan(items, robot)
     for entry in expected.parameters:
         shown = parameters[entry.name]
