@@ -68,6 +68,7 @@ from odohil.science.floor_marks import (
     pose_covariance,
     solve_marks,
 )
+from odohil.science.moments import pose_moments, turn_errors_from
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
@@ -108,12 +109,18 @@ class ParameterBelief:
         source: ``priors`` or ``estimate``, for messages.
         rate_floor: the least K_theta (rad^2/m) and K_rho (m) a prediction
             assumes (the priors' values for a belief from an estimate).
+        turns: a general-path fit's turn errors the estimate pins, as
+            (name, value, standard deviation) in SI (``e_turn``... no unit,
+            ``K_spin`` rad^2/rad; names as odohil/science/estimators/paths.py
+            fits them), the deviation widened like the four's; empty: exact
+            turns (the four-parameter model).
     """
 
     mean: ErrorParameters
     cov: FloatArray
     source: str = "priors"
     rate_floor: tuple[float, float] = (0.0, 0.0)
+    turns: tuple[tuple[str, float, float], ...] = ()
 
     @classmethod
     def from_priors(cls, priors: ParameterPriors) -> ParameterBelief:
@@ -162,17 +169,29 @@ class ParameterBelief:
     @classmethod
     def from_result(cls, result: EstimateResult, priors: ParameterPriors) -> ParameterBelief:
         """An estimate's values, standard errors and correlation (see
-        :meth:`from_estimate`): its four parameters (a general-path fit's turn
-        errors left out: the belief is of the four-parameter model)."""
+        :meth:`from_estimate`), and a general-path fit's turn errors (e_turn...,
+        K_spin) where it pins them (a finite standard error, widened by
+        :data:`ESTIMATE_INFLATION`; their correlations with the four are left
+        out): a Create 2 square's prediction without them is off by 2 pi
+        e_turn in heading and lacks its spins' spread, so nearly every clean
+        square would trip the slip check and the prior would pull the choice
+        of pose (tests/science/test_turn_belief.py)."""
         names = [p.name for p in result.parameters]
         rows = [names.index(name) for name in PARAMETER_NAMES]
         correlation = result.correlation
-        return cls.from_estimate(
+        belief = cls.from_estimate(
             [result.parameters[i].value for i in rows],
             [result.parameters[i].stderr for i in rows],
             None if correlation is None else [[correlation[i][j] for j in rows] for i in rows],
             priors,
         )
+        turns = tuple(
+            (p.name, max(p.value, 0.0) if p.name == "K_spin" else p.value,
+             ESTIMATE_INFLATION * p.stderr)
+            for p in result.parameters
+            if p.name not in PARAMETER_NAMES and p.stderr is not None and math.isfinite(p.stderr)
+        )  # fmt: skip
+        return replace(belief, turns=turns)
 
 
 @dataclass(frozen=True, eq=False)
@@ -236,7 +255,9 @@ def predictive_pose(
     """The predictive distribution of one trial's pose change (dx m, dy m,
     dtheta rad) under ``belief``, shifted by the encoders' departure from the
     design's ideal end pose (see the module docstring)."""
-    mean, cov = _moments(design, belief.mean.as_tuple(), _key(belief.cov), belief.rate_floor)
+    mean, cov = _moments(
+        design, belief.mean.as_tuple(), _key(belief.cov), belief.rate_floor, belief.turns
+    )
     mean = mean.copy()
     if encoder_end_pose is not None:
         ideal = np.array(design.path().encoder_end_pose())
@@ -256,10 +277,12 @@ def _moments(
     values: tuple[float, ...],
     cov_key: tuple[float, ...],
     floor: tuple[float, float],
+    turns: tuple[tuple[str, float, float], ...] = (),
 ) -> tuple[FloatArray, FloatArray]:
     params = ErrorParameters(*values)
     cov_params = np.array(cov_key).reshape(4, 4)
-    derivatives = moment_derivatives(design.path(), params)
+    path = design.path()
+    derivatives = moment_derivatives(path, params)
     sd = np.sqrt(np.clip(np.diag(cov_params), 0.0, None))
     widened = ErrorParameters(
         params.e_r,
@@ -269,9 +292,33 @@ def _moments(
     )
     # the widened rates give the model's spread; the mean's dependence on
     # the parameters adds their uncertainty
-    model_cov = moment_derivatives(design.path(), widened).cov
+    model_cov = moment_derivatives(path, widened).cov
     cov = model_cov + derivatives.d_mean.T @ cov_params @ derivatives.d_mean
-    return derivatives.mean.copy(), 0.5 * (cov + cov.T)
+    mean = derivatives.mean.copy()
+    if turns:
+        names = [name for name, _, _ in turns]
+        at = np.array([value for _, value, _ in turns])
+        turn_sd = np.array([s for _, _, s in turns])
+        raised = np.array(
+            [v + s if name == "K_spin" else v for name, v, s in turns]
+        )  # K_spin raised by its deviation, as K_theta and K_rho are
+        mean = pose_moments(path, params, turn_errors_from(names, list(at))).mean
+        cov = (
+            cov - model_cov + pose_moments(path, widened, turn_errors_from(names, list(raised))).cov
+        )
+        for j, (name, value, s) in enumerate(turns):
+            if name == "K_spin" or s == 0.0:
+                continue  # a rate moves the spread, not the mean
+            step = max(1e-7, 1e-4 * abs(value))
+            high, low = at.copy(), at.copy()
+            high[j] += step
+            low[j] -= step
+            d_mean = (
+                pose_moments(path, params, turn_errors_from(names, list(high))).mean
+                - pose_moments(path, params, turn_errors_from(names, list(low))).mean
+            ) / (2.0 * step)
+            cov = cov + np.outer(d_mean, d_mean) * turn_sd[j] ** 2
+    return mean, 0.5 * (cov + cov.T)
 
 
 def select_pose(
