@@ -36,7 +36,7 @@ from odohil.errors import (
     TrialFileError,
 )
 from odohil.science.estimators import EstimateResult
-from odohil.session.engine import IncrementalLiveEstimator, StartCheck
+from odohil.session.engine import StartCheck
 from odohil.session.events import Solved, Void
 from odohil.session.journal import Record
 from odohil.session.lifecycle import (
@@ -51,6 +51,7 @@ from odohil.session.lifecycle import (
     interrupted_before_run,
     open_session,
     preflight,
+    progress_estimator,
     require,
     run_session,
 )
@@ -207,9 +208,10 @@ def run_with_progress(
 ) -> RunOutcome:
     """Run the session with a progress bar. The bar shows a live E_R value
     only, so the cheap incremental fit serves it instead of the recipe's
-    robust fit per trial; the verdict is the recipe's (odohil/session/lifecycle)."""
+    robust fit per trial where it can (``progress_estimator``: not for a plan
+    with general paths); the verdict is the recipe's (odohil/session/lifecycle)."""
     observer = ProgressObserver(console, opened.state, system)
-    estimator = IncrementalLiveEstimator(opened.prepared.spec.exclude)
+    estimator = progress_estimator(opened)
     with observer.shown():
         return run_session(
             opened, observer, estimator=estimator, start_check=start_check or observer.show_start

@@ -27,6 +27,7 @@ from odohil.session.lifecycle.running import (
     final_estimate,
     interrupt_text,
     interrupted_before_run,
+    progress_estimator,
     run_session,
 )
 from odohil.session.lifecycle.spec import SessionSpec, default_session_folder
@@ -46,6 +47,7 @@ __all__ = [
     "interrupted_before_run",
     "open_session",
     "preflight",
+    "progress_estimator",
     "require",
     "run_session",
 ]

@@ -15,6 +15,7 @@ from typing import Any, Literal
 from odohil.errors import OdohilError, StopUnconfirmedError
 from odohil.science.estimators import EstimateResult
 from odohil.session.engine import (
+    IncrementalLiveEstimator,
     LiveEstimator,
     MotionSettings,
     SessionEngine,
@@ -139,6 +140,19 @@ class RecipeLiveEstimator:
             self._done = len(state.completed)
             self._result = final_estimate(state, self.exclude).result
         return self._result
+
+
+def progress_estimator(opened: Opened) -> LiveEstimator | None:
+    """The live estimator behind a progress bar: the cheap incremental fit for
+    a plan of forth-and-back designs; None (the recipe's fit of every trial,
+    :class:`RecipeLiveEstimator`) for a plan with general paths, which the
+    incremental fit cannot fold in: a live belief without the squares' turn
+    errors mis-predicts every square, so the slip check trips on clean tape
+    readings and the prior pulls the choice of pose (issue 19,
+    tests/session/test_path_belief.py)."""
+    if opened.prepared.plan.has_paths:
+        return None
+    return IncrementalLiveEstimator(opened.prepared.spec.exclude)
 
 
 def run_session(
