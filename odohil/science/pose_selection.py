@@ -172,7 +172,8 @@ class ParameterBelief:
         :meth:`from_estimate`), and a general-path fit's turn errors (e_turn...,
         K_spin) where it pins them (a finite standard error, widened by
         :data:`ESTIMATE_INFLATION`; their correlations with the four are left
-        out): a Create 2 square's prediction without them is off by 2 pi
+        out; none when the estimate does not pin E_R, with which squares of
+        one direction confound e_turn): a Create 2 square's prediction without them is off by 2 pi
         e_turn in heading and lacks its spins' spread, so nearly every clean
         square would trip the slip check and the prior would pull the choice
         of pose (tests/science/test_turn_belief.py)."""
@@ -185,6 +186,9 @@ class ParameterBelief:
             None if correlation is None else [[correlation[i][j] for j in rows] for i in rows],
             priors,
         )
+        e_r = result.parameters[rows[0]].stderr
+        if e_r is None or not (math.isfinite(e_r) and ESTIMATE_INFLATION * e_r < priors.sd[0]):
+            return belief  # E_R is the prior's: a turn scale fitted beside another E_R is not
         turns = tuple(
             (p.name, max(p.value, 0.0) if p.name == "K_spin" else p.value,
              ESTIMATE_INFLATION * p.stderr)

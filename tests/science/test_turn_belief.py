@@ -89,3 +89,23 @@ def test_clean_squares_rarely_trip_the_slip_check_with_the_fits_turn_errors() ->
     # measured (seeds 19-21, 80 squares each): with the four parameters only,
     # 66, 72 and 71 clean squares tripped; with the fit's turn errors 0, 0, 0
     assert alarms / clean <= 0.03, (alarms, clean)
+
+
+def test_turn_errors_are_left_out_when_the_fit_does_not_pin_e_r() -> None:
+    """Squares of one direction alone confound e_turn with E_R (a validation
+    session's own fit: e_turn 0.27 +- 0.14 on the fake Create 2, seed 102): the
+    belief falls back to the priors' E_R, and a turn scale fitted against
+    another E_R would move the prediction's mean by 2 pi e_turn for nothing."""
+    rng = np.random.default_rng(3)
+    design = PathDesign("square", 4, 1.0, False)
+    path = design.path()
+    poses = simulate_turn_errors(path, CREATE2, TURNS, 10, seed=rng).pose_change
+    trials = [
+        PathTrial(path, pose + rng.multivariate_normal(np.zeros(3), TAPE_COV), TAPE_COV)
+        for pose in poses
+    ]
+    belief = ParameterBelief.from_result(
+        estimate_paths(trials, turns_exact=False), ParameterPriors()
+    )
+    assert belief.mean.e_r == ParameterPriors().mean.e_r  # not pinned: the prior's
+    assert belief.turns == ()
