@@ -19,6 +19,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from odohil.cli.app import app
@@ -27,6 +28,7 @@ PLAN = "k=0.5,l=2,n=4;path=square:0.5,cw,n=8;path=square:0.5,ccw,n=8"
 URL = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15"
 
 
+@pytest.mark.slow
 def test_squares_are_predicted_with_the_turn_errors_of_the_squares_before(
     tmp_path: Path,
 ) -> None:
