@@ -6,20 +6,19 @@ square has in-place turns ... give the square's measured poses with --measure
 FILE"), for both robots. Now the square is driven, journaled under
 SESSION/validation/<slug>/ and tested.
 
-Acceptance (issue 19, first point), one seed per cell here (several in
-bench/validate_paths.py, BENCHMARKS.md): a session calibrated on a fake passes
+Acceptance (issue 19, first point): a session calibrated on a fake passes
 (exit 0) on a square driven on the same fake, and fails (exit 3) on a fake
-whose E_R is three times and K_theta nine times larger, for the fake Nomad and
-the fake Create 2, clockwise and counter-clockwise. The Create 2 is calibrated
-with turns_exact = false on one-way straight runs and 0.5 m squares both ways,
-so its spin errors are estimated (e_turn, K_spin) and predicted for the 1 m
-square. Its spins are noisy (K_spin 2e-4 rad^2/rad: about 2 degrees of heading
-per square), so the calibration needs many of them: with 20 polygonal circles
-the calibration's own e_turn uncertainty (0.0017, 0.6 degrees a square) hid
-the wrong fake's extra 2.8 degrees of heading drift a square in one cell of
-four; with 50 squares (e_turn to 0.0013 per direction) every cell is told
-apart (BENCHMARKS.md). One calibration per robot, its four validations in one
-test (a module fixture would be recomputed on every xdist worker).
+whose E_R is three times and K_theta nine times larger, clockwise and
+counter-clockwise. Here, in CI: the fake Nomad, one seed, all four cells
+(12 s). The fake Create 2's cells cost about 400 s of one core (a 60-trial
+calibration of squares at time scale 10, then 60 validation squares), more
+than CI's budget, so they are a benchmark: ``python bench/validate_paths.py
+--robot create2 --seeds 1-3`` (BENCHMARKS.md, "Validation on a driven square"
+and "Create 2: is the calibration confidently wrong": 12 of 12 cells as
+required once the live belief kept the turn errors; about 84-96 % power per
+wrong cell with 15 squares of 1 m). The Create 2 driving a validation square
+path in CI: tests/session/test_path_plans.py (a session of squares),
+tests/session/test_path_belief.py, tests/driver/test_drive_paths.py.
 """
 
 from __future__ import annotations
@@ -119,20 +118,19 @@ def validate(
     if code == 1:  # cut off: resume the validation session, then test it
         folder = out or session / "validation" / parse_validation_path(path).slug()
         code, err = resumed(code, err, folder)
-        assert code in (0, 3), err
+        assert code != 1, err
         code, out_text, err = odohil(*args)
     assert out_text.strip(), (code, err)
     return code, json.loads(out_text), err
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("robot", list(ROBOTS))
+@pytest.mark.parametrize("robot", ["nomad150"])  # the Create 2's: bench/validate_paths.py
 def test_a_square_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(
     tmp_path: Path, robot: str
 ) -> None:
     session = calibrate(tmp_path, robot, SEED)
     other = SEED + 100  # the validations drive other draws than the calibration
-    missed: list[str] = []  # wrong-fake cells that passed
     for direction in ("cw", "ccw"):
         path = f"square:1.0,{direction}"
         code, good, err = validate(session, robot, path, other, wrong=False)
@@ -147,11 +145,7 @@ def test_a_square_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(
             assert any(name.startswith("e_turn") for name in good["calibration"]["parameters"])
         wrong = session / "validation" / f"wrong-{direction}"
         code, bad, err = validate(session, robot, path, other, wrong=True, out=wrong)
-        assert code in (0, 3), err
-        if code == 0:
-            missed.append(f"{direction}: {bad['verdict']['bias']['axes']['theta']}")
-        else:
-            assert bad["verdict"]["status"] == "fail", bad["verdict"]
+        assert (code, bad["verdict"]["status"]) == (3, "fail"), (direction, bad["verdict"], err)
     # a finished validation is tested again without a robot
     again, _, err = odohil("validate", str(session), "--path", "square:1.0,cw", "--json")
     assert again == 0, err
@@ -164,13 +158,6 @@ def test_a_square_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(
     # the calibration's journal never saw the 1 m squares
     log = (session / "journal.jsonl").read_text(encoding="utf-8")
     assert "square:1," not in log
-    if missed and robot == "create2":
-        # measured (BENCHMARKS.md, "Validation on a driven square"): 15 squares of 1 m
-        # hold about 50 % power against the Create 2's wrong fake (the extra 2.8 degrees
-        # of drift a square against about 2 degrees of spin noise a square and the
-        # calibration's own uncertainty: z near the bias test's 3.2)
-        pytest.xfail(f"wrong Create 2 fake not rejected (low power, issue 19): {missed}")
-    assert not missed, missed
 
 
 def test_the_issue_command_drives_the_square(tmp_path: Path) -> None:
@@ -181,7 +168,7 @@ def test_the_issue_command_drives_the_square(tmp_path: Path) -> None:
         "--robot", str(tmp_path / "robot.toml"), "--path", "square:1.0", "--trials", "15",
         "--measure", "fake", "--json",
     )  # fmt: skip
-    assert code in (0, 3), err  # driven and tested: no longer bad input
+    assert code == 0, err  # driven and tested (no longer bad input); the calibrated fake passes
     data = json.loads(out)
     assert data["validation_session"] == str(session / "validation" / "square-1-ccw")
     assert data["n_trials"] + len(data["left_out_ambiguous"]) == 15
