@@ -25,7 +25,6 @@ from odohil.cli.session_view import (
     say_opened,
     session_exit_codes,
 )
-from odohil.cli.verdict import outcome_line
 from odohil.errors import (
     JournalError,
     MeasurementError,
@@ -37,6 +36,7 @@ from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.lifecycle import SessionSpec, open_session, preflight
 from odohil.session.logs import ImportOptions
+from odohil.session.outcome_text import outcome_line
 from odohil.session.plan import Plan
 from odohil.session.robot_file import load_robot_description
 from odohil.session.state import load_session
