@@ -29,6 +29,7 @@ from odohil.science.path_plans import (
 from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
+from odohil.session.path_pose_files import check_serves, file_format
 from odohil.session.plan import Plan
 from odohil.session.trial_files import read_trials
 
@@ -207,12 +208,16 @@ def check_trial_file(
     path: str | Path, description: RobotDescription, plan: Plan, first_trial: int = 1
 ) -> None:
     """A trial file that serves the plan: one row per trial, row k of trial k's
-    design, for trials ``first_trial`` .. the plan's last.
+    design, for trials ``first_trial`` .. the plan's last (a pose file or a
+    general-path trial file: odohil/session/path_pose_files.py).
 
     Raises:
         TrialFileError: the file is unreadable, has bad rows, too few rows or a
             row of another design (the first few are listed).
     """
+    if file_format(path) != "trials":
+        check_serves(path, plan, first_trial)
+        return
     trials = read_trials(path, description)
     if len(trials) < plan.n_trials:
         raise TrialFileError(
