@@ -49,7 +49,7 @@ def calibrate(tmp_path: Path) -> Path:
     robot.write_text(ROBOT_TOML, encoding="utf-8")
     session = tmp_path / "calibration"
     code, _, err = odohil(
-        "run", "--allow-few-trials", "--port", "fakerobot://?seed=3&time_scale=2000",
+        "run", "--allow-few-trials", "--port", "fakerobot://?seed=3&time_scale=20000",
         "--robot", str(robot), "--plan", "k=1,l=3,n=12;k=10,l=0.5,n=12", "--measure", "fake",
         "--seed", "3", "--session", str(session), "--json",
     )  # fmt: skip
