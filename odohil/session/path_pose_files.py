@@ -260,12 +260,7 @@ def check_serves(path: str | Path, plan: Plan, first_trial: int = 1) -> None:
             each with what it should be).
     """
     rows = read_rows(path)
-    if len(rows) < plan.n_trials:
-        raise TrialFileError(
-            f"--measure {path}: {units.plural(len(rows), 'row')} for a plan of "
-            f"{units.plural(plan.n_trials, 'trial')}; "
-            "the file needs one row per trial, in plan order"
-        )
+    check_row_count(path, len(rows), plan)
     if rows[0].steps is None and len(plan.items) > 1:
         labels = ", ".join(item.design.label() for item in plan.items)
         raise TrialFileError(
@@ -279,10 +274,34 @@ def check_serves(path: str | Path, plan: Plan, first_trial: int = 1) -> None:
         problem = row_problem(row, plan.design_of(trial))
         if problem:
             wrong.append(f"row {trial} (line {row.line}): {problem}")
+    refuse_rows(path, wrong, "path")
+
+
+def check_row_count(path: str | Path, n_rows: int, plan: Plan) -> None:
+    """A file of ``n_rows`` rows for ``plan``, one per trial (``--measure``).
+
+    Raises:
+        TrialFileError: fewer rows than the plan has trials.
+    """
+    if n_rows < plan.n_trials:
+        raise TrialFileError(
+            f"--measure {path}: {units.plural(n_rows, 'row')} for a plan of "
+            f"{units.plural(plan.n_trials, 'trial')}; "
+            "the file needs one row per trial, in plan order"
+        )
+
+
+def refuse_rows(path: str | Path, wrong: list[str], what: str) -> None:
+    """Refuse the rows of ``--measure`` that do not serve their trials (``wrong``:
+    one line each, the first :data:`SHOWN` listed; ``what``: ``design`` or ``path``).
+
+    Raises:
+        TrialFileError: ``wrong`` is not empty.
+    """
     if wrong:
         shown = "\n  ".join(wrong[:SHOWN])
         more = f"\n  ... {len(wrong) - SHOWN} more" if len(wrong) > SHOWN else ""
         raise TrialFileError(
-            f"--measure {path}: {units.plural(len(wrong), 'row')} of another path than the "
+            f"--measure {path}: {units.plural(len(wrong), 'row')} of another {what} than the "
             f"plan's:\n  {shown}{more}"
         )
