@@ -97,7 +97,11 @@ from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState
 from odohil.session.tape_entry import INSTRUCTIONS, TapeEntries, parse_optional_metres
 from odohil.session.validation import PATH_SYNTAX
-from odohil.session.validation_wizard import GuidedValidation, guided_validation, validation_of
+from odohil.session.validation_wizard import (
+    GuidedValidation,
+    guided_validation,
+    validation_target,
+)
 
 DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
 _STYLE = {"refused": "[red]refused:[/] ", "check": "[yellow]check:[/] ", "no_back": "[yellow]"}
@@ -303,15 +307,14 @@ def wizard(
         allow_few_trials=True, note=note,
     )  # fmt: skip
     guide = None
-    with bad_inputs():  # a validation session continued by --session alone
-        if validate is None and session is not None and (found := validation_of(session)):
-            validate, path_text = found
-    if validate is not None:
-        with bad_inputs():
+    with bad_inputs():  # --validate, or a validation session continued by --session alone
+        target = validation_target(validate, path_text, trials, session)
+        if target is not None:
             guide = guided_validation(
-                validate, path_text or "", trials, folder=session, robot_file=robot_file,
-                port=port, baud=baud, max_leg_m=max_leg_m, note=note,
+                *target, trials, folder=session, robot_file=robot_file, port=port, baud=baud,
+                max_leg_m=max_leg_m, note=note,
             )  # fmt: skip
+    if guide is not None:
         spec = guide.spec
         if not guide.trusted:
             print_refusal(console, guide.calibration.outcome, None, "nothing driven")

@@ -31,6 +31,7 @@ from odohil.session.plan import Plan
 from odohil.session.pose_sources import OPERATOR
 from odohil.session.state import SessionState, load_session
 from odohil.session.validation import (
+    PATH_SYNTAX,
     Calibration,
     ValidationPath,
     check_trials,
@@ -201,3 +202,32 @@ def validation_of(folder: Path) -> tuple[Path, str] | None:
     if not (isinstance(of, str) and isinstance(path, str) and of and path):
         return None
     return Path(of), path
+
+
+def validation_target(
+    validate: Path | None, path_text: str | None, trials: int | None, session: Path | None
+) -> tuple[Path, str] | None:
+    """What the wizard validates: the calibration session and ``--path`` of
+    ``--validate SESSION --path PATH``, or of the validation session that
+    ``--session`` names (continued as one); None: the wizard calibrates.
+
+    Raises:
+        ParameterError: ``--validate`` without ``--path``, or ``--path`` or
+            ``--trials`` without ``--validate`` (and no validation session).
+        JournalError: a corrupt journal in ``session``.
+    """
+    if validate is not None:
+        if path_text is None:
+            raise ParameterError(
+                f"--validate {validate}: give the path to validate on, --path PATH ({PATH_SYNTAX})"
+            )
+        return validate, path_text
+    found = validation_of(session) if session is not None else None
+    if found is None:
+        if path_text is not None or trials is not None:
+            raise ParameterError(
+                "--path and --trials name a validation: give --validate SESSION (the "
+                "calibrated session) too; a calibration's plan is --plan"
+            )
+        return None
+    return found[0], path_text or found[1]

@@ -163,7 +163,8 @@ def test_a_validation_the_wizard_cannot_make_is_refused_before_anything_moves(
 ) -> None:
     """Refused before the pre-flight (nothing written, no port opened): a
     calibration that is not trusted (exit 3), a file to read instead of a path
-    to drive, a new validation without --trials, a path the fit used (exit 2)."""
+    to drive, a new validation without --trials, a path the fit used,
+    --validate without --path, --path without --validate (exit 2)."""
     robot = tmp_path / "robot.toml"
     robot.write_text(ROBOT_TOML, encoding="utf-8")
     poses = tmp_path / "poses.csv"  # squares measured 2 cm off: a failed fit
@@ -182,8 +183,14 @@ def test_a_validation_the_wizard_cannot_make_is_refused_before_anything_moves(
         (["--path", "square:0.5,ccw"], 2, "--trials N is needed to start a validation"),
         (["--path", "square:0.5,cw", "--trials", "3"], 2, "is a path of the calibration's plan"),
     ]
-    for args, status, said in cases:
-        code, out, err = odohil("wizard", "--validate", str(session), *args, "--port", port)
+    every = [(["--validate", str(session), *args], status, said) for args, status, said in cases]
+    every += [
+        (["--validate", str(session), "--trials", "3"], 2, "give the path to validate on, --path"),
+        (["--path", "square:0.5,ccw", "--trials", "3"], 2, "give --validate SESSION"),
+    ]
+    for args, status, said in every:
+        code, out, err = odohil("wizard", *args, "--port", port, "--session", str(tmp_path / "s"))
         assert code == status, (args, out, err)
         assert said in " ".join((out + err).split()), (args, out, err)
+    assert not (tmp_path / "s").exists()
     assert not (session / "validation").exists()
