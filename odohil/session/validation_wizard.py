@@ -192,12 +192,14 @@ def validation_of(folder: Path) -> tuple[Path, str] | None:
     journaled in ``folder`` (the wizard given only ``--session`` continues it
     as a validation), or None when ``folder`` holds no validation session.
 
-    Raises:
-        JournalError: a corrupt journal.
+    A journal that cannot be read is left to the pre-flight's session check.
     """
     if not (folder / "journal.jsonl").is_file():
         return None
-    settings = load_session(folder).state.header.settings
+    try:
+        settings = load_session(folder).state.header.settings
+    except JournalError:
+        return None
     of, path = settings.get("validation_of"), settings.get("validation_path")
     if not (isinstance(of, str) and isinstance(path, str) and of and path):
         return None
@@ -214,7 +216,6 @@ def validation_target(
     Raises:
         ParameterError: ``--validate`` without ``--path``, or ``--path`` or
             ``--trials`` without ``--validate`` (and no validation session).
-        JournalError: a corrupt journal in ``session``.
     """
     if validate is not None:
         if path_text is None:
