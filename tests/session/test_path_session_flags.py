@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from odohil.session.state import load_session
+from odohil.session.report.data import load_report
 from tests.cli.test_validate_paths import odohil
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 
@@ -34,15 +34,16 @@ def test_the_flagged_squares_of_a_session_are_named(tmp_path: Path) -> None:
         "--session", str(session),
     )  # fmt: skip
     assert code == 0, err
-    state = load_session(session).state
-    doubted = [t.trial for t in state.completed if not t.ambiguous and (not t.clear_cut or t.slip)]
-    squares = [t.trial for t in state.completed if not hasattr(t.design, "k")]
+    # the report's table points out the trials whose pose is in doubt
+    points = load_report(session).trials
+    doubted = [p.trial for p in points if p.flagged and not p.ambiguous]
+    squares = [p.trial for p in points if p.design.startswith("square")]
     assert set(doubted) & set(squares), (doubted, squares)  # the finding needs a doubted square
     code, out, err = odohil("estimate", str(session), "--json")
     assert code == 0, err
     data = json.loads(out)
     assert data["flagged_trials"] == doubted
-    assert data["ambiguous_trials"] == [t.trial for t in state.completed if t.ambiguous]
+    assert data["ambiguous_trials"] == [p.trial for p in points if p.ambiguous]
     code, out, err = odohil("estimate", str(session))
     assert code == 0, err
     named = " ".join(out.split())
