@@ -37,7 +37,7 @@ import numpy as np
 from odohil import units
 from odohil.errors import TrialFileError
 from odohil.science.path_designs import PathDesign
-from odohil.science.paths import Design, Leg, Step, Turn
+from odohil.science.paths import Design, EncoderPath, Leg, Step, Turn
 from odohil.session.path_trial_file import is_path_trial_file, read_path_trials
 from odohil.session.plan import Plan
 from odohil.session.trial_files import (
@@ -234,16 +234,24 @@ def row_problem(row: PoseRow, design: Design | PathDesign) -> str:
             f"a pose file's row names no design and serves general paths only, "
             f"this trial runs {design.label()} (give a trial file with k,l_m,variant)"
         )
-    want = design.path().steps
+    return steps_problem(row, design.path(), design.label())
+
+
+def steps_problem(row: PoseRow, path: EncoderPath, label: str) -> str:
+    """Why the steps of ``row`` (a general-path trial file's) are not those of
+    ``path`` (named ``label``), "" when they are (or the row has none)."""
+    if row.steps is None:
+        return ""
+    want = path.steps
     if len(row.steps) != len(want):
         return (
             f"a path of {units.plural(len(row.steps), 'step')} ({_steps_text(row.steps)}), "
-            f"this trial runs {design.label()}: {_steps_text(want)}"
+            f"this trial runs {label}: {_steps_text(want)}"
         )
     for index, (got, wanted) in enumerate(zip(row.steps, want, strict=True)):
         if _step_problem(got, wanted):
             return (
-                f"step {index + 1} is {_step_text(got)}, this trial runs {design.label()}, "
+                f"step {index + 1} is {_step_text(got)}, this trial runs {label}, "
                 f"whose step {index + 1} is {_step_text(wanted)}"
             )
     return ""

@@ -64,7 +64,13 @@ from odohil.session.outcome import (
     load_path_trials,
     source_kind,
 )
-from odohil.session.path_pose_files import read_pose_file
+from odohil.session.path_pose_files import (
+    file_format,
+    read_path_rows,
+    read_pose_file,
+    refuse_rows,
+    steps_problem,
+)
 from odohil.session.plan import Plan
 from odohil.session.state import (
     SessionState,
@@ -387,12 +393,23 @@ def held_out_trials(
 def read_path_poses(file: Path, path: EncoderPath, label: str) -> ValidationTrials:
     """Pose changes of trials of ``path`` from a CSV with the columns
     ``dx_m,dy_m,dtheta_rad`` and optionally ``sigma_x_m,sigma_y_m,sigma_theta_rad``
-    (blank lines and ``#`` comments ignored; odohil/session/path_pose_files.py).
+    (blank lines and ``#`` comments ignored), or from a general-path trial file
+    whose every row is of ``path`` (odohil/session/path_pose_files.py).
 
     Raises:
-        TrialFileError: naming the file, the line and the column.
+        TrialFileError: naming the file, the line and the column, or the rows
+            of another path.
     """
-    rows = read_pose_file(file, f"--path {label}")
+    if file_format(file) == "path-trials":
+        rows = read_path_rows(file)
+        wrong = [
+            f"row {row.number} (line {row.line}): {problem}"
+            for row in rows
+            if (problem := steps_problem(row, path, label))
+        ]
+        refuse_rows(file, wrong, "path")
+    else:
+        rows = read_pose_file(file, f"--path {label}")
     n = len(rows)
     return ValidationTrials(
         poses=np.array([row.pose for row in rows], dtype=np.float64),

@@ -148,6 +148,15 @@ def test_validate_tests_a_driven_square_whose_poses_a_file_gives(tmp_path: Path)
     assert solved(tmp_path / "near") == near  # row k served trial k, as written
     tested = [t["pose_change"] for t in data["trials"]]
     assert np.allclose(tested, near, rtol=0, atol=1e-15)
+    # the same poses in a general-path trial file, read without --port (nothing driven)
+    squares = [design] * 3
+    jsonl = path_trial_file(tmp_path / "near.jsonl", squares, near[1])
+    code, out, err = odohil("validate", str(session), "--path", SQUARE, "--measure", str(jsonl))
+    assert code == 0, err
+    ccw = path_trial_file(tmp_path / "ccw.jsonl", [parse_path_design("square:0.5,ccw")], near[1])
+    code, out, err = odohil("validate", str(session), "--path", SQUARE, "--measure", str(ccw))
+    assert code == 2, err
+    assert "row 1 (line 2): step 2 is spin 1.571 rad" in " ".join(err.split()), err
     # 5 cm off in y on every square: fails
     off = [(p[0], p[1] + 0.05, p[2]) for p in near]
     code, out, err = validate(pose_file(tmp_path / "off.csv", off, sigmas=True), "off")
