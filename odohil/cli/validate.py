@@ -69,7 +69,7 @@ _HELP = (
     "errors.\n\n"
     "A forth-back design or a general path (square, polygon, circle; cw or ccw) is driven "
     "(--trials N, --measure fake|tcp://HOST:PORT|FILE, the port from --port or robot.toml "
-    "\\[serial]; `odohil wizard --plan path=...` drives one with the tape) and journaled as its "
+    "\\[serial]; `odohil wizard --validate SESSION --path ...` with the tape) and journaled as its "
     "own validation session, by default SESSION/validation/<path>/, never mixed into the "
     "calibration; when that folder already holds a finished validation of the path, its trials "
     "are tested again without driving.\n\n"

@@ -44,7 +44,15 @@ from odohil.cli.options import (
     option,
     unit_system,
 )
-from odohil.cli.render import MotionProgress, check_line, estimate_panel, print_verdict
+from odohil.cli.render import (
+    MotionProgress,
+    bad_inputs,
+    check_line,
+    estimate_panel,
+    print_lines,
+    print_refusal,
+    print_verdict,
+)
 from odohil.cli.robot_option import robot_option
 from odohil.cli.session_view import MAY_STILL_MOVE, prepared_or_exit, refuse, report_run
 from odohil.driver.odometry import OdometrySample
@@ -80,6 +88,7 @@ from odohil.session.operator_words import (
     start_marks,
     trial_header,
 )
+from odohil.session.outcome_text import outcome_line
 from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
 from odohil.session.signals import signal_of, signals_raise
@@ -87,6 +96,12 @@ from odohil.session.sources import OperatorSource, TrialContext
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState
 from odohil.session.tape_entry import INSTRUCTIONS, TapeEntries, parse_optional_metres
+from odohil.session.validation import PATH_SYNTAX
+from odohil.session.validation_wizard import (
+    GuidedValidation,
+    guided_validation,
+    validation_target,
+)
 
 DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
 _STYLE = {"refused": "[red]refused:[/] ", "check": "[yellow]check:[/] ", "no_back": "[yellow]"}
@@ -201,6 +216,7 @@ class WizardObserver:
     interrupts: Interrupts
     progress: MotionProgress
     system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
+    validation: GuidedValidation | None = None
 
     def on_sample(self, sample: OdometrySample) -> None:
         """An encoder sample of the motion: show it, act on a deferred Ctrl-C."""
@@ -230,6 +246,9 @@ class WizardObserver:
         """The solved pose, then the session's estimate and verdict by the one recipe."""
         self.console.print(solved(state.completed[-1]), style="green", markup=False)
         assert state.plan is not None
+        if self.validation is not None:  # the test so far, not an estimate
+            self.console.print(self.validation.live_line(state), markup=False)
+            return
         outcome = final_estimate(state)
         if outcome.result is None:
             self.console.print(f"No estimate yet: {escape(outcome.problem)}", soft_wrap=True)
@@ -263,8 +282,15 @@ def wizard(
     ] = DEFAULT_MAX_LEG_M,
     units_choice: UnitsOption = UNITS_DEFAULT,
     allow_turns: AllowTurnsOption = False,
-) -> None:
-    """Guide a calibration session beside the robot, one trial at a time."""
+    validate: Annotated[Path | None, typer.Option("--validate", help="Validate this calibrated "
+                        "session on --path with the tape instead (journaled in "
+                        "SESSION/validation/<path>/ or --session; exit 0 pass, 3 fail).")] = None,
+    path_text: Annotated[str | None, option("--path", help=PATH_SYNTAX)] = None,
+    trials: Annotated[int | None, option("--trials", bound="plan_n", help="Trials of --path "
+                      "(a new validation).")] = None,
+) -> None:  # fmt: skip
+    """Guide a calibration session beside the robot, one trial at a time
+    (with --validate SESSION --path PATH: a validation of it)."""
     console = Console(highlight=False)
     interrupts = Interrupts(
         lambda text: os.write(2, text.encode()),
@@ -274,24 +300,41 @@ def wizard(
     )
     interrupts.install()
     folder = session or default_session_folder()
+    note = {"by": "wizard", "port": port}
     spec = SessionSpec(
         folder, "auto", robot_file, plan=plan_text, default_plan=DEFAULT_PLAN,
         measure=OPERATOR, port=port, baud=baud, max_leg_m=max_leg_m, allow_turns=allow_turns,
-        allow_few_trials=True, note={"by": "wizard", "port": port},
+        allow_few_trials=True, note=note,
     )  # fmt: skip
+    guide = None
+    with bad_inputs():  # --validate, or a validation session continued by --session alone
+        target = validation_target(validate, path_text, trials, session)
+        if target is not None:
+            guide = guided_validation(
+                *target, trials, folder=session, robot_file=robot_file, port=port, baud=baud,
+                max_leg_m=max_leg_m, note=note,
+            )  # fmt: skip
+    if guide is not None:
+        spec = guide.spec
+        if not guide.trusted:
+            print_refusal(console, guide.calibration.outcome, None, "nothing driven")
+            raise typer.Exit(EXIT_UNTRUSTED)
+        print_lines(console, [outcome_line(guide.calibration.outcome)])
     console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
     with signals_raise():
-        code = _guided(console, spec, interrupts, unit_system(units_choice))
+        code = _guided(console, spec, interrupts, unit_system(units_choice), guide)
+    again = f"the wizard again with --session {spec.folder}" if guide is None else guide.again
     if code not in (EXIT_OK, EXIT_BAD_INPUT, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
-        console.print(
-            f"Stopped. The journal is in {folder}; run the wizard again with "
-            f"--session {folder} to continue."
-        )
+        console.print(f"Stopped. The journal is in {spec.folder}; run {again} to continue.")
     raise typer.Exit(code)
 
 
 def _guided(
-    console: Console, spec: SessionSpec, interrupts: Interrupts, system: units.UnitSystem
+    console: Console,
+    spec: SessionSpec,
+    interrupts: Interrupts,
+    system: units.UnitSystem,
+    guide: GuidedValidation | None,
 ) -> int:
     """Pre-flight (each check a tick), open the session (resume or start it:
     locked, connected), then run; a pre-flight failure exits by its class."""
@@ -305,18 +348,24 @@ def _guided(
             if opened.torn is not None:
                 console.print(f"[yellow]warning:[/] {opened.torn.describe()}")
             interrupts.robot = opened.robot
-            return _run(console, opened, interrupts, system)
+            return _run(console, opened, interrupts, system, guide)
     except PreflightFailed as exc:
         refuse(console, exc.check, tick)
     except KeyboardInterrupt as exc:
         return exit_for_signal(signal_of(exc))
 
 
-def _run(console: Console, opened: Opened, interrupts: Interrupts, system: units.UnitSystem) -> int:
+def _run(
+    console: Console,
+    opened: Opened,
+    interrupts: Interrupts,
+    system: units.UnitSystem,
+    guide: GuidedValidation | None,
+) -> int:
     """The session with the operator's prompts and screens, to the final screen."""
     progress = MotionProgress(console)
     prompts = WizardPrompts(console, opened.prepared.description, interrupts, progress)
-    observer = WizardObserver(console, interrupts, progress, system)
+    observer = WizardObserver(console, interrupts, progress, system, guide)
     try:
         outcome = run_session(
             opened, observer, source=OperatorSource(prompts), on_sample=observer.on_sample,
@@ -324,10 +373,14 @@ def _run(console: Console, opened: Opened, interrupts: Interrupts, system: units
         )  # fmt: skip
     finally:
         progress.stop()
+    if outcome.status == "finished" and guide is not None:
+        passed, lines = guide.final(outcome.state)
+        print_lines(console, lines)
+        return EXIT_OK if passed else EXIT_UNTRUSTED
     if outcome.status == "finished":
         return final_screen(console, outcome.state)
     # the command that continues a wizard session (`odohil resume` refuses them)
-    again = f"odohil wizard --session {opened.journal.folder}"
+    again = f"odohil wizard --session {opened.journal.folder}" if guide is None else guide.again
     report_run(console, outcome, again, interrupted="Interrupted")
     return exit_for_run(outcome)
 

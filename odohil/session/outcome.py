@@ -88,6 +88,9 @@ class EstimateOutcome:
         path_trials: the general-path trials estimated from (a general-path
             trial file or a recording, after the selection); empty for a
             session or a forth-and-back trial file.
+        path_flagged: (trial number, why) of the trials of a session with
+            general paths whose pose from the marks is in doubt (the others'
+            come from ``trials``).
     """
 
     source: str
@@ -100,6 +103,7 @@ class EstimateOutcome:
     export_refusals: tuple[str, ...] = ()
     torn: TornRecord | None = None
     path_trials: tuple[PathTrial, ...] = ()
+    path_flagged: tuple[tuple[int, str], ...] = ()
 
     @property
     def verdict(self) -> Verdict | None:
@@ -146,7 +150,7 @@ class EstimateOutcome:
     @property
     def flagged(self) -> tuple[tuple[int, str], ...]:
         """(trial number, why) of the trials whose pose from the marks is in doubt."""
-        return tuple(
+        return self.path_flagged + tuple(
             (o.trial or 0, t.note)
             for o, t in zip(self.observations, self.trials.trials, strict=True)
             if t.flagged
@@ -252,7 +256,12 @@ def _session_paths_outcome(
             "--method paper: a session with general paths is fitted by " + " or ".join(PATH_METHODS)
         )
     outcome = estimate_path_trials(trials, turns_exact, exclude, method, source)
-    return replace(outcome, ambiguous=ambiguous, torn=torn)
+    flagged = tuple(
+        (t.trial, "; ".join(part for part in (t.note, t.slip) if part))
+        for t in state.completed
+        if not t.ambiguous and (not t.clear_cut or t.slip)
+    )  # as session_trials flags a forth-and-back trial
+    return replace(outcome, ambiguous=ambiguous, torn=torn, path_flagged=flagged)
 
 
 def estimate_path(

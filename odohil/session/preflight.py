@@ -15,7 +15,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from odohil import units
-from odohil.errors import ParameterError, TrialFileError
+from odohil.errors import ParameterError
 from odohil.science.estimators.checks import plan_problems
 from odohil.science.path_plans import (
     Estimability,
@@ -29,6 +29,12 @@ from odohil.science.path_plans import (
 from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
+from odohil.session.path_pose_files import (
+    check_row_count,
+    check_serves,
+    file_format,
+    refuse_rows,
+)
 from odohil.session.plan import Plan
 from odohil.session.trial_files import read_trials
 
@@ -207,19 +213,18 @@ def check_trial_file(
     path: str | Path, description: RobotDescription, plan: Plan, first_trial: int = 1
 ) -> None:
     """A trial file that serves the plan: one row per trial, row k of trial k's
-    design, for trials ``first_trial`` .. the plan's last.
+    design, for trials ``first_trial`` .. the plan's last (a pose file or a
+    general-path trial file: odohil/session/path_pose_files.py).
 
     Raises:
         TrialFileError: the file is unreadable, has bad rows, too few rows or a
             row of another design (the first few are listed).
     """
+    if file_format(path) != "trials":
+        check_serves(path, plan, first_trial)
+        return
     trials = read_trials(path, description)
-    if len(trials) < plan.n_trials:
-        raise TrialFileError(
-            f"--measure {path}: {len(trials)} row(s) for a plan of "
-            f"{units.plural(plan.n_trials, 'trial')}; "
-            "the file needs one row per trial, in plan order"
-        )
+    check_row_count(path, len(trials), plan)
     wrong = []
     for trial in range(first_trial, plan.n_trials + 1):
         row = trials.trials[trial - 1]
@@ -229,10 +234,4 @@ def check_trial_file(
                 f"row {trial} (line {row.line}) is {row.design.label()}, "
                 f"trial {trial} runs {wanted.label()}"
             )
-    if wrong:
-        shown = "\n  ".join(wrong[:5]) + (
-            f"\n  ... {len(wrong) - 5} more" if len(wrong) > 5 else ""
-        )
-        raise TrialFileError(
-            f"--measure {path}: {len(wrong)} row(s) of another design than the plan's:\n  {shown}"
-        )
+    refuse_rows(path, wrong, "design")

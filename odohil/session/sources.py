@@ -9,7 +9,9 @@ Pose sources here:
   journaled through ``log``;
 - :class:`TruthPoseSource`: the fake robot's true pose change from its truth
   channel, with seeded Gaussian pose noise;
-- :class:`PoseFileSource`: a trial file of poses, read as poses.
+- :class:`PoseFileSource`: a trial file of poses, read as poses;
+- :class:`PathPoseSource`: a pose file or a general-path trial file serving
+  driven general paths (odohil/session/path_pose_files.py).
 
 A :class:`MeasurementSource` is asked three things per trial attempt:
 ``mark_start`` once the robot is re-zeroed (the operator marks the floor under
@@ -58,6 +60,7 @@ from odohil.science.pose_selection import (
     unmeasured_pair,
 )
 from odohil.science.robot_description import RobotDescription
+from odohil.session.path_pose_files import PoseRow, file_format, read_rows, row_problem
 from odohil.session.pose_source import (
     Covariance3,
     MeasuredPose,
@@ -79,6 +82,7 @@ __all__ = [
     "MeasurementSource",
     "OperatorPrompts",
     "OperatorSource",
+    "PathPoseSource",
     "PoseFileSource",
     "RecordedSource",
     "TapeSource",
@@ -638,6 +642,57 @@ class PoseFileSource:
         )
 
 
+class PathPoseSource:
+    """A pose file or a general-path trial file (odohil/session/path_pose_files.py)
+    as a :class:`PoseSource`: row k serves trial k of the plan (every attempt
+    at it) and must be of its path (the pre-flight checked the whole file). A
+    row's covariance is the file's, else what the description's floor marks
+    would give at that pose."""
+
+    def __init__(self, rows: Sequence[PoseRow], origin: str, description: RobotDescription) -> None:
+        self.rows = tuple(rows)
+        self.origin = origin
+        self.description = description
+
+    def _row(self, ctx: TrialContext) -> PoseRow:
+        if ctx.trial > len(self.rows):
+            raise MeasurementError(
+                f"{self.origin}: trial {ctx.trial} needs row {ctx.trial}, "
+                f"the file has {len(self.rows)}"
+            )
+        row = self.rows[ctx.trial - 1]
+        problem = row_problem(row, ctx.design)
+        if problem:
+            raise MeasurementError(
+                f"{self.origin}: row {row.number} (line {row.line}) cannot serve "
+                f"trial {ctx.trial}: {problem}"
+            )
+        return row
+
+    def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Nothing to mark; journal which row serves the trial."""
+        return {"row": ctx.trial, "origin": self.origin}
+
+    def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Nothing to mark."""
+        return {}
+
+    def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
+        """The trial's row as it stands in the file.
+
+        Raises:
+            MeasurementError: the file has no row for the trial, or its row is
+                of another path.
+        """
+        row = self._row(ctx)
+        cov = row.cov if row.cov is not None else pose_covariance(self.description, row.pose)
+        return MeasuredPose(
+            pose=_pose(row.pose),
+            covariance=_covariance(cov),
+            details={"source": f"{self.origin} line {row.line}"},
+        )
+
+
 def true_pose_change(ctx: TrialContext) -> Pose:
     """The attempt's true (dx m, dy m, dtheta rad) from the journaled true start
     and end poses, dtheta minus the design's winding.
@@ -656,12 +711,16 @@ def true_pose_change(ctx: TrialContext) -> Pose:
 
 def pose_source_from_file(path: str | Path, description: RobotDescription) -> PoseSource:
     """The pose source for a trial file: a file of poses is read as poses
-    (:class:`PoseFileSource`); a file of raw distances goes through the tape
-    and the floor-marks solver (:class:`TapeSource` over a :class:`RecordedSource`).
+    (:class:`PoseFileSource`; a pose file or a general-path trial file of
+    driven general paths: :class:`PathPoseSource`); a file of raw distances
+    goes through the tape and the floor-marks solver (:class:`TapeSource` over
+    a :class:`RecordedSource`).
 
     Raises:
         TrialFileError: bad rows (all listed).
     """
+    if file_format(path) != "trials":
+        return PathPoseSource(read_rows(path), str(path), description)
     trials = read_trials(path, description)
     if trials.kind == "pose":
         return PoseFileSource(trials.trials, str(path), description)

@@ -25,7 +25,6 @@ The test itself is :func:`odohil.science.validation.validation_test`.
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass, replace
@@ -39,7 +38,6 @@ from odohil.errors import (
     MeasurementError,
     OdohilError,
     ParameterError,
-    TrialFileError,
 )
 from odohil.science.estimators import EstimateResult
 from odohil.science.limits import RANGES
@@ -66,6 +64,13 @@ from odohil.session.outcome import (
     load_path_trials,
     source_kind,
 )
+from odohil.session.path_pose_files import (
+    file_format,
+    read_path_rows,
+    read_pose_file,
+    refuse_rows,
+    steps_problem,
+)
 from odohil.session.plan import Plan
 from odohil.session.state import (
     SessionState,
@@ -73,14 +78,7 @@ from odohil.session.state import (
     session_path_trials,
     session_trials,
 )
-from odohil.session.trial_files import (
-    MAX_ANGLE_RAD,
-    MAX_POSE_M,
-    MAX_ROWS,
-    TrialSet,
-    read_trial_text,
-    read_trials,
-)
+from odohil.session.trial_files import TrialSet, read_trials
 
 VALIDATION_FOLDER = "validation"
 """Sub-folder of a calibration session that holds its validation sessions."""
@@ -88,8 +86,6 @@ PATH_SYNTAX = (
     "square:SIDE[,cw|ccw], polygon:N,SIDE[,cw|ccw], circle:RADIUS,N[,cw|ccw], "
     "forth-back:K,L[,turn|reverse] or file:CSV"
 )
-POSE_COLUMNS = ("dx_m", "dy_m", "dtheta_rad")
-SIGMA_COLUMNS = ("sigma_x_m", "sigma_y_m", "sigma_theta_rad")
 
 PathKind = Literal["path", "forth-back", "file"]
 
@@ -397,77 +393,33 @@ def held_out_trials(
 def read_path_poses(file: Path, path: EncoderPath, label: str) -> ValidationTrials:
     """Pose changes of trials of ``path`` from a CSV with the columns
     ``dx_m,dy_m,dtheta_rad`` and optionally ``sigma_x_m,sigma_y_m,sigma_theta_rad``
-    (blank lines and ``#`` comments ignored).
+    (blank lines and ``#`` comments ignored), or from a general-path trial file
+    whose every row is of ``path`` (odohil/session/path_pose_files.py).
 
     Raises:
-        TrialFileError: naming the file, the line and the column.
+        TrialFileError: naming the file, the line and the column, or the rows
+            of another path.
     """
-    text = read_trial_text(file, "pose file").removeprefix("\ufeff")
-    lines = [
-        (n, line)
-        for n, line in enumerate(text.splitlines(), start=1)
-        if line.strip() and not line.lstrip().startswith("#")
-    ]
-    if not lines:
-        raise TrialFileError(f"{file}: no header line")
-    header = [h.strip() for h in next(csv.reader([lines[0][1]]))]
-    allowed = POSE_COLUMNS + SIGMA_COLUMNS
-    missing = [c for c in POSE_COLUMNS if c not in header]
-    unknown = [c for c in header if c not in allowed]
-    sigmas = [c in header for c in SIGMA_COLUMNS]
-    if missing or unknown or (any(sigmas) and not all(sigmas)) or len(set(header)) < len(header):
-        raise TrialFileError(
-            f"{file}, line {lines[0][0]}: a pose file for --path {label} has the columns "
-            f"{','.join(POSE_COLUMNS)}[,{','.join(SIGMA_COLUMNS)}]; got {','.join(header)}"
-        )
-    if len(lines) - 1 > MAX_ROWS:
-        raise TrialFileError(f"{file}: {len(lines) - 1} rows; at most {MAX_ROWS}")
-    poses: list[list[float]] = []
-    covs: list[FloatArray] = []
-    numbers: list[int] = []
-    problems: list[str] = []
-    for number, line in lines[1:]:
-        fields = [f.strip() for f in next(csv.reader([line]))]
-        if len(fields) != len(header):
-            problems.append(f"line {number}: expected {len(header)} fields, got {len(fields)}")
-            continue
-        row = dict(zip(header, fields, strict=True))
-        values: dict[str, float] = {}
-        for name in header:
-            try:
-                value = float(row[name])
-            except ValueError:
-                problems.append(f"line {number}: {name} is not a number: {row[name]!r}")
-                continue
-            cap = MAX_ANGLE_RAD if name.endswith("_rad") else MAX_POSE_M
-            if (
-                not math.isfinite(value)
-                or abs(value) > cap
-                or (name in SIGMA_COLUMNS and value < 0)
-            ):
-                low = 0 if name in SIGMA_COLUMNS else -cap
-                problems.append(f"line {number}: {name} must be within [{low:g}, {cap:g}]")
-                continue
-            values[name] = value
-        if len(values) != len(header):
-            continue
-        poses.append([values[c] for c in POSE_COLUMNS])
-        sd = [values.get(c, 0.0) for c in SIGMA_COLUMNS]
-        covs.append(np.diag(np.square(sd)))
-        numbers.append(len(numbers) + 1)
-    if problems:
-        raise TrialFileError(
-            f"{file}: {len(problems)} bad row(s), none used:\n  " + "\n  ".join(problems[:20])
-        )
-    if not poses:
-        raise TrialFileError(f"{file}: no trials")
-    n = len(poses)
+    if file_format(file) == "path-trials":
+        rows = read_path_rows(file)
+        wrong = [
+            f"row {row.number} (line {row.line}): {problem}"
+            for row in rows
+            if (problem := steps_problem(row, path, label))
+        ]
+        refuse_rows(file, wrong, "path")
+    else:
+        rows = read_pose_file(file, f"--path {label}")
+    n = len(rows)
     return ValidationTrials(
-        poses=np.array(poses, dtype=np.float64),
-        covs=np.array(covs, dtype=np.float64),
+        poses=np.array([row.pose for row in rows], dtype=np.float64),
+        covs=np.array(
+            [row.cov if row.cov is not None else np.zeros((3, 3)) for row in rows],
+            dtype=np.float64,
+        ),
         paths=(path,) * n,
         labels=(label,) * n,
-        numbers=tuple(numbers),
+        numbers=tuple(row.number for row in rows),
         backward=(False,) * n,
         source=str(file),
     )
