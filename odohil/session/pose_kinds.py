@@ -17,7 +17,13 @@ from odohil.errors import InitError, MeasurementError, ParameterError
 from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
 from odohil.session.mocap.stream import parse_tcp_url
 from odohil.session.pose_source import PoseSource
-from odohil.session.pose_sources import Connection, OpenContext, OpenedSource, Preflight
+from odohil.session.pose_sources import (
+    OPERATOR_WORDS,
+    Connection,
+    OpenContext,
+    OpenedSource,
+    Preflight,
+)
 from odohil.session.preflight import check_trial_file
 from odohil.session.sources import FakeTruthSource, TapeSource, pose_source_from_file
 
@@ -134,8 +140,9 @@ class TrialFileKind:
     fallback = True
 
     def parse(self, text: str) -> TrialFileSettings | None:
-        """Any text without a ``scheme:`` prefix, or an existing file."""
-        if _SCHEME.match(text) and not Path(text).exists():
+        """Any text without a ``scheme:`` prefix, or an existing file; not a
+        word for the operator's tape (:data:`OPERATOR_WORDS`) that names no file."""
+        if (_SCHEME.match(text) or text.lower() in OPERATOR_WORDS) and not Path(text).exists():
             return None
         return TrialFileSettings(text)
 

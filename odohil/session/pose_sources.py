@@ -272,6 +272,11 @@ class MeasureOption:
         return self.source_kind().journal_settings(self.settings)
 
 
+OPERATOR_WORDS = frozenset({"tape", "operator", "wizard", "manual"})
+"""``--measure`` words a user may try for the operator's tape, which only the
+wizard asks for: none is a pose source (unless a file of that name exists)."""
+
+
 def parse_measure(text: str) -> MeasureOption:
     """``--measure TEXT``: the first kind whose ``parse`` takes it (fallback kinds last).
 
@@ -286,8 +291,14 @@ def parse_measure(text: str) -> MeasureOption:
         if settings is not None:
             return MeasureOption(kind.name, settings, text)
     forms = "; ".join(k.forms for k in _in_parse_order(found))
+    operator = (
+        "; the operator's tape is measured in the wizard: `odohil wizard` to calibrate, "
+        "`odohil wizard --validate SESSION --path PATH` to validate"
+        if text.lower() in OPERATOR_WORDS
+        else ""
+    )
     raise ParameterError(
-        f"--measure {text!r}: no pose source takes this form; give one of: {forms}"
+        f"--measure {text!r}: no pose source takes this form{operator}; give one of: {forms}"
     )
 
 
