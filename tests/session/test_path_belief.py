@@ -25,7 +25,7 @@ from typer.testing import CliRunner
 from odohil.cli.app import app
 
 PLAN = "k=0.5,l=2,n=4;path=square:0.5,cw,n=8;path=square:0.5,ccw,n=8"
-URL = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15"
+URL = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15&skip_waits=1"
 
 
 @pytest.mark.slow
