@@ -9,7 +9,11 @@ take effect; ``passive_sleep_s``: simulated seconds before Passive sleeps, 0
 never; pacing off unless ``pacing=1``, then at the port's baud rate;
 ``max_gap_ms``: the fake's clock skips any gap between two host calls longer
 than this, fakes/create2/clock.py, so a descheduled host cannot make a leg
-drive on; default: wall time).
+drive on; default: wall time; ``skip_waits=1``: a read that waits for the
+robot's next frame or reply moves the fake's clock to it instead of sleeping
+(with ``max_gap_ms``, or alone: then no gap is cut), so the fake runs as fast
+as the host computes; the host sees the same frames at the same simulated
+times).
 Opened with ``serial.serial_for_url`` once :mod:`fakes` is imported.
 
 The port is the fake Nomad's in-process port (fakes/protocol_fakerobot.py)
@@ -19,8 +23,10 @@ runs whenever the port is used.
 
 from __future__ import annotations
 
+import math
 import time
 import urllib.parse
+from collections.abc import Callable
 from typing import Any, cast
 
 from serial.serialutil import SerialException
@@ -68,6 +74,7 @@ class Serial(FakeNomadSerial):
         faults: list[str] = []
         self._pacing = False
         max_gap_s: float | None = None
+        skip_waits = False
         try:
             for key, values in options.items():
                 value = values[-1]
@@ -89,6 +96,8 @@ class Serial(FakeNomadSerial):
                     faults.extend(values)
                 elif key == "max_gap_ms":
                     max_gap_s = float(value) / 1000.0
+                elif key == "skip_waits":
+                    skip_waits = value not in ("", "0", "false", "no")
                 elif key == "pacing":
                     self._pacing = value not in ("", "0", "false", "no")
                 elif key in _PAPER:
@@ -97,7 +106,11 @@ class Serial(FakeNomadSerial):
                     raise ValueError(f"unknown option {key!r}")
             params = ErrorParameters.from_paper_units(*(paper[k] for k in _PAPER))
             config = build_config(params=params, faults=faults, **kwargs)
-            clock = time.monotonic if max_gap_s is None else LagAbsorbingClock(max_gap_s)
+            clock: Callable[[], float] = time.monotonic
+            if max_gap_s is not None or skip_waits:
+                bounded = LagAbsorbingClock(math.inf if max_gap_s is None else max_gap_s)
+                self._skip = bounded.skip if skip_waits else None
+                clock = bounded
         except (ValueError, OdohilError) as exc:
             raise SerialException(f"bad fakecreate2 URL {url!r}: {exc}") from exc
         engine = Create2Engine(config, clock)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import time
 import urllib.parse
+from collections.abc import Callable
 from typing import Any
 
 import serial
@@ -48,6 +49,9 @@ class Serial(SerialBase):  # type: ignore[misc]
         self._pacer = LinePacer(None)
         self._pacing = False
         self._cut = False
+        self._skip: Callable[[float], None] | None = None
+        """Moves the robot's clock forward (set by a subclass whose URL asks
+        for it): a read that waits for the robot's next write jumps to it."""
         super().__init__(*args, **kwargs)
 
     # ---- SerialBase API --------------------------------------------------------
@@ -107,17 +111,38 @@ class Serial(SerialBase):  # type: ignore[misc]
             wait = POLL_S
             engine = self._engine()
             due = engine.next_output_wall()  # on the engine's clock
-            if due is not None:
-                wait = min(wait, max(0.0, due - engine.clock()))
+            to_due = None if due is None else max(0.0, due - engine.clock())
+            if to_due is not None:
+                wait = min(wait, to_due)
             release = self._pacer.next_release()
             if release is not None:
                 wait = min(wait, max(0.0, release - now))
             if deadline is not None:
                 wait = min(wait, deadline - now)
+            if self._skip is not None and to_due is not None:
+                skipped = self._skip_to(to_due, now, deadline)
+                if skipped == to_due:
+                    continue  # the robot's write is due now
+                if skipped > 0.0:
+                    break  # the read's timeout passed on the robot's clock
             time.sleep(wait)
         data = bytes(self._rx[:size])
         del self._rx[:size]
         return data
+
+    def _skip_to(self, to_due: float, now: float, deadline: float | None) -> float:
+        """Instead of sleeping, move the robot's clock forward: ``to_due`` s
+        to its next write, or only to the read's deadline when that comes
+        first (the read then times out as it would have); 0 (no jump) when a
+        line release comes first (pacing runs on the wall clock). The seconds
+        jumped."""
+        assert self._skip is not None
+        step = to_due if deadline is None else max(0.0, min(to_due, deadline - now))
+        release = self._pacer.next_release()
+        if step <= 0.0 or (release is not None and release - now < step):
+            return 0.0
+        self._skip(step)
+        return step
 
     def write(self, data: bytes | bytearray | memoryview) -> int:
         """Send ``data`` to the robot."""

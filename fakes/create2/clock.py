@@ -7,6 +7,13 @@ host can read a frame and send its stop: a leg ends long for a reason no real
 robot shares with its host. :class:`LagAbsorbingClock` cuts every gap between
 two readings to at most ``max_gap_s``: the fake's time, and so its simulated
 motion, advances in bounded steps between host calls, however late they come.
+
+:meth:`LagAbsorbingClock.skip` moves the clock forward without waiting: a port
+whose host waits for the fake's next write (``skip_waits=1`` on a
+``fakecreate2://`` URL, fakes/protocol_fakerobot.py) jumps to it instead of
+sleeping, so the fake runs as fast as its host computes. What the host sees is
+the same frames at the same simulated times; only the wall time between them
+is gone.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ class LagAbsorbingClock:
 
     Attributes:
         lost_s: wall time dropped so far, s.
+        skipped_s: time added by :meth:`skip` so far, s.
     """
 
     def __init__(self, max_gap_s: float, wall: Callable[[], float] = time.monotonic) -> None:
@@ -33,6 +41,7 @@ class LagAbsorbingClock:
         self._wall = wall
         self._last = wall()
         self.lost_s = 0.0
+        self.skipped_s = 0.0
 
     def __call__(self) -> float:
         now = self._wall()
@@ -40,4 +49,10 @@ class LagAbsorbingClock:
         if gap > self.max_gap_s:
             self.lost_s += gap - self.max_gap_s
         self._last = now
-        return now - self.lost_s
+        return now - self.lost_s + self.skipped_s
+
+    def skip(self, seconds: float) -> None:
+        """Move the clock ``seconds`` (>= 0, s) forward at once, as if the host
+        had slept that long (and no gap bound had cut it)."""
+        if seconds > 0:
+            self.skipped_s += seconds

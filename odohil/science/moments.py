@@ -259,7 +259,9 @@ def pose_moments(
     tail = (alpha * i_tail).tolist()  # B_i
     head = np.conj(alpha * i_mean).tolist()  # conj C_j
     shrink = np.exp(-0.5 * k * length).tolist()
-    jumps = np.exp(-0.5 * np.diff(jump, prepend=0.0)).tolist()
+    # the heading variance jumps at spins; without any, e^0 = 1 exactly, and
+    # np.diff and np.exp cost a tenth of the call
+    jumps = np.exp(-0.5 * np.diff(jump, prepend=0.0)).tolist() if turn_var else [1.0] * length.size
     running, cross = 0.0j, 0.0j
     for b, c_conj, g, h in zip(tail, head, shrink, jumps, strict=True):
         running *= h

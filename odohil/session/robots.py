@@ -23,9 +23,11 @@ time scales. :func:`fake_hooks` is the one place that reads them.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import importlib
+import sys
 from dataclasses import dataclass
-from importlib.metadata import entry_points
+from importlib.metadata import EntryPoint, entry_points
 from typing import Any, Protocol, cast
 
 from odohil.errors import InitError, OdohilError, ParameterError, RobotDescriptionError
@@ -54,9 +56,27 @@ class RobotBackend(Protocol):
         ...
 
 
+@functools.lru_cache(maxsize=4)
+def _registered(search_path: tuple[str, ...]) -> tuple[EntryPoint, ...]:
+    """The group's entry points on ``search_path`` (sys.path: the cache
+    follows it), by name. Reading every installed distribution's metadata
+    costs tens of milliseconds, and a session's estimate asks for its
+    backend's facts several times (as odohil/session/pose_sources.py)."""
+    return tuple(sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name))
+
+
+def clear_cache() -> None:
+    """Forget the entry points found so far (a package installed since)."""
+    _registered.cache_clear()
+
+
+def _named(protocol: str) -> tuple[EntryPoint, ...]:
+    return tuple(e for e in _registered(tuple(sys.path)) if e.name == protocol)
+
+
 def backend_names() -> tuple[str, ...]:
     """The registered backend names, sorted."""
-    return tuple(sorted(ep.name for ep in entry_points(group=ENTRY_POINT_GROUP)))
+    return tuple(sorted(e.name for e in _registered(tuple(sys.path))))
 
 
 def find_backend(protocol: str) -> RobotBackend:
@@ -67,7 +87,7 @@ def find_backend(protocol: str) -> RobotBackend:
             message lists the names that are).
         InitError: it is registered but cannot be loaded.
     """
-    found = entry_points(group=ENTRY_POINT_GROUP, name=protocol)
+    found = _named(protocol)
     if not found:
         known = ", ".join(backend_names()) or "none"
         raise RobotDescriptionError(
@@ -107,7 +127,7 @@ def known_facts(protocol: str) -> RobotFacts | None:
     """The facts of the backend ``protocol``; None when no backend of that
     name is installed (a recorded robot: a description read for its
     constants only). InitError when it is installed but cannot load."""
-    if not entry_points(group=ENTRY_POINT_GROUP, name=protocol):
+    if not _named(protocol):
         return None
     return robot_facts(protocol)
 

@@ -27,7 +27,7 @@ PLAN = (
     "k=0.5,l=1,n=6;path=square:0.5,cw,n=6;path=square:0.5,ccw,n=6;"
     "path=circle:0.4,6,cw,n=6;path=circle:0.4,6,ccw,n=6"
 )
-URL = "fakecreate2://?seed={seed}&time_scale=10&max_gap_ms=15&turn_scale={scale:g}"
+URL = "fakecreate2://?seed={seed}&time_scale=10&max_gap_ms=15&skip_waits=1&turn_scale={scale:g}"
 
 
 def run_and_estimate(folder: Path, seed: int) -> dict[str, dict[str, object]]:

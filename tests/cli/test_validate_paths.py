@@ -47,7 +47,7 @@ ROBOTS: dict[str, dict[str, str]] = {
     "create2": {
         # the Create 2's host ends each step on 15 ms readings: time scale 10
         # with the lag-absorbing clock, as tests/driver/test_drive_paths.py drives it
-        "url": "fakecreate2://?seed={seed}&time_scale=10&max_gap_ms=15",
+        "url": "fakecreate2://?seed={seed}&time_scale=10&max_gap_ms=15&skip_waits=1",
         "plan": "k=0.5,l=2,n=10;path=square:0.5,cw,n=25;path=square:0.5,ccw,n=25",
         "wrong": CREATE2_WRONG,
     },

@@ -17,15 +17,18 @@ the turn errors of the squares before it.
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
 
 from odohil.cli.app import app
+from odohil.session.lifecycle.running import PathBeliefEstimator, final_estimate
+from odohil.session.state import load_session
 
 PLAN = "k=0.5,l=2,n=4;path=square:0.5,cw,n=8;path=square:0.5,ccw,n=8"
-URL = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15"
+URL = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15&skip_waits=1"
 
 
 @pytest.mark.slow
@@ -47,3 +50,20 @@ def test_squares_are_predicted_with_the_turn_errors_of_the_squares_before(
     # measured (seed 3): 14 of the 16 squares re-measured before; after, only
     # the first squares, whose turn errors no trial pins yet
     assert len(remeasured & squares) <= 4, sorted(remeasured)
+    # the live belief (Wald intervals, odohil/session/lifecycle's
+    # PathBeliefEstimator) is the recipe's fit: the same values, standard
+    # errors and correlations as `odohil estimate` of the same trials
+    state = load_session(session).state
+    live = PathBeliefEstimator(replace(state, completed=()), ())
+    belief = None
+    for trial in state.completed:
+        if not trial.ambiguous:
+            belief = live.add(trial)
+    recipe = final_estimate(state).result
+    assert belief is not None
+    assert recipe is not None
+    assert [p.name for p in belief.parameters] == [p.name for p in recipe.parameters]
+    assert [p.value for p in belief.parameters] == [p.value for p in recipe.parameters]
+    assert [p.stderr for p in belief.parameters] == [p.stderr for p in recipe.parameters]
+    assert belief.correlation == recipe.correlation
+    assert all(p.interval.startswith("Wald") for p in belief.parameters)

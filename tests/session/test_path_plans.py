@@ -103,7 +103,7 @@ def _anywhere(start: StartPose) -> None:
 
 BACKENDS = {
     "nomad150": "fakerobot://?seed=3&time_scale=2000",
-    "create2": "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15",
+    "create2": "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15&skip_waits=1",
 }
 
 

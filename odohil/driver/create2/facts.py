@@ -37,8 +37,10 @@ CREATE2_FACTS = RobotFacts(
         # a leg ends on 15 ms readings and a stop sent by the host: on a faster
         # clock a late reading ends a leg centimetres long; the fake's clock then
         # advances at most one 15 ms tick between two driver calls
-        # (fakes/create2/clock.py)
-        demo_url_options=(("max_gap_ms", 15.0),),
+        # (fakes/create2/clock.py); a read that waits for the next frame moves
+        # the fake's clock to it instead of sleeping (skip_waits: the same frames
+        # at the same simulated times, without the 15 ms of wall time each)
+        demo_url_options=(("max_gap_ms", 15.0), ("skip_waits", 1.0)),
     ),
 )
 """A differential drive: its spins carry error (turns_exact false), its legs

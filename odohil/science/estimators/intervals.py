@@ -223,7 +223,7 @@ class _Profile:
         self.reference = nll
         self.solved = [_Solved(self.psi_hat, 0.0, phi, value)]
 
-    def _value(self, phi: FloatArray) -> LikelihoodValue:
+    def _value(self, phi: FloatArray, nll_only: bool = False) -> LikelihoodValue:
         self.evaluations += 1
         moved = self.model.point(phi, self.designs, derivatives=False)
         anchor = self.anchor
@@ -234,7 +234,7 @@ class _Profile:
         d_means = {k: v * scale[:, None] for k, v in anchor.d_means.items()}
         d_covs = {k: v * scale[:, None, None] for k, v in anchor.d_covs.items()}
         point = ModelPoint(phi, moved.means, moved.covs, d_means, d_covs, anchor.phi, self.model)
-        return evaluate(self.groups, point, self.cox_reid)
+        return evaluate(self.groups, point, self.cox_reid, nll_only=nll_only)
 
     def _nuisance(self, phi: FloatArray, gradient: FloatArray) -> list[int]:
         """The free parameters not held on the floor (a rate there whose
@@ -256,7 +256,7 @@ class _Profile:
                 h = min(h, 1e-3)
             moved = phi.copy()
             moved[i] += h
-            out[i] = (self._value(moved).nll - value.nll) / h
+            out[i] = (self._value(moved, nll_only=True).nll - value.nll) / h
         return out
 
     def refit(

@@ -298,11 +298,17 @@ def _stack(groups: Sequence[GroupStats], point: ModelPoint) -> tuple[FloatArray,
 
 
 def evaluate(
-    groups: Sequence[GroupStats], point: ModelPoint, cox_reid: bool = False
+    groups: Sequence[GroupStats],
+    point: ModelPoint,
+    cox_reid: bool = False,
+    nll_only: bool = False,
 ) -> LikelihoodValue:
     """NLL of the grouped trials at ``point``; score and information too when
     ``point`` carries derivatives. ``cox_reid``: the adjusted NLL (see the
-    module docstring; needs derivatives, else the plain NLL is returned)."""
+    module docstring; needs derivatives, else the plain NLL is returned).
+    ``nll_only``: the same NLL (the same operations, so the same number)
+    without the score and information (None), for a caller that differences
+    NLLs (odohil/science/estimators/intervals.py)."""
     groups = [g for g in groups if g.n > 0]
     n, s, t, mu, cov = _stack(groups, point)
     counts = np.array([g.n for g in groups], dtype=np.float64)
@@ -324,6 +330,14 @@ def evaluate(
     if point.d_means is None or point.d_covs is None:
         return LikelihoodValue(nll, None, None)
     d_mu = np.array([point.d_means[g.key] for g in groups])  # (G, p, 3)
+    if nll_only:
+        if cox_reid:
+            mean_index = list(point.layout.mean_index)
+            mean_info = np.einsum("g,gai,gij,gbj->ab", n, d_mu, inv, d_mu)
+            half_logdet = _half_logdet(mean_info[np.ix_(mean_index, mean_index)])
+            if half_logdet is not None:
+                nll += half_logdet
+        return LikelihoodValue(nll, None, None)
     d_cov = np.array([point.d_covs[g.key] for g in groups])  # (G, p, 3, 3)
     resid = s - n[:, None] * mu
     w = np.einsum("gij,gajk->gaik", inv, d_cov)  # S^-1 dS_a
@@ -360,8 +374,8 @@ def _cox_reid(
     layout: Layout = FOUR_PARAMETERS,
 ) -> tuple[float, FloatArray] | None:
     """(1/2 log det I_bb, its gradient in phi), or None when I_bb is singular."""
-    sign, logdet = np.linalg.slogdet(info_bb)
-    if sign <= 0 or not math.isfinite(logdet):
+    half_logdet = _half_logdet(info_bb)
+    if half_logdet is None:
         return None
     inv_bb = np.linalg.inv(info_bb)
     # d I_bb / d phi_a = -sum W dmu_b^T S^-1 dS_a S^-1 dmu_c, for a = the log rates
@@ -371,4 +385,12 @@ def _cox_reid(
     d_info = -np.einsum("g,gbi,gaij,gjk,gck->abc", n, d_b, w[:, rates], inv, d_b)
     grad = np.zeros(d_mu.shape[1])
     grad[rates] = 0.5 * np.einsum("bc,acb->a", inv_bb, d_info)
-    return 0.5 * float(logdet), grad
+    return half_logdet, grad
+
+
+def _half_logdet(info_bb: FloatArray) -> float | None:
+    """1/2 log det I_bb, or None when I_bb is singular."""
+    sign, logdet = np.linalg.slogdet(info_bb)
+    if sign <= 0 or not math.isfinite(logdet):
+        return None
+    return 0.5 * float(logdet)

@@ -8,12 +8,13 @@ from __future__ import annotations
 import contextlib
 import signal
 from collections.abc import Callable, Collection
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
 
-from odohil.errors import OdohilError, StopUnconfirmedError
+from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
 from odohil.science.estimators import EstimateResult
+from odohil.science.estimators.paths import estimate_paths
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     LiveEstimator,
@@ -29,7 +30,13 @@ from odohil.session.pose_source import PoseSource
 from odohil.session.robot import SampleCallback
 from odohil.session.signals import signal_name, signal_of
 from odohil.session.sources import MeasurementSource
-from odohil.session.state import CompletedTrial, SessionState, load_session
+from odohil.session.state import (
+    CompletedTrial,
+    SessionState,
+    description_of_header,
+    load_session,
+    session_path_trials,
+)
 
 RunStatus = Literal["finished", "interrupted", "error", "stop unconfirmed"]
 
@@ -142,17 +149,63 @@ class RecipeLiveEstimator:
         return self._result
 
 
-def progress_estimator(opened: Opened) -> LiveEstimator | None:
+class PathBeliefEstimator:
+    """The live belief of a session with general paths behind a progress bar:
+    the recipe's fit of every trial so far (as :func:`final_estimate`: the
+    same trials, exclusions, turn model and robust fit, so the same values,
+    standard errors and correlations, which are all that the engine's belief
+    and the bar read) with Wald intervals instead of the recipe's profile
+    intervals, which no reader of a live estimate needs and which cost about
+    half of each fit (``estimate_paths(intervals="wald")``). The journal's
+    ``estimate`` records carry these intervals; the final estimate, and the
+    wizard's live one (:class:`RecipeLiveEstimator`), are the recipe's.
+
+    Args:
+        start: the session as opened (its header, and the trials a resumed
+            run catches up on: fitted once, at the last of them).
+        exclude: trial numbers left out (those not yet done are ignored).
+    """
+
+    def __init__(self, start: SessionState, exclude: Collection[int]) -> None:
+        self.start = start
+        self.exclude = exclude
+        self._catch_up = sum(1 for t in start.completed if not t.ambiguous)
+        self._trials: list[CompletedTrial] = []
+        self._turns_exact: bool | None = None
+
+    def add(self, trial: CompletedTrial) -> EstimateResult | None:
+        """The belief after every trial added so far (``trial`` the last)."""
+        self._trials.append(trial)
+        if len(self._trials) < self._catch_up:
+            return None  # a resumed run catching up: only its last trial is fitted
+        state = replace(self.start, completed=tuple(self._trials))
+        if self._turns_exact is None:  # the journaled description does not change
+            self._turns_exact = description_of_header(state).robot.turns_exact
+        done = {t.trial for t in self._trials}
+        left_out = tuple(sorted(t for t in self.exclude if t in done))
+        try:
+            return estimate_paths(
+                session_path_trials(state),
+                turns_exact=self._turns_exact,
+                exclude=left_out,
+                intervals="wald",
+            )
+        except MeasurementError:  # too few trials yet: the recipe's outcome has none either
+            return None
+
+
+def progress_estimator(opened: Opened) -> LiveEstimator:
     """The live estimator behind a progress bar: the cheap incremental fit for
-    a plan of forth-and-back designs; None (the recipe's fit of every trial,
-    :class:`RecipeLiveEstimator`) for a plan with general paths, which the
-    incremental fit cannot fold in: a live belief without the squares' turn
+    a plan of forth-and-back designs; for a plan with general paths, which the
+    incremental fit cannot fold in, the recipe's fit of every trial
+    (:class:`PathBeliefEstimator`): a live belief without the squares' turn
     errors mis-predicts every square, so the slip check trips on clean tape
     readings and the prior pulls the choice of pose (issue 19,
     tests/session/test_path_belief.py)."""
+    exclude = opened.prepared.spec.exclude
     if opened.prepared.plan.has_paths:
-        return None
-    return IncrementalLiveEstimator(opened.prepared.spec.exclude)
+        return PathBeliefEstimator(opened.state, exclude)
+    return IncrementalLiveEstimator(exclude)
 
 
 def run_session(
