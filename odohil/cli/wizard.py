@@ -92,10 +92,11 @@ from odohil.session.outcome_text import outcome_line
 from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
 from odohil.session.signals import signal_of, signals_raise
-from odohil.session.sources import OperatorSource, TrialContext
+from odohil.session.sources import OperatorSource, TapeSource
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState
 from odohil.session.tape_entry import INSTRUCTIONS, TapeEntries, parse_optional_metres
+from odohil.session.tape_records import TapeContext
 from odohil.session.validation import PATH_SYNTAX
 from odohil.session.validation_wizard import (
     GuidedValidation,
@@ -129,7 +130,7 @@ class WizardPrompts:
         except EOFError:
             raise MeasurementError("the input ended (no operator at the terminal)") from None
 
-    def _context(self, ctx: TrialContext, resumed: bool = True) -> None:
+    def _context(self, ctx: TapeContext, resumed: bool = True) -> None:
         """The trial's header once per attempt; on a resumed one also what was entered."""
         if not self.entries.first_sight(ctx):
             return
@@ -137,12 +138,12 @@ class WizardPrompts:
         if resumed and (entered := entered_so_far(ctx)) is not None:
             self.console.print(entered, markup=False)
 
-    def confirm_start_marks(self, ctx: TrialContext) -> None:
+    def confirm_start_marks(self, ctx: TapeContext) -> None:
         """Ask for the start marks."""
         self._context(ctx, resumed=False)
         self._input(start_marks(self.description))
 
-    def confirm_end_marks(self, ctx: TrialContext) -> None:
+    def confirm_end_marks(self, ctx: TapeContext) -> None:
         """The motion is over: ask for the end marks."""
         self.progress.stop()
         self.interrupts.in_motion = False
@@ -152,7 +153,7 @@ class WizardPrompts:
             self.console.print(encoders_at_end(pose))
         self._input(END_MARKS)
 
-    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+    def ask_distance(self, ctx: TapeContext, index: int) -> float:
         """Distance ``index``, metres, as the attempt's :class:`TapeEntry` hands it over."""
         self._context(ctx)
         entry, new = self.entries.entry(ctx)
@@ -166,7 +167,7 @@ class WizardPrompts:
             self.console.print(f"{ctx.labels[index]}: {value:.4f} m kept")
         return value
 
-    def _optional(self, ctx: TrialContext, doubt: str, prompt: str, label: str) -> float | None:
+    def _optional(self, ctx: TapeContext, doubt: str, prompt: str, label: str) -> float | None:
         self._context(ctx)
         self.console.print(doubt)
         while True:
@@ -175,12 +176,12 @@ class WizardPrompts:
             except MeasurementError as exc:
                 self.console.print(f"[red]refused:[/] {exc}; type it again")
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+    def ask_remeasure(self, ctx: TapeContext, index: int, reason: str) -> float | None:
         """The slip check doubts the trial: ask for the suspect distance again."""
         doubt = f"[yellow]check the marks:[/] {reason}"
         return self._optional(ctx, doubt, remeasure_prompt(ctx, index), ctx.labels[index])
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
+    def ask_extra_distance(self, ctx: TapeContext, label: str, reason: str) -> float | None:
         """The trial is ambiguous: ask for one more cross distance, named by its screws."""
         doubt = f"[yellow]two poses fit these marks:[/] {reason}"
         return self._optional(ctx, doubt, extra_distance_prompt(label), label)
@@ -201,7 +202,7 @@ class WizardPrompts:
 
         return check
 
-    def show_rejection(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+    def show_rejection(self, ctx: TapeContext, rejection: InconsistentMeasurementError) -> None:
         """Say why; only the distances the rejection names are asked for again."""
         again = measure_again(ctx, self.entries.rejected(ctx, rejection))
         self.console.print(f"[red]These distances fit no rigid motion:[/] {rejection}\n{again}")
@@ -368,7 +369,8 @@ def _run(
     observer = WizardObserver(console, interrupts, progress, system, guide)
     try:
         outcome = run_session(
-            opened, observer, source=OperatorSource(prompts), on_sample=observer.on_sample,
+            opened, observer, source=TapeSource(OperatorSource(prompts), prompts.description),
+            on_sample=observer.on_sample,
             start_check=prompts.start_check(opened.robot),
         )  # fmt: skip
     finally:

@@ -14,9 +14,10 @@ attempt:
    journaled as ``motion_done``;
 5. the source's ``pose_change``, given the model's predictive distribution of
    the pose at the current estimate (or the description's priors); a source
-   that takes several readings journals each through ``log`` (the tape:
-   ``measurement``, ``measurements_rejected``, ``remeasured``,
-   ``extra_distance``, odohil/session/sources.py); the pose is checked
+   that takes several readings journals each through ``log`` as its own
+   events (the tape's: odohil/session/tape_records.py), which the state folds
+   into the source's own readings and hands back in the next context,
+   unopened; the pose is checked
    against the encoders and the prediction (odohil/session/plausibility.py:
    an implausible one is journaled ``void`` with its likely cause and stops
    the session before the next motion) and journaled (``solved``); an
@@ -26,7 +27,7 @@ attempt:
 Every record is on disk (fsync) before the next step starts, so after a crash
 :func:`resume_session` continues exactly where the journal stops: an attempt
 cut off before or during its motion is voided and the trial redone; one whose
-motion finished resumes at its next missing distance. On any failure, Ctrl-C
+motion finished resumes where its source's readings stop. On any failure, Ctrl-C
 or other signal (:mod:`odohil.session.signals`) the engine stops the robot and
 waits, within ``MotionSettings.stop_timeout_s``, for it to report that it
 stopped (``Robot.stop_and_confirm``); it journals ``void`` for an attempt cut off before its motion
@@ -96,7 +97,6 @@ from odohil.session.signals import (
     signal_name,
     signals_held,
 )
-from odohil.session.sources import MeasurementSource, as_pose_source
 from odohil.session.start_pose import StartPose, check_start
 from odohil.session.state import (
     FORMAT,
@@ -332,9 +332,7 @@ class SessionEngine:
         journal: the session's open journal.
         state: its state (from :func:`start_session` or :func:`resume_session`).
         robot: the connected robot (any backend behind the ``Robot`` protocol).
-        source: where each trial's real pose change comes from; a distance
-            source (:class:`~odohil.session.sources.MeasurementSource`) is put
-            behind the tape and the floor-marks solver.
+        source: where each trial's real pose change comes from.
         estimator: the live estimator, or None.
         observer: sees every record, or None.
         motion: how the robot drives.
@@ -348,7 +346,7 @@ class SessionEngine:
         journal: Journal,
         state: SessionState,
         robot: Robot,
-        source: PoseSource | MeasurementSource,
+        source: PoseSource,
         *,
         estimator: LiveEstimator | None = None,
         observer: SessionObserver | None = None,
@@ -364,7 +362,7 @@ class SessionEngine:
         self.plan: Plan = state.plan
         self.robot = robot
         self.description = description_of(state)
-        self.source = as_pose_source(source, self.description)
+        self.source = source
         self.estimator = estimator
         self.observer = observer
         self.motion = motion or MotionSettings()
@@ -515,18 +513,17 @@ class SessionEngine:
 
     def _context(self, opened: OpenTrial, predicted: PosePrior | None = None) -> TrialContext:
         """What the source may know of the open attempt (its own readings included)."""
-        ctx = TrialContext(
+        return TrialContext(
             trial=opened.trial,
             attempt=opened.attempt,
             n_trials=self.plan.n_trials,
             design=self.plan.design_of(opened.trial),
-            labels=(),
             start=opened.start,
             end=opened.end,
             encoder_end_pose=opened.encoder_end_pose,
             predicted=predicted,
+            readings=opened.readings,
         )
-        return opened.readings.context(ctx) if opened.readings is not None else ctx
 
     def _settle(self) -> OdometrySample:
         return self.robot.settle(self.motion.settle_timeout_s)
@@ -537,9 +534,7 @@ class SessionEngine:
         design = self.plan.design_of(trial)  # as driven: one-way trials alternate
         self._settle()
         zeroed = self.robot.zero()
-        ctx = TrialContext(
-            trial=trial, attempt=attempt, n_trials=self.plan.n_trials, design=design, labels=()
-        )
+        ctx = TrialContext(trial=trial, attempt=attempt, n_trials=self.plan.n_trials, design=design)
         start = dict(self.source.at_start(ctx))
         self._log(
             TrialStart(
@@ -651,7 +646,7 @@ def _solved(opened: OpenTrial, measured: MeasuredPose) -> Solved:
         cov=(_pose(cov[0]), _pose(cov[1]), _pose(cov[2])),
         clear_cut=bool(measured.clear_cut),
         reason=measured.note,
-        slip=(measured.flag_reason or "flagged by the measurement source")
+        flag_reason=(measured.flag_reason or "flagged by the measurement source")
         if measured.flagged
         else None,
         ambiguous=True if measured.ambiguous else None,

@@ -14,7 +14,9 @@ objects kept as they are), :class:`~odohil.session.plan.Plan` and ``X | None``.
 A field whose value is None and whose default is None is left out of the
 record; a member missing from a record takes the field's default (older
 journals lack some); a field marked :data:`REST` takes every member no other
-field names (the ``solved`` record's source details, the ``resumed`` note).
+field names (the ``solved`` record's source details, the ``resumed`` note);
+a field whose metadata names a ``member`` is journaled under that name (the
+name journals have always used, where the field's is more general).
 
 The events of the session's life are here; a pose source's own readings
 (the tape's distances, rejections, re-measures, extra distances) are
@@ -29,14 +31,14 @@ from __future__ import annotations
 import importlib
 import types
 from collections.abc import Callable, Mapping
-from dataclasses import MISSING, dataclass, field, fields
+from dataclasses import MISSING, Field, dataclass, field, fields
 from typing import Any, ClassVar, Protocol, Union, get_args, get_origin, get_type_hints
 
 from odohil.errors import ParameterError
 from odohil.science.floor_marks import MarkDistances
 from odohil.science.robot_description import RobotDescription
 from odohil.session.plan import Plan
-from odohil.session.pose_source import Pose, TrialContext
+from odohil.session.pose_source import Pose
 
 __all__ = [
     "REST",
@@ -91,17 +93,14 @@ class Event:
 
 class SourceReadings(Protocol):
     """A pose source's own record of one trial attempt's readings, built from its
-    :class:`SourceEvent` s; opaque to the session state and the engine."""
+    :class:`SourceEvent` s; opaque to the session state and the engine, handed
+    back to the source in ``TrialContext.readings``."""
 
     @property
     def values(self) -> tuple[float, ...]:
         """The readings the pose was solved from, in order (kept with the trial,
         so that the session can be solved again offline; the tape: its
         distances, metres)."""
-        ...
-
-    def context(self, ctx: TrialContext) -> TrialContext:
-        """``ctx`` with what the source needs to go on (e.g. after a resume)."""
         ...
 
     def marks(self, description: RobotDescription) -> MarkDistances | None:
@@ -279,7 +278,9 @@ class Solved(Event):
         cov: its 3x3 covariance, rows.
         clear_cut: the source is sure of the pose.
         reason: why the pose is in doubt ("" when clear-cut).
-        slip: why a check doubts the trial (the trial is flagged).
+        flag_reason: why the source flagged the trial (None: not flagged;
+            journaled as ``slip``, the tape's slip check being the first
+            source to flag a trial).
         ambiguous: two candidate poses stay plausible (left out of every estimate).
         candidates: their poses.
         details: the source's details (the tape's ``chi2``, ``check``...).
@@ -292,7 +293,7 @@ class Solved(Event):
     cov: tuple[Pose, Pose, Pose]
     clear_cut: bool
     reason: str = ""
-    slip: str | None = None
+    flag_reason: str | None = field(default=None, metadata={"member": "slip"})
     ambiguous: bool | None = None
     candidates: tuple[Pose, ...] | None = None
     details: JsonObject = field(default_factory=dict, metadata=REST)
@@ -377,8 +378,13 @@ def encode(event: Event) -> tuple[str, dict[str, Any]]:
         elif value is None and f.default is None:
             continue
         else:
-            data[f.name] = _to_json(value)
+            data[_member(f)] = _to_json(value)
     return event.KIND, {**rest, **data}
+
+
+def _member(f: Field[Any]) -> str:
+    """The JSON member a field is journaled as."""
+    return str(f.metadata.get("member", f.name))
 
 
 def decode(kind: str, data: Mapping[str, Any]) -> Event:
@@ -398,18 +404,21 @@ def decode(kind: str, data: Mapping[str, Any]) -> Event:
             raise ValueError(f"bad plan: {exc}") from None
     hints = _hints(cls)
     values: dict[str, Any] = {}
+    named: set[str] = set()
     rest_field = ""
     for f in fields(cls):  # type: ignore[arg-type]
         if f.metadata.get("rest"):
             rest_field = f.name
             continue
-        if f.name not in data:
+        member = _member(f)
+        named.add(member)
+        if member not in data:
             if f.default is MISSING and f.default_factory is MISSING:
-                raise ValueError(f"no member {f.name!r}")
+                raise ValueError(f"no member {member!r}")
             continue
-        values[f.name] = _from_json(data[f.name], hints[f.name], f.name)
+        values[f.name] = _from_json(data[member], hints[f.name], member)
     if rest_field:
-        values[rest_field] = {k: v for k, v in data.items() if k not in values and k not in hints}
+        values[rest_field] = {k: v for k, v in data.items() if k not in named and k not in hints}
     return cls(**values)
 
 

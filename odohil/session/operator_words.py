@@ -15,6 +15,7 @@ from odohil import units
 from odohil.science.robot_description import RobotDescription
 from odohil.session.pose_source import TrialContext
 from odohil.session.state import CompletedTrial
+from odohil.session.tape_records import TapeContext
 
 END_MARKS = "Mark the floor at the screws again (end marks), then press Enter: "
 HERE = "here"
@@ -31,7 +32,7 @@ def trial_header(ctx: TrialContext, resumed: bool) -> str:
     )
 
 
-def entered_so_far(ctx: TrialContext) -> str | None:
+def entered_so_far(ctx: TapeContext) -> str | None:
     """The distances of a resumed attempt already entered (None: none)."""
     if not ctx.measurements:
         return None
@@ -58,7 +59,7 @@ def encoders_at_end(pose: tuple[float, float, float]) -> str:
     )
 
 
-def remeasure_prompt(ctx: TrialContext, index: int) -> str:
+def remeasure_prompt(ctx: TapeContext, index: int) -> str:
     """The slip check doubts distance ``index``: measure it again (Enter keeps it)."""
     typed = ctx.measurements[index]
     return (
@@ -81,7 +82,7 @@ def put_back_prompt(trial: int) -> str:
     )
 
 
-def measure_again(ctx: TrialContext, kept: Collection[int]) -> str:
+def measure_again(ctx: TapeContext, kept: Collection[int]) -> str:
     """Which distances a rejection asks for again: those not ``kept`` (indices)."""
     again = ", ".join(label for i, label in enumerate(ctx.labels) if i not in kept)
     what = f"only {again} (the other distances are kept)" if kept else "all its distances"

@@ -257,9 +257,9 @@ def _session_paths_outcome(
         )
     outcome = estimate_path_trials(trials, turns_exact, exclude, method, source)
     flagged = tuple(
-        (t.trial, "; ".join(part for part in (t.note, t.slip) if part))
+        (t.trial, "; ".join(part for part in (t.note, t.flag_reason) if part))
         for t in state.completed
-        if not t.ambiguous and (not t.clear_cut or t.slip)
+        if not t.ambiguous and (not t.clear_cut or t.flag_reason)
     )  # as session_trials flags a forth-and-back trial
     return replace(outcome, ambiguous=ambiguous, torn=torn, path_flagged=flagged)
 

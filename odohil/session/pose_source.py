@@ -13,9 +13,14 @@ The session owns this protocol. The engine calls, per trial attempt:
 What ``at_start`` and ``at_end`` return is journaled with the trial and handed
 back in the context (``TrialContext.start`` / ``.end``), so a resumed session
 gives a source the same data. A source that takes several readings (the tape:
-one distance at a time, re-measures) journals each through ``log`` before it
-goes on, so nothing the operator typed is lost; ``log`` hands back the context
-as the journal now stands.
+one distance at a time, re-measures) journals each through ``log`` as one of
+its own :class:`~odohil.session.events.SourceEvent` s before it goes on, so
+nothing the operator typed is lost; the session folds them into the source's
+own :class:`~odohil.session.events.SourceReadings` record, and ``log`` hands
+back the context as the journal now stands, with that record in
+``TrialContext.readings``. The context carries nothing else of any one
+source: the tape's own context (distance names, rejections, re-measures) is
+the tape's (odohil/session/tape_records.py).
 
 The engine checks what ``pose_change`` returns against the encoders and the
 model's prediction (odohil/session/plausibility.py: a doubtful pose is
@@ -42,7 +47,7 @@ from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
 
 if TYPE_CHECKING:
-    from odohil.session.events import SourceEvent
+    from odohil.session.events import SourceEvent, SourceReadings
 
 Pose = tuple[float, float, float]
 """(x m, y m, theta rad)."""
@@ -62,16 +67,10 @@ class TrialContext:
         attempt: attempt number (1-based).
         n_trials: trials in the plan.
         design: the design driven (forth-and-back, or a general path).
-        labels: names of the tape distances, in the order they are asked for.
         start: the data ``at_start`` returned (journaled).
         end: the data ``at_end`` returned (journaled; empty before).
         encoder_end_pose: (x m, y m, theta rad) the odometry reported, once
             the motion is done.
-        measurements: the tape distances already taken, metres.
-        rejections: how many times this attempt's distances were rejected.
-        remeasures: how many suspect distances were taken again.
-        slip: why the slip check doubts the trial, once a suspect value was kept.
-        extra: extra cross distances taken (start screw, end screw, metres).
         predicted: the model's predictive distribution of the pose change,
             given the odometry, at the current estimate (or the description's
             priors); None before the motion is done.
@@ -80,23 +79,23 @@ class TrialContext:
             the start, given to ``at_end``; a source that watches the path
             reports what it saw then (None: not given, or the motion went
             nowhere).
+        readings: the source's own record of the attempt's readings so far
+            (folded from the :class:`~odohil.session.events.SourceEvent` s it
+            journaled through ``log``; the tape's:
+            :class:`~odohil.session.tape_records.TapeReadings`), None before
+            the first; opaque to the engine.
     """
 
     trial: int
     attempt: int
     n_trials: int
     design: Design | PathDesign
-    labels: tuple[str, ...]
     start: Mapping[str, Any] = field(default_factory=dict)
     end: Mapping[str, Any] = field(default_factory=dict)
     encoder_end_pose: Pose | None = None
-    measurements: tuple[float, ...] = ()
-    rejections: int = 0
-    remeasures: int = 0
-    slip: str = ""
-    extra: tuple[tuple[str, str, float], ...] = ()
     predicted: PosePrior | None = None
     far_s: tuple[float, float] | None = None
+    readings: SourceReadings | None = None
 
 
 @dataclass(frozen=True)
@@ -109,7 +108,8 @@ class MeasuredPose:
         covariance: its measurement covariance (see :data:`Covariance3`).
         flagged: a reading was kept that a check doubted (the trial is
             flagged in the report).
-        flag_reason: why it is flagged.
+        flag_reason: why it is flagged (journaled with the trial; the tape:
+            the slip check's doubt).
         note: why the pose is in doubt ("" when it is clear-cut).
         clear_cut: the source is sure of this pose among the ones it allows.
         ambiguous: several poses stayed plausible; the trial is journaled and

@@ -18,8 +18,10 @@ A :class:`MeasurementSource` is asked three things per trial attempt:
 every screw), ``mark_end`` once the motion is done (the end marks), then one
 ``distance`` per tape reading, in the robot description's order (same-screw
 distances, then cross distances). Whatever ``mark_start``/``mark_end`` return
-is journaled with the trial, so a resumed session hands the same data back in
-:class:`TrialContext`.
+is journaled with the trial, so a resumed session hands the same data back.
+A distance source sees each attempt as a
+:class:`~odohil.session.tape_records.TapeContext`: the generic context with
+the distances' names and the tape's readings so far.
 
 Sources here:
 
@@ -36,9 +38,8 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import replace
 from pathlib import Path
-from typing import Any, Protocol, cast
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -74,6 +75,7 @@ from odohil.session.tape_records import (
     Measurement,
     MeasurementsRejected,
     Remeasured,
+    TapeContext,
 )
 from odohil.session.trial_files import Trial, read_trials
 
@@ -85,11 +87,11 @@ __all__ = [
     "PathPoseSource",
     "PoseFileSource",
     "RecordedSource",
+    "TapeContext",
     "TapeSource",
     "TrialContext",
     "TruthPoseSource",
     "TruthReader",
-    "as_pose_source",
     "check_distance",
     "pose_source_from_file",
     "prediction",
@@ -107,36 +109,36 @@ trial it still doubts after that is journaled flagged."""
 class MeasurementSource(Protocol):
     """Where distances come from (see the module docstring)."""
 
-    def mark_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+    def mark_start(self, ctx: TapeContext) -> Mapping[str, Any]:
         """The start marks are made now (the robot stands still, re-zeroed).
 
         Returns JSON data to journal with the trial (may be empty)."""
         ...
 
-    def mark_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+    def mark_end(self, ctx: TapeContext) -> Mapping[str, Any]:
         """The motion is over: the end marks are made now. Returns JSON data."""
         ...
 
-    def distance(self, ctx: TrialContext, index: int) -> float:
+    def distance(self, ctx: TapeContext, index: int) -> float:
         """Distance number ``index`` (label ``ctx.labels[index]``), metres.
 
         Raises MeasurementError when it cannot be had."""
         ...
 
-    def rejected(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+    def rejected(self, ctx: TapeContext, rejection: InconsistentMeasurementError) -> None:
         """The distances of this attempt explain no rigid motion (``rejection``
         says why and names the suspect distances in its ``labels``); they will
         be asked for again (raise MeasurementError to give up instead)."""
         ...
 
-    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+    def remeasure(self, ctx: TapeContext, index: int, reason: str) -> float | None:
         """The slip check doubts the trial and suspects distance ``index``
         (``reason`` says why): that distance taken again, metres, or None to
         keep the value taken (the trial is then flagged)."""
         ...
 
     def extra_distance(
-        self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
+        self, ctx: TapeContext, pair: tuple[str, str], label: str, reason: str
     ) -> float | None:
         """The trial is ambiguous (``reason``): the cross distance from the start
         mark of screw ``pair[0]`` to the end mark of ``pair[1]`` (named
@@ -148,31 +150,31 @@ class MeasurementSource(Protocol):
 class OperatorPrompts(Protocol):
     """The operator's side of a measurement (implemented by a user interface)."""
 
-    def confirm_start_marks(self, ctx: TrialContext) -> None:
+    def confirm_start_marks(self, ctx: TapeContext) -> None:
         """Ask the operator to mark the floor under every screw; return when done."""
         ...
 
-    def confirm_end_marks(self, ctx: TrialContext) -> None:
+    def confirm_end_marks(self, ctx: TapeContext) -> None:
         """Ask the operator to mark the end positions; return when done."""
         ...
 
-    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+    def ask_distance(self, ctx: TapeContext, index: int) -> float:
         """Ask for distance ``ctx.labels[index]``; return it in metres (the
         interface parses what was typed, once, and asks again until it is a
         distance)."""
         ...
 
-    def show_rejection(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+    def show_rejection(self, ctx: TapeContext, rejection: InconsistentMeasurementError) -> None:
         """Tell the operator the distances are inconsistent and will be retaken
         (those ``rejection.labels`` names, or all when it names none)."""
         ...
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+    def ask_remeasure(self, ctx: TapeContext, index: int, reason: str) -> float | None:
         """Ask to measure distance ``ctx.labels[index]`` again (``reason``: the
         slip check's message); return it in metres, or None to keep the value."""
         ...
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
+    def ask_extra_distance(self, ctx: TapeContext, label: str, reason: str) -> float | None:
         """Ask for one more cross distance, ``label`` (e.g. ``A start to C end``),
         because the trial is ambiguous (``reason``); return it in metres, or
         None when it cannot be measured."""
@@ -187,30 +189,30 @@ class OperatorSource:
     def __init__(self, prompts: OperatorPrompts) -> None:
         self.prompts = prompts
 
-    def mark_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+    def mark_start(self, ctx: TapeContext) -> Mapping[str, Any]:
         """Wait for the operator's start marks."""
         self.prompts.confirm_start_marks(ctx)
         return {}
 
-    def mark_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+    def mark_end(self, ctx: TapeContext) -> Mapping[str, Any]:
         """Wait for the operator's end marks."""
         self.prompts.confirm_end_marks(ctx)
         return {}
 
-    def distance(self, ctx: TrialContext, index: int) -> float:
+    def distance(self, ctx: TapeContext, index: int) -> float:
         """Ask the operator for the distance, metres."""
         return self.prompts.ask_distance(ctx, index)
 
-    def rejected(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+    def rejected(self, ctx: TapeContext, rejection: InconsistentMeasurementError) -> None:
         """Tell the operator."""
         self.prompts.show_rejection(ctx, rejection)
 
-    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+    def remeasure(self, ctx: TapeContext, index: int, reason: str) -> float | None:
         """Ask the operator to re-enter the suspect distance; None keeps it."""
         return self.prompts.ask_remeasure(ctx, index, reason)
 
     def extra_distance(
-        self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
+        self, ctx: TapeContext, pair: tuple[str, str], label: str, reason: str
     ) -> float | None:
         """Ask the operator for the named cross distance; None if skipped."""
         return self.prompts.ask_extra_distance(ctx, label, reason)
@@ -281,11 +283,11 @@ class FakeTruthSource:
         self.seed = seed
         self.sigma_m = description.sigma_m if sigma_m is None else sigma_m
 
-    def mark_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+    def mark_start(self, ctx: TapeContext) -> Mapping[str, Any]:
         """Journal the true start pose."""
         return {"true_pose": list(self.truth.true_pose())}
 
-    def mark_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+    def mark_end(self, ctx: TapeContext) -> Mapping[str, Any]:
         """Journal the true end pose."""
         return {"true_pose": list(self.truth.true_pose())}
 
@@ -293,27 +295,27 @@ class FakeTruthSource:
         """The attempt's true (dx m, dy m, dtheta rad), dtheta minus the winding."""
         return true_pose_change(ctx)
 
-    def distance(self, ctx: TrialContext, index: int) -> float:
+    def distance(self, ctx: TapeContext, index: int) -> float:
         """The noisy forward-model distance number ``index``, metres."""
         return self._draw(ctx, index, [self.seed, ctx.trial, ctx.attempt, ctx.rejections])
 
-    def _draw(self, ctx: TrialContext, index: int, seed: list[int]) -> float:
+    def _draw(self, ctx: TapeContext, index: int, seed: list[int]) -> float:
         exact = marks_from_pose(self.description, self.true_pose_change(ctx)).as_array()
         rng = np.random.default_rng(seed)
         noisy = np.abs(exact + rng.normal(0.0, self.sigma_m, exact.size))
         return float(noisy[index])
 
-    def rejected(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+    def rejected(self, ctx: TapeContext, rejection: InconsistentMeasurementError) -> None:
         """Nothing to do: the next draw differs (``rejections`` is in the seed)."""
 
-    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> float:
+    def remeasure(self, ctx: TapeContext, index: int, reason: str) -> float:
         """The suspect distance with a new noise draw (seeded by the attempt and
         the number of re-measures so far)."""
         seed = [self.seed, ctx.trial, ctx.attempt, ctx.rejections, 1 + ctx.remeasures]
         return self._draw(ctx, index, seed)
 
     def extra_distance(
-        self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
+        self, ctx: TapeContext, pair: tuple[str, str], label: str, reason: str
     ) -> None:
         """An unattended run takes no extra distances: the trial is left out."""
         return None
@@ -343,19 +345,19 @@ class RecordedSource:
         self.origin = origin
         self.designs = tuple(designs) if designs is not None else None
 
-    def row_for(self, ctx: TrialContext) -> int:
+    def row_for(self, ctx: TapeContext) -> int:
         """The row used by trial ``ctx.trial`` (trial k uses row k - 1)."""
         return ctx.trial - 1
 
-    def mark_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+    def mark_start(self, ctx: TapeContext) -> Mapping[str, Any]:
         """Nothing to mark; journal which row serves the trial."""
         return {"row": self.row_for(ctx) + 1, "origin": self.origin}
 
-    def mark_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+    def mark_end(self, ctx: TapeContext) -> Mapping[str, Any]:
         """Nothing to mark."""
         return {}
 
-    def distance(self, ctx: TrialContext, index: int) -> float:
+    def distance(self, ctx: TapeContext, index: int) -> float:
         """Distance ``index`` of the trial's row."""
         row = self.row_for(ctx)
         if row >= len(self.rows):
@@ -370,17 +372,17 @@ class RecordedSource:
             )
         return self.rows[row][index]
 
-    def remeasure(self, ctx: TrialContext, index: int, reason: str) -> None:
+    def remeasure(self, ctx: TapeContext, index: int, reason: str) -> None:
         """Recorded distances cannot be retaken: keep the value (the trial is flagged)."""
         return None
 
     def extra_distance(
-        self, ctx: TrialContext, pair: tuple[str, str], label: str, reason: str
+        self, ctx: TapeContext, pair: tuple[str, str], label: str, reason: str
     ) -> None:
         """Recorded sessions have no extra distances: the trial is left out."""
         return None
 
-    def rejected(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+    def rejected(self, ctx: TapeContext, rejection: InconsistentMeasurementError) -> None:
         """Recorded distances cannot be retaken."""
         raise MeasurementError(
             f"{self.origin}: row {self.row_for(ctx) + 1} (trial {ctx.trial}): {rejection}"
@@ -458,9 +460,10 @@ class TapeSource:
         self.max_rejections = max_rejections
         self.max_remeasures = max_remeasures
 
-    def _labelled(self, ctx: TrialContext) -> TrialContext:
-        """``ctx`` with the names of the tape distances."""
-        return replace(ctx, labels=self.labels)
+    def _labelled(self, ctx: TrialContext) -> TapeContext:
+        """``ctx`` as the distance source sees it: with the names of the tape
+        distances (its readings are this source's :class:`TapeReadings`)."""
+        return TapeContext.of(ctx, self.labels)
 
     def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
         """The start marks (the distance source's journal data)."""
@@ -470,7 +473,7 @@ class TapeSource:
         """The end marks (the distance source's journal data)."""
         return self.distances.mark_end(self._labelled(ctx))
 
-    def _measure_missing(self, ctx: TrialContext, log: MeasurementLog) -> TrialContext:
+    def _measure_missing(self, ctx: TapeContext, log: MeasurementLog) -> TapeContext:
         for index in range(len(ctx.measurements), len(self.labels)):
             label = self.labels[index]
             value = check_distance(self.distances.distance(ctx, index), label)
@@ -484,7 +487,9 @@ class TapeSource:
             MeasurementError: the distances were rejected more than
                 ``max_rejections`` times, or the distance source gave up.
         """
-        ctx = self._labelled(ctx)
+        return self._pose_change(self._labelled(ctx), log)
+
+    def _pose_change(self, ctx: TapeContext, log: MeasurementLog) -> MeasuredPose:
         while True:
             ctx = self._measure_missing(ctx, log)
             marks = MarkDistances.of(self.description, ctx.measurements)
@@ -725,13 +730,3 @@ def pose_source_from_file(path: str | Path, description: RobotDescription) -> Po
     if trials.kind == "pose":
         return PoseFileSource(trials.trials, str(path), description)
     return TapeSource(recorded_source_from_file(path, description), description)
-
-
-def as_pose_source(
-    source: PoseSource | MeasurementSource, description: RobotDescription
-) -> PoseSource:
-    """``source`` as a :class:`PoseSource`: a distance source is put behind the
-    tape and the floor-marks solver (:class:`TapeSource`)."""
-    if hasattr(source, "pose_change"):
-        return cast(PoseSource, source)
-    return TapeSource(source, description)

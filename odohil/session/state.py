@@ -61,7 +61,9 @@ from odohil.units import wrap_angle
 FORMAT = 1
 """Version of the journal's event schema."""
 
-# The record kinds, for readers of raw records (the events' ``KIND``s).
+# The record kinds of the session's life, for readers of raw records (the
+# events' ``KIND``s; a pose source's own kinds are its events', e.g.
+# odohil/session/tape_records.py).
 SESSION = SessionHeader.KIND
 PLAN = PlanSet.KIND
 ROBOT = RobotConnected.KIND
@@ -70,10 +72,6 @@ TORN_RECORD = TornRecordKept.KIND
 TRIAL_START = TrialStart.KIND
 MOTION_START = MotionStart.KIND
 MOTION_DONE = MotionDone.KIND
-MEASUREMENT = "measurement"
-MEASUREMENTS_REJECTED = "measurements_rejected"
-REMEASURED = "remeasured"
-EXTRA_DISTANCE = "extra_distance"
 SOLVED = Solved.KIND
 ESTIMATE = Estimate.KIND
 VOID = Void.KIND
@@ -91,7 +89,7 @@ class Phase(Enum):
     MOVING = "moving"
     """The motion was started and did not report its end."""
     MEASURING = "measuring"
-    """The motion finished; distances are being taken (maybe all are in)."""
+    """The motion finished; the source is measuring (its readings may all be in)."""
 
 
 @dataclass(frozen=True)
@@ -121,11 +119,6 @@ class OpenTrial:
     end: Mapping[str, Any] = field(default_factory=dict)
     readings: SourceReadings | None = None
 
-    @property
-    def measurements(self) -> tuple[float, ...]:
-        """The source's readings so far (the tape: distances, metres)."""
-        return self.readings.values if self.readings is not None else ()
-
 
 @dataclass(frozen=True)
 class CompletedTrial:
@@ -147,8 +140,11 @@ class CompletedTrial:
         ambiguous: two candidate poses stayed plausible; the trial is left
             out of every estimate.
         candidates: the plausible poses of an ambiguous trial (dx m, dy m, dtheta rad).
-        slip: why the slip check doubts the trial (empty when it does not).
-        readings: the pose source's own record of the attempt's readings.
+        flag_reason: why the source flagged the trial (empty when it did not;
+            the tape: the slip check's doubt).
+        readings: the pose source's own record of the attempt's readings
+            (the readings the pose was solved from: ``readings.values``;
+            None for a source that measures poses).
     """
 
     trial: int
@@ -165,15 +161,8 @@ class CompletedTrial:
     seq: int = 0
     ambiguous: bool = False
     candidates: tuple[tuple[float, float, float], ...] = ()
-    slip: str = ""
+    flag_reason: str = ""
     readings: SourceReadings | None = None
-
-    @property
-    def measurements(self) -> tuple[float, ...]:
-        """The readings the pose was solved from (the tape: the floor-mark
-        distances, metres, same-screw then cross; empty for a source that
-        measures poses)."""
-        return self.readings.values if self.readings is not None else ()
 
 
 @dataclass(frozen=True)
@@ -502,7 +491,7 @@ def _solved(state: SessionState, event: Solved, seq: int) -> SessionState:
         seq=seq,
         ambiguous=bool(event.ambiguous),
         candidates=event.candidates or (),
-        slip=event.slip or "",
+        flag_reason=event.flag_reason or "",
         readings=opened.readings,
     )
     return replace(state, completed=(*state.completed, done), open_trial=None)
@@ -532,9 +521,9 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
     completion order (a general path's trials are :func:`session_path_trials`').
 
     Each trial's ``line`` is the journal line of its ``solved`` record;
-    ``flagged``/``note`` say when the floor-mark solution was not clear-cut or
-    the slip check doubts it. Ambiguous trials are left out of ``trials`` and
-    listed in ``ambiguous``.
+    ``flagged``/``note`` say when the source was not sure of the pose, or
+    flagged the trial (the tape: the slip check doubts it). Ambiguous trials
+    are left out of ``trials`` and listed in ``ambiguous``.
     """
     description = description_of_header(state)
     line = [t for t in state.completed if isinstance(t.design, Design)]
@@ -545,8 +534,8 @@ def session_trials(state: SessionState, source: str = "session") -> TrialSet:
             pose_cov=np.array(t.cov, dtype=np.float64),
             marks=t.readings.marks(description) if t.readings is not None else None,
             odometry_end_pose=np.array(t.encoder_end_pose, dtype=np.float64),
-            flagged=not t.clear_cut or bool(t.slip),
-            note="; ".join(part for part in (t.note, t.slip) if part),
+            flagged=not t.clear_cut or bool(t.flag_reason),
+            note="; ".join(part for part in (t.note, t.flag_reason) if part),
             line=t.seq,
             number=t.trial,
         )

@@ -27,7 +27,8 @@ from odohil.science.floor_marks import PosePrior, marks_from_pose
 from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription
-from odohil.session.sources import TrialContext, check_distance, prediction
+from odohil.session.sources import check_distance, prediction
+from odohil.session.tape_records import TapeContext
 
 BACK_WORDS = ("back", "-")
 """What the operator types at a distance prompt to correct the value typed just before."""
@@ -109,7 +110,7 @@ def expected_ranges(
     return tuple(ExpectedRange(float(a), float(b), limit) for a, b in zip(low, high, strict=True))
 
 
-def attempt_ranges(ctx: TrialContext, description: RobotDescription) -> tuple[ExpectedRange, ...]:
+def attempt_ranges(ctx: TapeContext, description: RobotDescription) -> tuple[ExpectedRange, ...]:
     """The expected ranges of a trial attempt's distances, from the engine's
     prediction (:func:`~odohil.session.sources.prediction`)."""
     return expected_ranges(description, ctx.design, prediction(ctx, description), ctx.trial)
@@ -189,7 +190,7 @@ class TapeEntry:
 
     @classmethod
     def for_attempt(
-        cls, ctx: TrialContext, description: RobotDescription, kept: Mapping[int, float] | None
+        cls, ctx: TapeContext, description: RobotDescription, kept: Mapping[int, float] | None
     ) -> TapeEntry:
         """The entry of a trial attempt, its ranges from the session's prediction."""
         trial = f"Trial {ctx.trial}/{ctx.n_trials}"
@@ -273,13 +274,13 @@ class TapeEntries:
         self._kept: dict[tuple[int, int, int], dict[int, float]] = {}
         self._seen: set[tuple[int, int]] = set()
 
-    def first_sight(self, ctx: TrialContext) -> bool:
+    def first_sight(self, ctx: TapeContext) -> bool:
         """Whether ``ctx``'s attempt is seen for the first time (its header is due)."""
         new = (ctx.trial, ctx.attempt) not in self._seen
         self._seen.add((ctx.trial, ctx.attempt))
         return new
 
-    def entry(self, ctx: TrialContext) -> tuple[TapeEntry, bool]:
+    def entry(self, ctx: TapeContext) -> tuple[TapeEntry, bool]:
         """The entry of ``ctx``'s round, and whether it is new (its instructions are due)."""
         key = (ctx.trial, ctx.attempt, ctx.rejections)
         new = key not in self._entries
@@ -288,7 +289,7 @@ class TapeEntries:
         return self._entries[key], new
 
     def rejected(
-        self, ctx: TrialContext, rejection: InconsistentMeasurementError
+        self, ctx: TapeContext, rejection: InconsistentMeasurementError
     ) -> dict[int, float]:
         """The distances the next round keeps (:func:`kept_after`), by index."""
         kept = kept_after(rejection, ctx.labels, ctx.measurements)

@@ -1,10 +1,15 @@
-"""The tape's own journal records: its events and the readings they fold into.
+"""The tape's own journal records: its events, the readings they fold into,
+and the context its distance sources see.
 
 The tape source (:class:`~odohil.session.sources.TapeSource`) journals each
 reading as it is taken; the session state keeps them, per attempt, as an
-opaque :class:`~odohil.session.events.SourceReadings` (a :class:`TapeReadings`
-here) and hands them back to the source in its context. Kinds (``data``
-members in brackets; every one also names ``trial`` and ``attempt``):
+opaque :class:`~odohil.session.events.SourceReadings` (a
+:class:`TapeReadings` here) and hands them back to the source in its context
+(``TrialContext.readings``). The tape's distance sources (the operator, the
+fake's simulated tape, recorded rows) see the attempt as a
+:class:`TapeContext`: the generic context with the distances' names and the
+readings taken so far. Kinds (``data`` members in brackets; every one also
+names ``trial`` and ``attempt``):
 
 - ``measurement``: one distance [``index``, ``label``, ``value_m``];
 - ``measurements_rejected``: the distances of this attempt are discarded and
@@ -19,7 +24,7 @@ members in brackets; every one also names ``trial`` and ``attempt``):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from typing import ClassVar
 
 from odohil.science.floor_marks import MarkDistances
@@ -58,17 +63,6 @@ class TapeReadings:
         """The distances as floor marks of ``description`` (None before any)."""
         return MarkDistances.of(description, self.measurements) if self.measurements else None
 
-    def context(self, ctx: TrialContext) -> TrialContext:
-        """``ctx`` with the readings taken so far."""
-        return replace(
-            ctx,
-            measurements=self.measurements,
-            rejections=self.rejections,
-            remeasures=self.remeasures,
-            slip=self.slip,
-            extra=self.extra,
-        )
-
 
 def _tape(readings: SourceReadings | None) -> TapeReadings:
     if readings is None:
@@ -76,6 +70,61 @@ def _tape(readings: SourceReadings | None) -> TapeReadings:
     if not isinstance(readings, TapeReadings):
         raise ValueError(f"a tape reading in an attempt measured by {type(readings).__name__}")
     return readings
+
+
+@dataclass(frozen=True)
+class TapeContext(TrialContext):
+    """A trial attempt as the tape's distance sources see it: the generic
+    context (its ``readings`` the attempt's :class:`TapeReadings`, or None
+    before the first) with the names of the distances.
+
+    Attributes:
+        labels: names of the tape distances, in the order they are asked for
+            (the robot description's: same-screw, then cross distances).
+    """
+
+    labels: tuple[str, ...] = ()
+
+    @classmethod
+    def of(cls, ctx: TrialContext, labels: tuple[str, ...]) -> TapeContext:
+        """``ctx`` (as the engine hands it to the tape) with the distances' names.
+
+        Raises:
+            ValueError: ``ctx`` holds another source's readings.
+        """
+        _tape(ctx.readings)
+        generic = {f.name: getattr(ctx, f.name) for f in fields(TrialContext)}
+        return cls(**generic, labels=labels)
+
+    @property
+    def tape(self) -> TapeReadings:
+        """The attempt's tape readings so far."""
+        return _tape(self.readings)
+
+    @property
+    def measurements(self) -> tuple[float, ...]:
+        """The distances already taken, metres."""
+        return self.tape.measurements
+
+    @property
+    def rejections(self) -> int:
+        """How many times this attempt's distances were rejected."""
+        return self.tape.rejections
+
+    @property
+    def remeasures(self) -> int:
+        """How many suspect distances were taken again."""
+        return self.tape.remeasures
+
+    @property
+    def slip(self) -> str:
+        """Why the slip check doubts the trial, once a suspect value was kept."""
+        return self.tape.slip
+
+    @property
+    def extra(self) -> tuple[tuple[str, str, float], ...]:
+        """Extra cross distances taken (start screw, end screw, metres)."""
+        return self.tape.extra
 
 
 @dataclass(frozen=True)

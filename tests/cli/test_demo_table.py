@@ -10,9 +10,9 @@ import re
 import pytest
 
 from odohil import units
-from odohil.session import state as ev
 from odohil.session.demo import DEMO_TRUTH
 from odohil.session.journal import read_journal
+from odohil.session.tape_records import MeasurementsRejected, Remeasured
 from tests.demo_run import demo_run
 
 
@@ -38,8 +38,8 @@ def test_demo_shows_the_truth_in_its_table_and_says_who_measured_again(
     assert "{'" not in done.stderr  # no raw dict
     assert "E_R = -1 deg/m, E_T = -0.05, K_theta = 0.3 deg^2/m" in " ".join(done.stderr.split())
     records = read_journal(session).records
-    rejected = [r.data["trial"] for r in records if r.kind == ev.MEASUREMENTS_REJECTED]
-    remeasured = [r.data["trial"] for r in records if r.kind == ev.REMEASURED]
+    rejected = [r.data["trial"] for r in records if r.kind == MeasurementsRejected.KIND]
+    remeasured = [r.data["trial"] for r in records if r.kind == Remeasured.KIND]
     assert rejected or remeasured, "the default seed has the simulated operator measure again"
     text = " ".join(done.stderr.split())
     assert "distances rejected" not in text

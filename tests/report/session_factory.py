@@ -18,8 +18,9 @@ from odohil.session.engine import (
     start_session,
 )
 from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource, TrialContext
+from odohil.session.sources import FakeTruthSource, TapeSource, TrialContext
 from odohil.session.state import SessionState
+from odohil.session.tape_records import TapeContext
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 
 
@@ -59,14 +60,14 @@ class KeptSlips(FakeTruthSource):
         super().__init__(*args, **kwargs)
         self.first = first
 
-    def distance(self, ctx: TrialContext, index: int) -> float:
+    def distance(self, ctx: TapeContext, index: int) -> float:
         """The fake's distance, typed 10 mm long on the chosen trials' first reading."""
         value = super().distance(ctx, index)
         slip = ctx.trial >= self.first and ctx.rejections == 0
         return value + 0.01 if slip and index == ctx.trial % len(ctx.labels) else value
 
     def remeasure(  # type: ignore[override]  # the source protocol allows None
-        self, ctx: TrialContext, index: int, reason: str
+        self, ctx: TapeContext, index: int, reason: str
     ) -> None:
         """The operator keeps the value taken."""
         return None
@@ -92,7 +93,10 @@ def build_session(
             journal,
             state,
             robot,
-            _source(PortTruth(port), description_of(state), seed, bump, kept_slips_from),
+            TapeSource(
+                _source(PortTruth(port), description_of(state), seed, bump, kept_slips_from),
+                description_of(state),
+            ),
             estimator=IncrementalLiveEstimator(),
             motion=MotionSettings(speeds=(1.0, 3.0), accelerations=(2.0, 6.0), watchdog_s=0.0),
         )

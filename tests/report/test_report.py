@@ -52,7 +52,7 @@ def test_report_is_self_contained_and_matches_the_estimate(
     written = json.loads((out / "parameters.json").read_text())
     # as estimate --json prints it: the estimate, then what the session's trials add
     assert written["flagged_trials"] == [
-        t.trial for t in state.completed if not t.clear_cut or t.slip
+        t.trial for t in state.completed if not t.clear_cut or t.flag_reason
     ]
     assert written["ambiguous_trials"] == []
     assert any("fewer than 10" in r for r in written["export_refusals"])
@@ -137,7 +137,7 @@ def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_pa
     # The flagged trials (the floor marks' solution in doubt) and the trial the
     # robust fit down-weights, listed by trial number.
     state = replay(read_journal(bumped).records)
-    flagged = {t.trial for t in state.completed if not t.clear_cut or t.slip}
+    flagged = {t.trial for t in state.completed if not t.clear_cut or t.flag_reason}
     assert 3 in flagged
     rows = parse_page(out / "index.html").pointed_out
     assert {n for n, what in rows.items() if "flagged" in what} == flagged

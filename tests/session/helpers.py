@@ -64,3 +64,9 @@ def fake_robot(query: str) -> Iterator[tuple[NomadBackend, PortTruth]]:
         yield robot, PortTruth(port)
     finally:
         robot.close()
+
+
+def readings_of(trial: Any) -> tuple[float, ...]:
+    """The readings an open or completed trial's pose was solved from (the
+    tape: its distances, metres); () for a source that journals none."""
+    return () if trial.readings is None else tuple(trial.readings.values)

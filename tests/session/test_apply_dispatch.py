@@ -45,6 +45,7 @@ from odohil.session.tape_records import (
     Measurement,
     MeasurementsRejected,
     Remeasured,
+    TapeContext,
     TapeReadings,
 )
 
@@ -64,7 +65,7 @@ ONE_OF_EACH: list[Event] = [
     MeasurementsRejected(1, 1, reason="no rigid motion"),
     Remeasured(1, 1, index=0, reason="slip", kept=False, previous_m=0.2, value_m=0.21, label="A"),
     ExtraDistance(1, 1, start="A", end="C", value_m=0.3, label="A start to C end"),
-    Solved(1, 1, (0.01, 0.0, 0.1), COV, clear_cut=True, slip="kept", details={"chi2": 0.5}),
+    Solved(1, 1, (0.01, 0.0, 0.1), COV, clear_cut=True, flag_reason="kept", details={"chi2": 0.5}),
     Estimate(2, result={"n_trials": 2}),
     Void(1, 2, reason="interrupted"),
     Stopped("interrupted", "Ctrl-C", state={"x_m": 0.0}),
@@ -124,10 +125,11 @@ def test_the_tape_readings_fold_into_the_open_attempts_own_record() -> None:
     assert state.open_trial.readings == TapeReadings(
         measurements=(0.11, 0.22), rejections=1, remeasures=1, extra=(("A", "C", 0.3),)
     )
-    ctx = TrialContext(1, 1, 2, PLAN.design_of(1), ())
-    assert state.open_trial.readings.context(ctx).rejections == 1
+    ctx = TrialContext(1, 1, 2, PLAN.design_of(1), readings=state.open_trial.readings)
+    assert TapeContext.of(ctx, ("d1", "d2")).rejections == 1
     done = _run(state, Solved(1, 1, (0.0, 0.0, 0.0), COV, clear_cut=True))
-    assert done.completed[0].measurements == (0.11, 0.22)
+    assert done.completed[0].readings is not None
+    assert done.completed[0].readings.values == (0.11, 0.22)
     assert done.completed[0].readings == state.open_trial.readings
 
 
@@ -140,9 +142,6 @@ class Beep:
     @property
     def values(self) -> tuple[float, ...]:
         return (float(self.heard),)
-
-    def context(self, ctx: TrialContext) -> TrialContext:
-        return ctx
 
     def marks(self, description: RobotDescription) -> MarkDistances | None:
         return None
@@ -174,7 +173,7 @@ def test_another_sources_readings_pass_the_state_unopened(tmp_path: object) -> N
         Solved(1, 1, (0.0, 0.0, 0.0), COV, clear_cut=True),
     )
     assert state.completed[0].readings == Beep(2)
-    assert state.completed[0].measurements == (2.0,)
+    assert state.completed[0].readings.values == (2.0,)
 
 
 def test_the_journal_writes_typed_events_and_replay_reads_them_back(tmp_path: object) -> None:

@@ -16,6 +16,7 @@ import pytest
 
 from odohil.session import state as ev
 from odohil.session.journal import read_journal
+from odohil.session.tape_records import Remeasured
 from tests.demo_run import demo_run
 
 
@@ -31,6 +32,6 @@ def test_backward_trials_are_not_called_slips(tmp_path_factory: pytest.TempPathF
     doubted = {
         r.data["trial"]
         for r in records
-        if (r.kind == ev.REMEASURED) or (r.kind == ev.SOLVED and r.data.get("slip"))
+        if (r.kind == Remeasured.KIND) or (r.kind == ev.SOLVED and r.data.get("slip"))
     }
     assert len(doubted & backward) <= 1, sorted(doubted & backward)

@@ -26,7 +26,9 @@ from odohil.session.journal import Record, read_journal
 from odohil.session.plan import parse_plan
 from odohil.session.sources import (
     FakeTruthSource,
+    MeasurementSource,
     OperatorSource,
+    TapeSource,
     TrialContext,
     check_distance,
     recorded_source_from_file,
@@ -34,6 +36,7 @@ from odohil.session.sources import (
 )
 from odohil.session.state import SessionState, load_session_trials, replay
 from odohil.session.tape_entry import parse_metres
+from odohil.session.tape_records import Measurement, MeasurementsRejected, TapeContext
 from tests.session.helpers import FAST, ROBOT_TOML, PortTruth, description, fake_robot
 
 PLAN = "k=1,l=1,n=3;k=0.5,l=1.5,n=3"
@@ -49,20 +52,25 @@ def _kinds(folder: Path) -> list[str]:
     return [r.kind for r in read_journal(folder).records]
 
 
+def _tape(distances: MeasurementSource) -> TapeSource:
+    """The tape and the floor-marks solver over ``distances``."""
+    return TapeSource(distances, description())
+
+
 def test_every_trial_once_with_the_true_pose_change(tmp_path: Path) -> None:
     with fake_robot(QUERY) as (robot, truth):
         journal, state = _start(tmp_path)
         source = FakeTruthSource(truth, description(), seed=3)
         with journal:
             engine = SessionEngine(
-                journal, state, robot, source, estimator=IncrementalLiveEstimator()
+                journal, state, robot, _tape(source), estimator=IncrementalLiveEstimator()
             )
             final = engine.run()
     assert final.finished
     assert [t.trial for t in final.completed] == [1, 2, 3, 4, 5, 6]
     assert all(t.attempt == 1 for t in final.completed)
     for t in final.completed:
-        ctx = TrialContext(t.trial, t.attempt, 6, t.design, (), start=t.start, end=t.end)
+        ctx = TrialContext(t.trial, t.attempt, 6, t.design, start=t.start, end=t.end)
         true = np.array(source.true_pose_change(ctx))
         solved = np.array(t.pose_change)
         sd = np.sqrt(np.diag(np.array(t.cov)))
@@ -98,7 +106,7 @@ def test_cut_off_at_the_motion_is_void_and_redone(tmp_path: Path) -> None:
         source = FakeTruthSource(truth, description(), seed=3)
         with journal, pytest.raises(KeyboardInterrupt):
             SessionEngine(
-                journal, state, robot, source, observer=_interrupt_on(ev.MOTION_START, 2)
+                journal, state, robot, _tape(source), observer=_interrupt_on(ev.MOTION_START, 2)
             ).run()
         assert not truth.moving()
         kinds = _kinds(tmp_path)
@@ -108,7 +116,7 @@ def test_cut_off_at_the_motion_is_void_and_redone(tmp_path: Path) -> None:
 
         resumed = resume_session(tmp_path)
         with resumed.journal:
-            final = SessionEngine(resumed.journal, resumed.state, robot, source).run()
+            final = SessionEngine(resumed.journal, resumed.state, robot, _tape(source)).run()
     assert [(t.trial, t.attempt) for t in final.completed] == [(1, 1), (2, 2), (3, 1)]
     assert final.voided == 1
 
@@ -120,7 +128,7 @@ class _FailingAt(FakeTruthSource):
         super().__init__(*args, **kwargs)
         self.at = (trial, index)
 
-    def distance(self, ctx: TrialContext, index: int) -> float:
+    def distance(self, ctx: TapeContext, index: int) -> float:
         if (ctx.trial, index) == self.at:
             raise KeyboardInterrupt
         return super().distance(ctx, index)
@@ -131,26 +139,28 @@ def test_cut_off_while_measuring_resumes_at_the_next_distance(tmp_path: Path) ->
         journal, state = _start(tmp_path, "k=1,l=0.5,n=2")
         failing = _FailingAt(truth, description(), seed=3, trial=2, index=2)
         with journal, pytest.raises(KeyboardInterrupt):
-            SessionEngine(journal, state, robot, failing).run()
+            SessionEngine(journal, state, robot, _tape(failing)).run()
         before = replay(read_journal(tmp_path).records)
         assert before.open_trial is not None
         assert before.open_trial.phase is ev.Phase.MEASURING
-        assert len(before.open_trial.measurements) == 2
+        assert before.open_trial.readings is not None
+        assert len(before.open_trial.readings.values) == 2
 
         source = FakeTruthSource(truth, description(), seed=3)
         resumed = resume_session(tmp_path)
         with resumed.journal:
-            final = SessionEngine(resumed.journal, resumed.state, robot, source).run()
+            final = SessionEngine(resumed.journal, resumed.state, robot, _tape(source)).run()
     assert [(t.trial, t.attempt) for t in final.completed] == [(1, 1), (2, 1)]
     assert final.voided == 0
     second = final.completed[1]
     # the distances taken before and after the break are those of one attempt
-    ctx = TrialContext(2, 1, 2, second.design, (), start=second.start, end=second.end)
+    ctx = TapeContext(2, 1, 2, second.design, start=second.start, end=second.end)
     expected = [source.distance(ctx, i) for i in range(5)]
-    assert list(second.measurements) == expected
+    assert second.readings is not None
+    assert list(second.readings.values) == expected
     records = read_journal(tmp_path).records
     indices = [
-        r.data["index"] for r in records if r.kind == ev.MEASUREMENT and r.data["trial"] == 2
+        r.data["index"] for r in records if r.kind == Measurement.KIND and r.data["trial"] == 2
     ]
     assert indices == [0, 1, 2, 3, 4]
 
@@ -158,7 +168,7 @@ def test_cut_off_while_measuring_resumes_at_the_next_distance(tmp_path: Path) ->
 class _OneBadTape(FakeTruthSource):
     """Misreads the first distance by 5 cm on the first try of each attempt."""
 
-    def distance(self, ctx: TrialContext, index: int) -> float:
+    def distance(self, ctx: TapeContext, index: int) -> float:
         value = super().distance(ctx, index)
         return value + 0.05 if (index == 0 and ctx.rejections == 0) else value
 
@@ -168,12 +178,12 @@ def test_inconsistent_distances_are_rejected_and_taken_again(tmp_path: Path) -> 
         journal, state = _start(tmp_path, "k=0.5,l=1,n=2")
         with journal:
             final = SessionEngine(
-                journal, state, robot, _OneBadTape(truth, description(), seed=3)
+                journal, state, robot, _tape(_OneBadTape(truth, description(), seed=3))
             ).run()
     assert len(final.completed) == 2
     kinds = _kinds(tmp_path)
-    assert kinds.count(ev.MEASUREMENTS_REJECTED) == 2
-    assert kinds.count(ev.MEASUREMENT) == 4 * 5
+    assert kinds.count(MeasurementsRejected.KIND) == 2
+    assert kinds.count(Measurement.KIND) == 4 * 5
 
 
 def _trial_file(path: Path, rows: list[tuple[float, float, str, float, float, float]]) -> Path:
@@ -192,7 +202,7 @@ def test_recorded_distances_from_a_trial_file(tmp_path: Path) -> None:
     with fake_robot(QUERY) as (robot, _):
         journal, state = _start(tmp_path / "s", "k=0.5,l=0.5,n=2")
         with journal:
-            final = SessionEngine(journal, state, robot, source).run()
+            final = SessionEngine(journal, state, robot, _tape(source)).run()
     for trial, pose in zip(final.completed, poses, strict=True):
         np.testing.assert_allclose(trial.pose_change, pose, atol=1e-7)
 
@@ -203,7 +213,7 @@ def test_recorded_row_of_another_design_is_refused(tmp_path: Path) -> None:
     with fake_robot(QUERY) as (robot, _):
         journal, state = _start(tmp_path / "s", "k=0.5,l=0.5,n=1")
         with journal, pytest.raises(MeasurementError, match="row 1 is design k=1"):
-            SessionEngine(journal, state, robot, source).run()
+            SessionEngine(journal, state, robot, _tape(source)).run()
     assert _kinds(tmp_path / "s")[-1] == ev.STOPPED
 
 
@@ -221,14 +231,14 @@ class _TapeOperator:
         self.typed: list[str] = []
         self.given: list[float] = []
 
-    def confirm_start_marks(self, ctx: TrialContext) -> None:
+    def confirm_start_marks(self, ctx: TapeContext) -> None:
         self.start = self.truth.true_pose()
 
-    def confirm_end_marks(self, ctx: TrialContext) -> None:
+    def confirm_end_marks(self, ctx: TapeContext) -> None:
         winding = ctx.design.path().winding_rad
         self.change = relative_true_pose(self.start, self.truth.true_pose(), winding)
 
-    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+    def ask_distance(self, ctx: TapeContext, index: int) -> float:
         exact = float(marks_from_pose(description(), self.change).as_array()[index])
         text = f"{exact!r}0000000000071"
         value = -exact if self.negative else parse_metres(text, ctx.labels[index])
@@ -236,13 +246,13 @@ class _TapeOperator:
         self.given.append(value)
         return value
 
-    def show_rejection(self, ctx: TrialContext, reason: str) -> None:
+    def show_rejection(self, ctx: TapeContext, reason: str) -> None:
         raise AssertionError(reason)
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+    def ask_remeasure(self, ctx: TapeContext, index: int, reason: str) -> float | None:
         return None
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
+    def ask_extra_distance(self, ctx: TapeContext, label: str, reason: str) -> float | None:
         return None
 
 
@@ -253,9 +263,9 @@ def test_a_typed_distance_reaches_the_journal_as_the_same_float(tmp_path: Path) 
         journal, state = _start(tmp_path, "k=1,l=1,n=1")
         operator = _TapeOperator(truth)
         with journal:
-            SessionEngine(journal, state, robot, OperatorSource(operator)).run()
+            SessionEngine(journal, state, robot, _tape(OperatorSource(operator))).run()
     journaled = [
-        r.data["value_m"] for r in read_journal(tmp_path).records if r.kind == ev.MEASUREMENT
+        r.data["value_m"] for r in read_journal(tmp_path).records if r.kind == Measurement.KIND
     ]
     assert journaled == operator.given == [float(text) for text in operator.typed]
     assert all(type(v) is float for v in journaled)
@@ -268,9 +278,11 @@ def test_a_distance_that_is_no_distance_is_refused_once_by_name(tmp_path: Path) 
     with fake_robot(QUERY) as (robot, truth):
         journal, state = _start(tmp_path, "k=1,l=1,n=1")
         with journal, pytest.raises(MeasurementError, match=r"d1 \(screw A\): a distance cannot"):
-            SessionEngine(journal, state, robot, OperatorSource(_TapeOperator(truth, True))).run()
+            SessionEngine(
+                journal, state, robot, _tape(OperatorSource(_TapeOperator(truth, True)))
+            ).run()
     kinds = _kinds(tmp_path)
-    assert ev.MEASUREMENT not in kinds
+    assert Measurement.KIND not in kinds
     assert kinds[-1] == ev.STOPPED
     with pytest.raises(MeasurementError, match="not a finite number"):
         check_distance(math.nan, "d1")
@@ -301,7 +313,7 @@ def test_the_live_estimate_crosses_the_session_typed(tmp_path: Path) -> None:
                 journal,
                 state,
                 robot,
-                FakeTruthSource(truth, description(), seed=3),
+                _tape(FakeTruthSource(truth, description(), seed=3)),
                 estimator=IncrementalLiveEstimator(),
                 observer=watcher,
             )
@@ -329,7 +341,7 @@ def test_records_go_to_the_observer_in_order(tmp_path: Path) -> None:
                 journal,
                 state,
                 robot,
-                FakeTruthSource(truth, description()),
+                _tape(FakeTruthSource(truth, description())),
                 observer=CallbackObserver(callback),
             ).run()
     kinds = [kind for _, kind, _ in seen]
@@ -358,7 +370,7 @@ def test_any_exception_during_a_motion_stops_the_robot(
         journal, state = _start(tmp_path, "k=0.5,l=0.5,n=1")
         source = FakeTruthSource(truth, description(), seed=3)
         with journal, pytest.raises(error):
-            SessionEngine(journal, state, robot, source, on_sample=on_sample).run()
+            SessionEngine(journal, state, robot, _tape(source), on_sample=on_sample).run()
         assert raised
         assert not truth.moving()
     records = read_journal(tmp_path).records

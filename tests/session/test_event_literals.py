@@ -23,8 +23,9 @@ KIND_NAMES = frozenset(
     name
     for name in dir(state)
     if name.isupper() and isinstance(getattr(state, name), str) and getattr(state, name) in KINDS
-)
-"""The constants that name a kind (``state.SOLVED``...)."""
+) | frozenset(kind.upper() for kind in KINDS)
+"""The constants that name a kind (``state.SOLVED``...; a pose source's kinds,
+which the state does not name, by their upper-case spelling: ``MEASUREMENTS_REJECTED``)."""
 
 
 def _names_a_kind(node: ast.expr) -> bool:

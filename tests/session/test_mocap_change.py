@@ -79,9 +79,7 @@ def test_the_covariance_matches_a_monte_carlo_of_the_transform() -> None:
 
 
 def _ctx(start: dict[str, object], end: dict[str, object]) -> TrialContext:
-    return TrialContext(
-        trial=3, attempt=1, n_trials=5, design=Design(1, 1.0), labels=(), start=start, end=end
-    )
+    return TrialContext(trial=3, attempt=1, n_trials=5, design=Design(1, 1.0), start=start, end=end)
 
 
 def test_the_source_measures_from_the_journaled_still_poses_alone() -> None:

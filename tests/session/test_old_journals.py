@@ -64,7 +64,7 @@ def snapshot(folder: Path) -> dict[str, Any]:
                 "design": t.design.label(),
                 "design_index": t.design_index,
                 "encoder_end_pose": t.encoder_end_pose,
-                "measurements": list(t.measurements),
+                "measurements": list(t.readings.values) if t.readings is not None else [],
                 "pose_change": t.pose_change,
                 "cov": t.cov,
                 "clear_cut": t.clear_cut,
@@ -74,7 +74,7 @@ def snapshot(folder: Path) -> dict[str, Any]:
                 "seq": t.seq,
                 "ambiguous": t.ambiguous,
                 "candidates": t.candidates,
-                "slip": t.slip,
+                "slip": t.flag_reason,
             }
             for t in state.completed
         ],

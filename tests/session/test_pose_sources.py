@@ -11,7 +11,6 @@ from typing import Any
 import numpy as np
 
 from odohil.science.floor_marks import marks_from_pose, pose_covariance
-from odohil.session import state as ev
 from odohil.session.engine import SessionEngine, start_session
 from odohil.session.journal import read_journal
 from odohil.session.plan import parse_plan
@@ -23,7 +22,8 @@ from odohil.session.sources import (
     pose_source_from_file,
 )
 from odohil.session.state import SessionState, session_trials
-from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
+from odohil.session.tape_records import Measurement
+from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot, readings_of
 
 QUERY = f"seed=11&{FAST}&E_R=-1.0&E_T=-0.05&K_theta=0.3&K_rho=0.0009"
 POSES = [(0.5, 0.001, -0.004), (-0.49, -0.0005, 0.003)]
@@ -63,8 +63,8 @@ def test_a_trial_file_of_poses_is_read_as_poses(tmp_path: Path) -> None:
         assert trial.pose_change == pose  # exactly: no distances, no solver
         expected_cov = pose_covariance(description(), pose)
         np.testing.assert_allclose(trial.cov, expected_cov, rtol=1e-12)
-        assert trial.measurements == ()
-    assert ev.MEASUREMENT not in _kinds(tmp_path / "s")
+        assert trial.readings is None
+    assert Measurement.KIND not in _kinds(tmp_path / "s")
     offline = session_trials(final)  # odohil estimate SESSION, the report
     assert [t.marks for t in offline.trials] == [None, None]
     assert [t.flagged for t in offline.trials] == [False, False]
@@ -84,8 +84,8 @@ def test_a_trial_file_of_distances_goes_through_the_solver(tmp_path: Path) -> No
     final = _run(tmp_path / "s", source)
     for trial, pose in zip(final.completed, POSES, strict=True):
         np.testing.assert_allclose(trial.pose_change, pose, atol=1e-7)
-        assert len(trial.measurements) == 5
-    assert _kinds(tmp_path / "s").count(ev.MEASUREMENT) == 2 * 5
+        assert len(readings_of(trial)) == 5
+    assert _kinds(tmp_path / "s").count(Measurement.KIND) == 2 * 5
 
 
 def test_the_fakes_truth_channel_is_a_pose_source_that_resumes_alike(tmp_path: Path) -> None:
@@ -110,7 +110,7 @@ def test_the_fakes_truth_channel_is_a_pose_source_that_resumes_alike(tmp_path: P
     # poses, a resumed session measures exactly what the first one did
     again = TruthPoseSource(truth, sigma, seed=5)
     for trial in final.completed:
-        ctx = TrialContext(trial.trial, trial.attempt, 3, trial.design, (), trial.start, trial.end)
+        ctx = TrialContext(trial.trial, trial.attempt, 3, trial.design, trial.start, trial.end)
         assert again.pose_change(ctx, _no_log).pose == trial.pose_change
 
 

@@ -35,6 +35,7 @@ from odohil.session.sources import (
     FakeTruthSource,
     MeasurementSource,
     OperatorSource,
+    TapeSource,
     TrialContext,
     relative_true_pose,
 )
@@ -45,8 +46,14 @@ from odohil.session.state import (
     session_observations,
     session_trials,
 )
+from odohil.session.tape_records import (
+    ExtraDistance,
+    MeasurementsRejected,
+    Remeasured,
+    TapeContext,
+)
 from tests.report.session_factory import PortTruth
-from tests.session.helpers import ROBOT_TOML
+from tests.session.helpers import ROBOT_TOML, readings_of
 
 NO_CROSS_TOML = ROBOT_TOML.replace('cross = [["A", "B"], ["B", "C"]]\n', "")
 TYPO_M = 0.01
@@ -62,7 +69,7 @@ class TypingSlips(FakeTruthSource):
         self.first = first
         self.slipped: dict[int, int] = {}
 
-    def distance(self, ctx: TrialContext, index: int) -> float:
+    def distance(self, ctx: TapeContext, index: int) -> float:
         value = super().distance(ctx, index)
         slip = ctx.trial >= self.first and ctx.rejections == 0
         if slip and index == ctx.trial % len(ctx.labels):
@@ -88,7 +95,7 @@ def _run(
             journal,
             state,
             robot,
-            source,
+            TapeSource(source, description),
             estimator=IncrementalLiveEstimator(),
             motion=MotionSettings(speeds=(1.0, 3.0), accelerations=(2.0, 6.0), watchdog_s=0.0),
         )
@@ -143,7 +150,7 @@ def test_a_slip_is_remeasured_and_journaled(tmp_path: Path) -> None:
 
     state, used = _run(folder, ROBOT_TOML, "k=1,l=2,n=6;k=4,l=0.5,n=6", seed=7, make_source=source)
     assert isinstance(used, TypingSlips)
-    remeasured = _records(folder, ev.REMEASURED)
+    remeasured = _records(folder, Remeasured.KIND)
     assert remeasured, "no slip was caught"
     for data in remeasured:
         assert data["index"] == used.slipped[data["trial"]]
@@ -153,15 +160,15 @@ def test_a_slip_is_remeasured_and_journaled(tmp_path: Path) -> None:
     by_trial = {t.trial: t for t in state.completed}
     for data in remeasured:
         trial = by_trial[data["trial"]]
-        assert trial.measurements[data["index"]] == data["value_m"]
+        assert readings_of(trial)[data["index"]] == data["value_m"]
     caught = {d["trial"] for d in remeasured} | {
-        d["trial"] for d in _records(folder, ev.MEASUREMENTS_REJECTED)
+        d["trial"] for d in _records(folder, MeasurementsRejected.KIND)
     }
     passed = [t for t in state.completed if t.trial >= 5 and t.trial not in caught]
     # a typo that neither check catches must leave the pose within 4 sd
     for t in passed:
         truth = FakeTruthSource.true_pose_change  # the fake's truth, journaled
-        ctx = TrialContext(t.trial, t.attempt, 12, t.design, (), t.start, t.end)
+        ctx = TrialContext(t.trial, t.attempt, 12, t.design, t.start, t.end)
         true = truth(used, ctx)
         sd = t.cov[2][2] ** 0.5
         error = abs(math.remainder(t.pose_change[2] - true[2], 2 * math.pi))
@@ -181,25 +188,25 @@ class TapeOperator:
         self.extra_labels: list[str] = []
         self.truths: dict[int, tuple[float, float, float]] = {}
 
-    def confirm_start_marks(self, ctx: TrialContext) -> None:
+    def confirm_start_marks(self, ctx: TapeContext) -> None:
         self.start = self.truth.true_pose()
 
-    def confirm_end_marks(self, ctx: TrialContext) -> None:
+    def confirm_end_marks(self, ctx: TapeContext) -> None:
         self.change = relative_true_pose(
             self.start, self.truth.true_pose(), ctx.design.path().winding_rad
         )
         self.truths[ctx.trial] = self.change
 
-    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+    def ask_distance(self, ctx: TapeContext, index: int) -> float:
         return float(marks_from_pose(self.description, self.change).as_array()[index])
 
-    def show_rejection(self, ctx: TrialContext, reason: str) -> None:
+    def show_rejection(self, ctx: TapeContext, reason: str) -> None:
         raise AssertionError(f"exact distances rejected: {reason}")
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+    def ask_remeasure(self, ctx: TapeContext, index: int, reason: str) -> float | None:
         return self.ask_distance(ctx, index)
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
+    def ask_extra_distance(self, ctx: TapeContext, label: str, reason: str) -> float | None:
         self.extra_labels.append(label)
         start, end = label.replace(" start to ", " ").replace(" end", "").split()
         probe = replace(self.description, cross_pairs=((start, end),))
@@ -223,12 +230,12 @@ def test_the_operator_settles_an_ambiguous_trial_with_one_more_named_distance(
             journal,
             state,
             robot,
-            OperatorSource(operator),
+            TapeSource(OperatorSource(operator), description_of(state)),
             estimator=IncrementalLiveEstimator(),
             motion=MotionSettings(speeds=(1.0, 3.0), accelerations=(2.0, 6.0), watchdog_s=0.0),
         )
         final = engine.run()
-    extra = _records(folder, ev.EXTRA_DISTANCE)
+    extra = _records(folder, ExtraDistance.KIND)
     assert extra, "no ambiguous trial was met"
     assert operator.extra_labels == [d["label"] for d in extra]
     for data in extra:

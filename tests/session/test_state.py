@@ -13,6 +13,8 @@ from odohil.session.events import Estimate
 from odohil.session.journal import Record
 from odohil.session.plan import parse_plan
 from odohil.session.state import Phase, replay
+from odohil.session.tape_records import Measurement, MeasurementsRejected
+from tests.session.helpers import readings_of
 
 PLAN = parse_plan("k=1,l=1,n=2;k=0.5,l=2,n=1")
 
@@ -42,7 +44,7 @@ class Log:
     def measure(self, trial: int, values: list[float], attempt: int = 1) -> None:
         for index, value in enumerate(values):
             self.add(
-                ev.MEASUREMENT,
+                Measurement.KIND,
                 {
                     "trial": trial,
                     "attempt": attempt,
@@ -80,7 +82,7 @@ def test_completed_trials_in_order() -> None:
     state = replay(log.records)
     assert state.plan == PLAN
     assert [t.trial for t in state.completed] == [1, 2]
-    assert state.completed[0].measurements == (0.1, 0.2, 0.3, 0.4)
+    assert readings_of(state.completed[0]) == (0.1, 0.2, 0.3, 0.4)
     assert state.completed[0].pose_change == (0.01, 0.02, 0.003)
     assert state.completed[1].design == PLAN.items[0].design
     assert state.open_trial is None
@@ -100,7 +102,7 @@ def test_phases_of_an_open_trial() -> None:
     assert opened is not None
     assert opened.phase is Phase.MEASURING
     assert opened.encoder_end_pose == (1.0, 2.0, 3.0)
-    assert opened.measurements == (0.5, 0.6)
+    assert readings_of(opened) == (0.5, 0.6)
 
 
 def test_void_then_a_new_attempt() -> None:
@@ -123,10 +125,10 @@ def test_rejected_measurements_are_taken_again() -> None:
     log.start(1)
     log.move(1)
     log.measure(1, [9.0, 9.0, 9.0, 9.0])
-    log.add(ev.MEASUREMENTS_REJECTED, {"trial": 1, "attempt": 1, "reason": "inconsistent"})
+    log.add(MeasurementsRejected.KIND, {"trial": 1, "attempt": 1, "reason": "inconsistent"})
     log.measure(1, [0.1, 0.2, 0.3, 0.4])
     log.solve(1)
-    assert replay(log.records).completed[0].measurements == (0.1, 0.2, 0.3, 0.4)
+    assert readings_of(replay(log.records).completed[0]) == (0.1, 0.2, 0.3, 0.4)
 
 
 def test_finished_and_estimate() -> None:

@@ -22,7 +22,7 @@ from odohil.science.floor_marks import (
 from odohil.science.robot_description import parse_robot_description
 from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
 from odohil.session.plan import parse_plan
-from odohil.session.sources import OperatorSource, TrialContext, relative_true_pose
+from odohil.session.sources import OperatorSource, TapeSource, relative_true_pose
 from odohil.session.tape_entry import (
     ExpectedRange,
     TapeEntries,
@@ -33,6 +33,7 @@ from odohil.session.tape_entry import (
     parse_metres,
     parse_optional_metres,
 )
+from odohil.session.tape_records import TapeContext, TapeReadings
 from tests.session.helpers import FAST, ROBOT_TOML, PortTruth, description, fake_robot
 
 DESIGN = parse_plan("k=1,l=1,n=2", "reverse").items[0].design
@@ -40,8 +41,8 @@ LABELS = distance_labels(description())
 WIDE = ExpectedRange(0.0, 10.0, 20.0)
 
 
-def _ctx(**changes: object) -> TrialContext:
-    ctx = TrialContext(1, 1, 2, DESIGN, LABELS, encoder_end_pose=(0.0, 0.0, 0.0))
+def _ctx(**changes: object) -> TapeContext:
+    ctx = TapeContext(1, 1, 2, DESIGN, encoder_end_pose=(0.0, 0.0, 0.0), labels=LABELS)
     return replace(ctx, **changes)  # type: ignore[arg-type]
 
 
@@ -114,7 +115,7 @@ def test_distances_a_typed_rejection_did_not_name_are_kept_without_asking() -> N
 
 def test_a_rejection_starts_a_round_that_keeps_what_it_did_not_name() -> None:
     entries = TapeEntries(description())
-    first = _ctx(measurements=(0.1, 0.2, 0.3, 0.4, 0.5))
+    first = _ctx(readings=TapeReadings(measurements=(0.1, 0.2, 0.3, 0.4, 0.5)))
     assert entries.first_sight(first)
     assert not entries.first_sight(first)
     entry, new = entries.entry(first)
@@ -122,7 +123,7 @@ def test_a_rejection_starts_a_round_that_keeps_what_it_did_not_name() -> None:
     assert entries.entry(first) == (entry, False)
     named = InconsistentMeasurementError("d2 is off", (LABELS[1],))
     assert entries.rejected(first, named) == {0: 0.1, 2: 0.3, 3: 0.4, 4: 0.5}
-    second, new = entries.entry(_ctx(rejections=1))
+    second, new = entries.entry(_ctx(readings=TapeReadings(rejections=1)))
     assert new
     assert second.take(0) == 0.1
     assert second.take(1) is None
@@ -159,14 +160,14 @@ class _Operator:
         self.outside: list[tuple[int, str, float, ExpectedRange]] = []
         self.asked = 0
 
-    def confirm_start_marks(self, ctx: TrialContext) -> None:
+    def confirm_start_marks(self, ctx: TapeContext) -> None:
         self.start = self.truth.true_pose()
 
-    def confirm_end_marks(self, ctx: TrialContext) -> None:
+    def confirm_end_marks(self, ctx: TapeContext) -> None:
         winding = ctx.design.path().winding_rad
         self.change = relative_true_pose(self.start, self.truth.true_pose(), winding)
 
-    def ask_distance(self, ctx: TrialContext, index: int) -> float:
+    def ask_distance(self, ctx: TapeContext, index: int) -> float:
         true = float(marks_from_pose(description(), self.change).as_array()[index])
         expected = attempt_ranges(ctx, description())[index]
         self.asked += 1
@@ -174,13 +175,13 @@ class _Operator:
             self.outside.append((ctx.trial, ctx.labels[index], true, expected))
         return true
 
-    def show_rejection(self, ctx: TrialContext, rejection: InconsistentMeasurementError) -> None:
+    def show_rejection(self, ctx: TapeContext, rejection: InconsistentMeasurementError) -> None:
         raise AssertionError(rejection)
 
-    def ask_remeasure(self, ctx: TrialContext, index: int, reason: str) -> float | None:
+    def ask_remeasure(self, ctx: TapeContext, index: int, reason: str) -> float | None:
         return None
 
-    def ask_extra_distance(self, ctx: TrialContext, label: str, reason: str) -> float | None:
+    def ask_extra_distance(self, ctx: TapeContext, label: str, reason: str) -> float | None:
         return None
 
 
@@ -194,7 +195,7 @@ def test_the_expected_ranges_contain_the_truth_on_the_fake(tmp_path: Path) -> No
                 journal,
                 state,
                 robot,
-                OperatorSource(operator),
+                TapeSource(OperatorSource(operator), description()),
                 estimator=IncrementalLiveEstimator(),
             ).run()
     assert final.finished

@@ -17,7 +17,7 @@ from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start
 from odohil.session.interrupts import Interrupts
 from odohil.session.lifecycle import final_estimate
 from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource
+from odohil.session.sources import FakeTruthSource, TapeSource
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
 
 
@@ -41,7 +41,7 @@ def test_live_estimate_after_the_last_trial_is_the_final_recipes(tmp_path: Path)
                 journal,
                 state,
                 robot,
-                FakeTruthSource(truth, description(), seed=3),
+                TapeSource(FakeTruthSource(truth, description(), seed=3), description()),
                 estimator=IncrementalLiveEstimator(),
                 observer=observer,
             ).run()

@@ -37,6 +37,7 @@ from odohil.session import state as ev
 from odohil.session.journal import journal_path, read_journal
 from odohil.session.sources import relative_true_pose
 from odohil.session.state import replay
+from odohil.session.tape_records import Measurement, Remeasured
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 
 DESCRIPTION = parse_robot_description(ROBOT_TOML)
@@ -275,16 +276,16 @@ def test_a_typo_is_caught_and_only_that_distance_is_re_entered(tmp_path: Path) -
         child.expect(pexpect.EOF)
         child.close()
     records = read_journal(folder).records
-    remeasured = [r.data for r in records if r.kind == ev.REMEASURED]
+    remeasured = [r.data for r in records if r.kind == Remeasured.KIND]
     assert [(d["trial"], d["index"], d["kept"]) for d in remeasured] == [(4, index, False)]
-    assert sum(1 for r in records if r.kind == ev.MEASUREMENT and r.data["trial"] == 4) == len(
+    assert sum(1 for r in records if r.kind == Measurement.KIND and r.data["trial"] == 4) == len(
         values
     )
     state = replay(records)
-    assert state.completed[-1].measurements == pytest.approx(values)
-    assert not state.completed[-1].slip
+    assert state.completed[-1].readings.values == pytest.approx(values)  # type: ignore[union-attr]
+    assert not state.completed[-1].flag_reason
     # a typed distance stays the one float Python parses from the text, up to the journal
-    journaled = [r.data["value_m"] for r in records if r.kind == ev.MEASUREMENT]
+    journaled = [r.data["value_m"] for r in records if r.kind == Measurement.KIND]
     assert journaled[: len(typed_first)] == typed_first
     assert all(type(v) is float for v in journaled)
 
@@ -408,7 +409,7 @@ def test_resumed_mid_trial_shows_its_context_and_back_corrects_the_last_value(
         child.expect(pexpect.EOF)
         child.close()
     records = read_journal(folder).records
-    typed = [r.data["value_m"] for r in records if r.kind == ev.MEASUREMENT]
+    typed = [r.data["value_m"] for r in records if r.kind == Measurement.KIND]
     assert typed == values + second
     assert "KeyboardInterrupt" not in journal_path(folder).read_text()
 

@@ -29,7 +29,6 @@ from odohil.session.outcome import EstimateOutcome, estimate_state
 from odohil.session.pose_source import PoseSource
 from odohil.session.robot import SampleCallback
 from odohil.session.signals import signal_name, signal_of
-from odohil.session.sources import MeasurementSource
 from odohil.session.state import (
     CompletedTrial,
     SessionState,
@@ -212,7 +211,7 @@ def run_session(
     opened: Opened,
     observer: SessionObserver | None = None,
     *,
-    source: PoseSource | MeasurementSource | None = None,
+    source: PoseSource | None = None,
     estimator: LiveEstimator | None = None,
     motion: MotionSettings | None = None,
     start_check: StartCheck | None = None,
