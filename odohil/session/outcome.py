@@ -319,9 +319,14 @@ def _correction_refusals(result: EstimateResult) -> list[str]:
         p = result.parameter(name)
         low, high = p.ci95
         if not (np.isfinite(low) and np.isfinite(high)) or high - low > abs(p.value):
+            unit = units.parameter_unit(name, "paper")
+            low_p, high_p, value_p = (
+                units.parameter_in(name, v, "paper") for v in (low, high, p.value)
+            )
             reasons.append(
                 f"the {what} correction is not told from none: {name}'s 95 % interval "
-                f"[{low:.4g}, {high:.4g}] is wider than its value {p.value:.4g}"
+                f"{units.with_unit(f'[{low_p:.4g}, {high_p:.4g}]', unit)} is wider than its value "
+                f"{units.with_unit(f'{value_p:.4g}', unit)}"
             )
     return reasons
 
