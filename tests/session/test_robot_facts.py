@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
+import fakes
 from odohil.cli.app import app
 from odohil.errors import ParameterError, RobotDescriptionError, StopUnconfirmedError
 from odohil.protocol.nomad.limits import check_leg_length_m
@@ -167,6 +168,7 @@ def test_both_backends_stop_and_confirm_the_same_way(protocol: str) -> None:
     """One implementation (odohil/driver/stopping.py): the same confirmation
     and the same refusal once the line is closed. Before: the Create 2 said
     "line closed", the Nomad "the line is closed", each from its own loop."""
+    fakes.register_url_handlers()  # as the CLI does for a fake's URL; not left to another test
     robot = open_robot(protocol, FAKE_PORTS[protocol], None, None)
     with robot:
         assert not robot.settle(2.0).moving
