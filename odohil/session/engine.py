@@ -339,6 +339,10 @@ class SessionEngine:
         connection: what to journal about the connection (port, baud...).
         on_sample: sees every odometry sample of a motion (live read-outs).
         start_check: judges where the robot stands before the session goes on.
+        belief: what every trial is predicted under (the floor-mark choice, the
+            slip check), held for the whole run: a validation's calibration,
+            which its held-out trials must not move. None: the live estimate,
+            else the description's priors.
     """
 
     def __init__(
@@ -354,6 +358,7 @@ class SessionEngine:
         connection: Mapping[str, Any] | None = None,
         on_sample: SampleCallback | None = None,
         start_check: StartCheck | None = None,
+        belief: ParameterBelief | None = None,
     ) -> None:
         if state.plan is None:
             raise JournalError("the session has no plan")
@@ -369,6 +374,7 @@ class SessionEngine:
         self.connection = dict(connection or {})
         self.on_sample = on_sample
         self.start_check = start_check
+        self.belief = belief
         self.latest_estimate: EstimateResult | None = None
         self.stop_outcome: StopOutcome | None = None
         self._predicted: PosePrior | None = None
@@ -570,7 +576,10 @@ class SessionEngine:
         self._measure()
 
     def _belief(self) -> ParameterBelief:
-        """The current estimate as a belief, or the description's priors."""
+        """The given belief, else the current estimate as a belief, else the
+        description's priors."""
+        if self.belief is not None:
+            return self.belief
         priors = self.description.priors
         if self.latest_estimate is None:
             return ParameterBelief.from_priors(priors)

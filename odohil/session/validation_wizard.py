@@ -183,6 +183,7 @@ def guided_validation(
         allow_few_trials=True,
         settings={"validation_of": str(session.resolve()), "validation_path": vpath.text},
         note=dict(note or {}),
+        calibration=calibration.outcome.result,
     )
     return GuidedValidation(spec, calibration, vpath, session)
 

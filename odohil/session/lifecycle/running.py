@@ -15,6 +15,7 @@ from typing import Any, Literal
 from odohil.errors import MeasurementError, OdohilError, StopUnconfirmedError
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.paths import estimate_paths
+from odohil.science.pose_selection import ParameterBelief
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     LiveEstimator,
@@ -226,6 +227,10 @@ def run_session(
     exclude = opened.prepared.spec.exclude
     chosen = source or opened.source
     assert chosen is not None, "the operator's source is the caller's to give"
+    calibration = opened.prepared.spec.calibration
+    belief = None if calibration is None else (
+        ParameterBelief.from_result(calibration, opened.prepared.description.priors)
+    )  # fmt: skip
     engine = SessionEngine(
         opened.journal,
         opened.state,
@@ -237,6 +242,7 @@ def run_session(
         connection=opened.prepared.settings,
         on_sample=on_sample,
         start_check=start_check,
+        belief=belief,
     )
     try:
         state = engine.run()

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
 
+from odohil.science.estimators import EstimateResult
 from odohil.session.plan import Plan
 
 Purpose = Literal["calibrate", "validate"]
@@ -48,6 +49,10 @@ class SessionSpec:
         settings: more to journal in the header's settings (the demo's truth,
             a validation's calibration and path).
         note: what a resumed session's ``resumed`` record says (who resumed it).
+        calibration: a validation's calibration estimate: every trial is
+            predicted under it (the floor-mark choice, the slip check), never
+            under an estimate of the held-out trials themselves; None: the
+            live estimate, else the description's priors.
     """
 
     folder: Path
@@ -68,6 +73,7 @@ class SessionSpec:
     allow_few_trials: bool = False
     settings: Mapping[str, Any] = field(default_factory=dict)
     note: Mapping[str, Any] = field(default_factory=dict)
+    calibration: EstimateResult | None = None
 
 
 def default_session_folder() -> Path:
