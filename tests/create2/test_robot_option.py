@@ -157,10 +157,12 @@ def test_turn_trials_of_a_robot_whose_turns_carry_error_are_not_trusted(turn_tri
 
 @pytest.mark.slow
 def test_run_with_allow_turns_defaults_to_reverse_and_is_not_trusted(tmp_path: Path) -> None:
+    # two trials a design are enough: the verdict's reason is the plan's turn
+    # trials, not their number (was n=6 each: 12 trials at time scale 10)
     done = odohil(
         "run", "--allow-few-trials",
         "--robot", "create2", "--port", FAKE, "--measure", "fake", "--allow-turns",
-        "--plan", "k=1,l=0.5,n=6,variant=turn;k=0.5,l=0.5,n=6", "--session", tmp_path / "s",
+        "--plan", "k=1,l=0.5,n=2,variant=turn;k=0.5,l=0.5,n=2", "--session", tmp_path / "s",
         "--json",
     )  # fmt: skip
     assert done.returncode == 3, done.stderr

@@ -9,6 +9,7 @@ More than 2000 cases in all; a couple of minutes on a loaded 2-core machine.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import signal
@@ -323,7 +324,12 @@ def test_robot_descriptions(data: st.DataObject, tmp_path: Path) -> None:
     check(result, {0, 2, 3}, ["robot.toml", "screws", "sigma_m", "serial", "TOML", "line"])
 
 
+@functools.cache
 def _jsonish() -> st.SearchStrategy[Any]:
+    """Any JSON-like value. One strategy object for the whole module: hypothesis
+    validates a new recursive strategy on its first draw, and _headers drew
+    from a new one eleven times per example (about 40 ms each: most of the
+    test's time, none of it the command under test)."""
     leaves = st.one_of(
         st.none(), st.booleans(), st.integers(-(10**20), 10**20), st.text(max_size=8),
         st.floats(allow_nan=False, allow_infinity=False),

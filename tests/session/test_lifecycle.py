@@ -37,7 +37,7 @@ from odohil.session.state import SessionState, load_session
 
 ROBOTS = Path(robots_init).parent
 BACKENDS = {
-    "nomad150": ("fakerobot://?seed=3&time_scale=100", "k=1,l=1,n=3"),
+    "nomad150": ("fakerobot://?seed=6&time_scale=100", "k=1,l=1,n=3"),
     "create2": ("fakecreate2://?seed=3&time_scale=10&max_gap_ms=15", "k=0.5,l=0.5,n=3"),
 }
 ORDER = [
