@@ -95,7 +95,10 @@ def test_run_refuses_a_trial_file_of_another_design_or_too_short(
     folder = tmp_path / "session"
     other = pose_file(tmp_path / "other.csv", ["1,2,turn,0,0,0"] * 3)
     short = pose_file(tmp_path / "short.csv", ["1,1,turn,0,0,0"] * 2)
-    for trial_file, words in ((other, ["row 1", "k=1 l=1 m turn"]), (short, ["2 row(s)", "3"])):
+    for trial_file, words in (
+        (other, ["row 1", "k=1 l=1 m turn"]),
+        (short, ["2 rows for a plan of 3 trials"]),
+    ):
         result = invoke("run", "--allow-few-trials",
                         "--port", NO_PORT, "--robot", str(robot), "--plan",
                         "k=1,l=1,n=3", "--measure", str(trial_file),
@@ -159,7 +162,7 @@ def test_resume_takes_measure_and_checks_it_before_the_port(tmp_path: Path) -> N
     _file_session(folder, short)
     stuck = invoke("resume", str(folder))
     assert stuck.exit_code == 2, stuck.output
-    assert "2 row(s)" in flat(stuck)
+    assert "2 rows for a plan of 3 trials" in flat(stuck)
     fixed = invoke("resume", str(folder), "--measure", str(good))
     no_traceback(fixed)
     assert fixed.exit_code == 1, fixed.output  # got past the checks, to the missing port
