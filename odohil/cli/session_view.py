@@ -127,16 +127,18 @@ def drive(
     json_out: bool,
     say: Callable[[Opened], None],
     start_check: StartCheck | None = None,
+    verdict: bool = True,
 ) -> RunOutcome:
     """Pre-flight, open (``say`` tells what was opened), run with the progress
-    bar and say how the run ended; what escapes exits by its status
-    (:func:`session_exit_codes`)."""
+    bar and say how the run ended (a finished one: its verdict line unless not
+    ``verdict``); what escapes exits by its status (:func:`session_exit_codes`)."""
     with session_exit_codes(console, json_out):
         prepared = prepared_or_exit(preflight(spec), console)
         with open_session(prepared, say_opened(console)) as opened:
             say(opened)
             outcome = run_with_progress(console, opened, system, start_check)
-            report_run(console, outcome)
+            if verdict or outcome.status != "finished":
+                report_run(console, outcome)
     return outcome
 
 

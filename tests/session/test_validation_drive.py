@@ -1,0 +1,93 @@
+"""What ``odohil validate`` asks the session layer before it drives
+(odohil/session/validation_drive.py, issue 18: the CLI parses, calls and
+renders): the spec of a driven validation session, the finished one it tests
+again without driving, and the options a trial file does not use; in process,
+over the fake Nomad's URL handler."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+import fakes
+from odohil.errors import JournalError, ParameterError
+from odohil.robots import __file__ as robots_init
+from odohil.session.lifecycle import open_session, preflight, require, run_session
+from odohil.session.plan import Plan, PlanItem
+from odohil.session.robots import parse_description
+from odohil.session.start_pose import StartPose
+from odohil.session.validation import parse_validation_path
+from odohil.session.validation_drive import check_file_options, journaled_trials, validation_spec
+from odohil.session.validation_steps import CalibrationRobot
+
+ROBOT = Path(robots_init).parent / "nomad150.toml"
+PORT = "fakerobot://?seed=2&time_scale=2000"
+
+
+@pytest.fixture(autouse=True)
+def _fake_urls() -> None:
+    fakes.register_url_handlers()
+
+
+def _robot() -> CalibrationRobot:
+    toml = ROBOT.read_text(encoding="utf-8")
+    return CalibrationRobot(parse_description(toml, str(ROBOT)), toml, str(ROBOT))
+
+
+def _anywhere(start: StartPose) -> None:
+    """Each trial starts where the in-process fake stands."""
+
+
+def test_a_driven_validation_needs_trials_and_a_measure(tmp_path: Path) -> None:
+    vpath = parse_validation_path("forth-back:1,0.5")
+    folder, calibration = tmp_path / "v", tmp_path / "calibration"
+    with pytest.raises(ParameterError, match=r"--trials N is needed"):
+        validation_spec(folder, vpath, calibration, _robot(), None, "fake")
+    with pytest.raises(ParameterError, match=r"--measure is needed to drive: `fake`"):
+        validation_spec(folder, vpath, calibration, _robot(), 2, None)
+    spec = validation_spec(folder, vpath, calibration, _robot(), 2, "fake")
+    assert (spec.folder, spec.mode, spec.purpose, spec.measure) == (
+        folder,
+        "new",
+        "validate",
+        "fake",
+    )
+    assert spec.robot_path == ROBOT
+    assert spec.robot_toml == ROBOT.read_text(encoding="utf-8")
+    assert spec.settings == {
+        "validation_of": str(calibration.resolve()),
+        "validation_path": "forth-back:1,0.5",
+    }
+    assert vpath.design is not None
+    assert spec.plan == Plan((PlanItem(vpath.design, 2),))
+
+
+def test_a_finished_validation_is_tested_again_and_another_refused(tmp_path: Path) -> None:
+    vpath = parse_validation_path("forth-back:1,0.5")
+    folder = tmp_path / "v"
+    assert journaled_trials(folder, vpath) is None  # nothing journaled yet: drive
+    spec = validation_spec(folder, vpath, tmp_path / "calibration", _robot(), 2, "fake")
+    spec = replace(spec, port=PORT, seed=1)
+    with open_session(require(preflight(spec))) as opened:
+        assert opened.state.completed == ()  # left unfinished: nothing run
+    with pytest.raises(JournalError, match=r"an unfinished validation session: give --out "):
+        journaled_trials(folder, vpath)
+    with open_session(require(preflight(replace(spec, mode="resume")))) as opened:
+        outcome = run_session(opened, start_check=_anywhere)
+    assert outcome.status == "finished", outcome.message
+    again = journaled_trials(folder, vpath)
+    assert again is not None
+    assert (len(again), again.source) == (2, str(folder))
+    with pytest.raises(JournalError, match=r"holds another validation session: give --out"):
+        journaled_trials(folder, parse_validation_path("forth-back:2,0.5"))
+
+
+def test_a_trial_file_takes_no_port_and_no_measure(tmp_path: Path) -> None:
+    vpath = parse_validation_path(f"file:{tmp_path / 'held-out.csv'}")
+    check_file_options(vpath, None, None)
+    check_file_options(parse_validation_path("square:1"), "/dev/ttyUSB0", "fake")  # driven
+    for port, measure in (("/dev/ttyUSB0", None), (None, "fake")):
+        with pytest.raises(ParameterError, match=r"reads its trials from the file: --port and"):
+            check_file_options(vpath, port, measure)
