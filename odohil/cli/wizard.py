@@ -77,7 +77,6 @@ from odohil.session.lifecycle import (
 )
 from odohil.session.operator_words import (
     END_MARKS,
-    HERE,
     encoders_at_end,
     entered_so_far,
     extra_distance_prompt,
@@ -93,7 +92,7 @@ from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TapeSource
-from odohil.session.start_pose import StartPose
+from odohil.session.start_pose import StartPose, put_back
 from odohil.session.state import SessionState
 from odohil.session.tape_entry import INSTRUCTIONS, TapeEntries, parse_optional_metres
 from odohil.session.tape_records import TapeContext
@@ -192,13 +191,9 @@ class WizardPrompts:
 
         def check(start: StartPose) -> None:
             self.console.print(f"Robot: {start.describe()}")
-            if start.ok or start.expected is None:
-                return
-            if self._input(put_back_prompt(start.trial), "bold").strip().lower() == HERE:
-                self.console.print("The trial starts where the robot stands.")
-                return
-            robot.zero(start.expected)
-            self.console.print("Encoders set to the trial's start.")
+            if not (start.ok or start.expected is None):
+                reply = self._input(put_back_prompt(start.trial), "bold")
+                self.console.print(put_back(start, reply, robot))
 
         return check
 

@@ -1,8 +1,10 @@
-"""What ``odohil validate`` asks the session layer before it drives
-(odohil/session/validation_drive.py, issue 18: the CLI parses, calls and
-renders): the spec of a driven validation session, the finished one it tests
-again without driving, and the options a trial file does not use; in process,
-over the fake Nomad's URL handler."""
+"""What the CLI used to decide itself and now asks the session layer for
+(issue 18, "the CLI parses, calls and renders"; tests/session/test_cli_slim.py
+for the first round), in process over the fake Nomad's URL handler:
+``odohil validate``'s spec of a driven validation session, the finished one it
+tests again without driving, the options a trial file does not use
+(odohil/session/validation_drive.py); the wizard's put-back answer
+(odohil/session/start_pose.py)."""
 
 from __future__ import annotations
 
@@ -17,7 +19,7 @@ from odohil.robots import __file__ as robots_init
 from odohil.session.lifecycle import open_session, preflight, require, run_session
 from odohil.session.plan import Plan, PlanItem
 from odohil.session.robots import parse_description
-from odohil.session.start_pose import StartPose
+from odohil.session.start_pose import StartPose, put_back
 from odohil.session.validation import parse_validation_path
 from odohil.session.validation_drive import check_file_options, journaled_trials, validation_spec
 from odohil.session.validation_steps import CalibrationRobot
@@ -91,3 +93,22 @@ def test_a_trial_file_takes_no_port_and_no_measure(tmp_path: Path) -> None:
     for port, measure in (("/dev/ttyUSB0", None), (None, "fake")):
         with pytest.raises(ParameterError, match=r"reads its trials from the file: --port and"):
             check_file_options(vpath, port, measure)
+
+
+def test_the_operator_puts_the_robot_back_or_starts_here(tmp_path: Path) -> None:
+    """The wizard's put-back answer (odohil/session/start_pose.py ``put_back``):
+    ``here`` leaves the encoders; anything else sets them to the trial's start."""
+    spec = validation_spec(
+        tmp_path / "v", parse_validation_path("forth-back:1,0.5"), tmp_path, _robot(), 2, "fake"
+    )
+    start = StartPose(2, (0.5, -0.02, 0.1), (0.0, 0.0, 0.0))
+    with open_session(require(preflight(replace(spec, port=PORT)))) as opened:
+        said = put_back(start, " Here ", opened.robot)
+        assert said == "The trial starts where the robot stands."
+        reading = opened.robot.odometry()
+        assert (reading.x_m, reading.y_m) == pytest.approx((0.0, 0.0), abs=1e-3)
+        assert put_back(start, "", opened.robot) == "Encoders set to the trial's start."
+        reading = opened.robot.odometry()
+        assert (reading.x_m, reading.y_m, reading.theta_rad) == pytest.approx(
+            (0.5, -0.02, 0.1), abs=3e-3
+        )
