@@ -36,6 +36,7 @@ from odohil.session.outcome_text import (
     refusal_line,
     verdict_line,
 )
+from odohil.session.run_text import Said, error_said
 from odohil.session.state import CompletedTrial
 
 
@@ -54,11 +55,19 @@ def table(
     return made
 
 
+_TONES = {"plain": "", "note": "yellow", "error": "red", "alarm": "bold red"}
+"""The colour of each tone of odohil/session/run_text.py's lines."""
+
+
+def print_said(console: Console, *said: Said) -> None:
+    """Lines for the operator, each head in its tone's colour, the text plain."""
+    for line in said:
+        console.print(Text.assemble((line.head, _TONES[line.tone]), line.text), soft_wrap=True)
+
+
 def bad_input(exc: BaseException | str, console: Console | None = None) -> typer.Exit:
     """Print ``error: <message>`` on stderr; the exit of bad input (2) to raise."""
-    (console or Console(stderr=True)).print(
-        f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True, highlight=False
-    )
+    print_said(console or Console(stderr=True), error_said(str(exc)))
     return typer.Exit(EXIT_BAD_INPUT)
 
 

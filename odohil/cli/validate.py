@@ -11,13 +11,12 @@ from typing import Annotated, Any
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED, exit_for_run
 from odohil.cli.options import JsonOption, option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, bad_inputs, print_refusal, table
+from odohil.cli.render import bad_input, bad_inputs, print_refusal, print_said, table
 from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.session_view import drive
 from odohil.errors import (
@@ -32,6 +31,7 @@ from odohil.session.lifecycle import Opened, SessionSpec
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome_text import outcome_line
 from odohil.session.robot_file import load_robot_description
+from odohil.session.run_text import error_said
 from odohil.session.validation import (
     PATH_SYNTAX,
     ValidationTrials,
@@ -150,7 +150,7 @@ def validate(
     except bad as exc:
         raise bad_input(exc, console) from None
     except OdohilError as exc:
-        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
+        print_said(console, error_said(str(exc)))
         raise typer.Exit(EXIT_ERROR) from None
     data = validation_document(session, vpath, folder, measured, calibration, tested)
     if as_json:

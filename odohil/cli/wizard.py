@@ -54,7 +54,7 @@ from odohil.cli.render import (
     print_verdict,
 )
 from odohil.cli.robot_option import robot_option
-from odohil.cli.session_view import MAY_STILL_MOVE, prepared_or_exit, refuse, report_run
+from odohil.cli.session_view import prepared_or_exit, refuse, report_run
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import InconsistentMeasurementError, MeasurementError
 from odohil.science.estimators import EstimateResult
@@ -90,6 +90,7 @@ from odohil.session.operator_words import (
 from odohil.session.outcome_text import outcome_line
 from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
+from odohil.session.run_text import MAY_STILL_MOVE
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TapeSource
 from odohil.session.start_pose import StartPose, put_back

@@ -4,7 +4,8 @@ for the first round), in process over the fake Nomad's URL handler:
 ``odohil validate``'s spec of a driven validation session, the finished one it
 tests again without driving, the options a trial file does not use
 (odohil/session/validation_drive.py); the wizard's put-back answer
-(odohil/session/start_pose.py)."""
+(odohil/session/start_pose.py); how a run that did not finish is told
+(odohil/session/run_text.py)."""
 
 from __future__ import annotations
 
@@ -16,9 +17,11 @@ import pytest
 import fakes
 from odohil.errors import JournalError, ParameterError
 from odohil.robots import __file__ as robots_init
+from odohil.session.engine import StopOutcome
 from odohil.session.lifecycle import open_session, preflight, require, run_session
 from odohil.session.plan import Plan, PlanItem
 from odohil.session.robots import parse_description
+from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, run_ended
 from odohil.session.start_pose import StartPose, put_back
 from odohil.session.validation import parse_validation_path
 from odohil.session.validation_drive import check_file_options, journaled_trials, validation_spec
@@ -112,3 +115,39 @@ def test_the_operator_puts_the_robot_back_or_starts_here(tmp_path: Path) -> None
         assert (reading.x_m, reading.y_m, reading.theta_rad) == pytest.approx(
             (0.5, -0.02, 0.1), abs=3e-3
         )
+
+
+def test_how_a_run_that_did_not_finish_is_told(tmp_path: Path) -> None:
+    """odohil/session/run_text.py ``run_ended``: what ended the run, the robot's
+    stop (confirmed or not), the journal and the command that continues."""
+    spec = validation_spec(
+        tmp_path / "v", parse_validation_path("forth-back:1,0.5"), tmp_path, _robot(), 2, "fake"
+    )
+    with open_session(require(preflight(replace(spec, port=PORT, seed=1)))) as opened:
+        done = run_session(opened, start_check=_anywhere)
+    folder = done.folder
+    stopped = StopOutcome(True, "x=+0.000 m", journaled=True)
+    cut = replace(done, status="interrupted", stop=stopped, message="Ctrl-C", signal=2)
+    assert run_ended(cut) == [
+        Said("note", "interrupted", " (Ctrl-C)"),
+        Said("plain", "robot stopped (it reports x=+0.000 m)"),
+        Said("plain", f"session journaled in {folder}; continue with `odohil resume {folder}`"),
+    ]
+    lost = StopOutcome(False, "no reply to st", journaled=False, journal_error="disk full")
+    failed = replace(done, status="error", stop=lost, message="the port went away")
+    assert run_ended(failed, "odohil wizard --session S", "Interrupted") == [
+        error_said("the port went away"),
+        Said("alarm", MAY_STILL_MOVE, ": no reply to st"),
+        Said(
+            "alarm",
+            "the journal could not be written",
+            f": disk full; the records before this failure are kept in {folder}; free the "
+            "disk, then `odohil wizard --session S`",
+        ),
+    ]
+    unconfirmed = replace(done, status="stop unconfirmed", message="no answer", cause="Ctrl-C")
+    assert run_ended(unconfirmed) == [
+        Said("alarm", f"WARNING: {MAY_STILL_MOVE}"),
+        Said("plain", "the run ended on: Ctrl-C"),
+        Said("plain", "st sent but not confirmed: no answer"),
+    ]
