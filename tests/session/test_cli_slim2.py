@@ -5,10 +5,12 @@ for the first round), in process over the fake Nomad's URL handler:
 tests again without driving, the options a trial file does not use
 (odohil/session/validation_drive.py); the wizard's put-back answer
 (odohil/session/start_pose.py); how a run that did not finish is told
-(odohil/session/run_text.py)."""
+(odohil/session/run_text.py); what ``odohil plan`` prints of a plan
+(odohil/session/planning.py)."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -17,9 +19,12 @@ import pytest
 import fakes
 from odohil.errors import JournalError, ParameterError
 from odohil.robots import __file__ as robots_init
+from odohil.science.parameters import NOMAD150
 from odohil.session.engine import StopOutcome
 from odohil.session.lifecycle import open_session, preflight, require, run_session
+from odohil.session.path_planning import plan_outcome
 from odohil.session.plan import Plan, PlanItem
+from odohil.session.planning import PlannedExperiment, PlanRequest, trial_minutes
 from odohil.session.robots import parse_description
 from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, run_ended
 from odohil.session.start_pose import StartPose, put_back
@@ -151,3 +156,25 @@ def test_how_a_run_that_did_not_finish_is_told(tmp_path: Path) -> None:
         Said("plain", "the run ended on: Ctrl-C"),
         Said("plain", "st sent but not confirmed: no answer"),
     ]
+
+
+def test_what_plan_prints_of_an_evaluated_plan() -> None:
+    """odohil/session/planning.py PlannedExperiment: the designs' rows, the
+    errors' rows in either unit system, the time and the verdict in words."""
+    request = PlanRequest(NOMAD150, {"E_R": 0.01}, evaluate="k=1,l=6,n=30;k=20,l=0.5,n=30")
+    planned = plan_outcome(request)
+    assert isinstance(planned, PlannedExperiment)
+    assert planned.design_rows() == [
+        ("1", "6", "turn", "30", "360", f"{trial_minutes(planned.plan, 0):.0f}"),
+        ("20", "0.5", "turn", "30", "600", f"{trial_minutes(planned.plan, 1):.0f}"),
+    ]
+    paper, si = planned.error_rows("paper"), planned.error_rows("si")
+    assert [row[0] for row in paper] == ["E_R", "E_T", "K_theta", "K_rho"]
+    assert paper[0][1] == "-0.202"  # deg/m
+    assert si[0][1] == f"{math.radians(-0.202):.4g}"  # rad/m
+    assert paper[0][3].startswith("0.01 (")  # given
+    assert paper[1][3].split(" ")[1] == "default"
+    assert planned.time_lines()[0].startswith("operator time: about ")
+    assert planned.time_lines()[1].startswith("free floor needed: ")
+    meets = planned.plan.meets_targets
+    assert planned.verdict().startswith("The plan meets" if meets else "The plan does NOT meet")
