@@ -15,8 +15,14 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil.cli.options import UNITS_DEFAULT, UnitsOption, option, unit_system, usage_errors
-from odohil.cli.robot_option import robot_protocol
+from odohil.cli.options import (
+    UNITS_DEFAULT,
+    UnitsOption,
+    option,
+    robot_protocol,
+    unit_system,
+    usage_errors,
+)
 from odohil.cli.session_view import drive, finish
 from odohil.science.parameters import SI_UNITS
 from odohil.session.demo import demo_session

@@ -16,8 +16,7 @@ from typing import Annotated
 
 import typer
 
-from odohil.cli.options import Parameters, option, parameters_option, usage_errors
-from odohil.cli.robot_option import robot_protocol
+from odohil.cli.options import Parameters, option, parameters_option, robot_protocol, usage_errors
 from odohil.science.robot_description import DEFAULT_PROTOCOL
 from odohil.science.robot_facts import RobotFacts
 from odohil.session.line import check_socket_path

@@ -14,10 +14,9 @@ from rich.console import Console
 
 from odohil import units
 from odohil.cli.exit_codes import exit_for_outcome
-from odohil.cli.options import UNITS_DEFAULT, JsonOption, UnitsOption, unit_system
+from odohil.cli.options import UNITS_DEFAULT, JsonOption, UnitsOption, robot_option, unit_system
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, print_outcome, torn_warning
-from odohil.cli.robot_option import robot_option
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome import EstimateOutcome, Selection, estimate_source
 from odohil.session.robot_file import load_robot_description

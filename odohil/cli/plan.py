@@ -18,10 +18,10 @@ from odohil.cli.options import (
     UnitsOption,
     option,
     parameters_option,
+    robot_option,
     unit_system,
 )
 from odohil.cli.render import table
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.errors import OdohilError
 from odohil.science.limits import RANGES
 from odohil.science.planner import (
@@ -102,8 +102,8 @@ def plan(
     sigma_m: Annotated[float | None, option("--sigma-m", bound="sigma_m", help="Tape sigma of "
         f"one floor-mark distance, m (default {DEFAULT_SIGMA_M}), with three screws on a "
         "0.2 m radius circle and one cross distance.")] = None,
-    robot: Annotated[Path | None, typer.Option("--robot", callback=robot_callback,
-        help=ROBOT_HELP + " Gives screws, sigma_m, cross pairs, turns_exact.")] = None,
+    robot: Annotated[Path | None, robot_option(" Gives screws, sigma_m, cross pairs, "
+        "turns_exact.")] = None,
     target_e_r: Annotated[float | None, option("--target-E-R", bound="target_E_R",
         help="Wanted stderr, deg/m (default: 25 % of |prior|, at least 0.005).")] = None,
     target_e_t: Annotated[float | None, option("--target-E-T", bound="target_E_T",

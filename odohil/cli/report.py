@@ -10,9 +10,9 @@ import typer
 from rich.console import Console
 
 from odohil.cli.estimate import SOURCES_HELP, load_outcome
+from odohil.cli.options import robot_option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, verdict_or_refuse
-from odohil.cli.robot_option import robot_option
 from odohil.session.exports import export_files
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome import Selection, source_kind

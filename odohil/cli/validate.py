@@ -14,10 +14,9 @@ from rich.console import Console
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED, exit_for_run
-from odohil.cli.options import JsonOption, option
+from odohil.cli.options import JsonOption, option, robot_option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_input, bad_inputs, print_refusal, print_said, table
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.cli.session_view import drive
 from odohil.errors import (
     JournalError,
@@ -95,8 +94,7 @@ def validate(
                        "--port.")] = None,
     port: Annotated[str | None, option("--port", help="Serial device, pty path or pyserial "
                     "URL.")] = None,
-    robot_file: Annotated[Path | None, typer.Option("--robot", callback=robot_callback,
-                          help=ROBOT_HELP + " Default: the session's.")] = None,
+    robot_file: Annotated[Path | None, robot_option(" Default: the session's.")] = None,
     baud: Annotated[int | None, option("--baud", bound="baud", help="Line speed.")] = None,
     truth_socket: Annotated[str | None, option("--truth-socket", help="The fake robot's truth "
                             "socket (--measure fake).")] = None,

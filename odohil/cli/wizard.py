@@ -42,6 +42,7 @@ from odohil.cli.options import (
     PortOption,
     UnitsOption,
     option,
+    robot_option,
     unit_system,
 )
 from odohil.cli.render import (
@@ -53,7 +54,6 @@ from odohil.cli.render import (
     print_refusal,
     print_verdict,
 )
-from odohil.cli.robot_option import robot_option
 from odohil.cli.session_view import prepared_or_exit, refuse, report_run
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import InconsistentMeasurementError, MeasurementError
