@@ -47,15 +47,12 @@ Metres = Annotated[float | None, option("--budget-m", bound="budget_m", help="Mo
 
 def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
     console = Console()
-    designs = table(planned.title, ("k", "l (m)", "variant", "trials", "metres", "minutes"))
-    for row in planned.design_rows():
-        designs.add_row(*row)
-    console.print(designs)
+    columns = ("k", "l (m)", "variant", "trials", "metres", "minutes")
+    console.print(table(planned.title, columns, rows=planned.design_rows()))
     columns = ("parameter", "prior", "stderr", "target", "unit")
     title = "Expected standard errors (Cramer-Rao)"
-    errors = table(title, columns, ("parameter", "unit"), planned.measurement)
-    for row in planned.error_rows(system):
-        errors.add_row(*row)
+    rows = planned.error_rows(system)
+    errors = table(title, columns, ("parameter", "unit"), planned.measurement, rows=rows)
     for text in planned.time_lines():
         console.print(text, highlight=False)
     console.print(errors)
@@ -68,11 +65,10 @@ def _print_paths(found: paths.PathsOutcome, as_json: bool, system: units.UnitSys
     if as_json:
         return typer.echo(json.dumps(paths.paths_document(found), indent=2))
     if isinstance(found, paths.ScoredPaths):
-        shown = table(found.title, ("parameter", "stderr", "target", "unit"),
-                      ("parameter", "unit"), found.measurement)  # fmt: skip
-        for row in found.rows(system):
-            shown.add_row(*row)
-        Console().print(shown)
+        columns, left = ("parameter", "stderr", "target", "unit"), ("parameter", "unit")
+        Console().print(
+            table(found.title, columns, left, found.measurement, rows=found.rows(system))
+        )
     for line in paths.paths_lines(found):
         Console().print(line, highlight=False, markup=False)
 

@@ -5,7 +5,7 @@ are the session's (odohil/session/outcome_text.py)."""
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Literal
 
 import typer
@@ -46,12 +46,15 @@ def table(
     left: Sequence[str] = (),
     caption: str | None = None,
     justify: Literal["left", "center", "right"] | None = None,
+    rows: Iterable[Sequence[str]] = (),
 ) -> Table:
-    """A table of ``columns``, right-aligned (numbers) but for those in
-    ``left``; ``justify``: where the title stands (default: centred)."""
+    """A table of ``columns`` holding ``rows``, right-aligned (numbers) but for
+    those in ``left``; ``justify``: where the title stands (default: centred)."""
     made = Table(title=title, caption=caption, title_justify=justify or "center")
     for column in columns:
         made.add_column(column, justify="left" if column in left else "right")
+    for row in rows:
+        made.add_row(*row)
     return made
 
 

@@ -6,7 +6,8 @@ tests again without driving, the options a trial file does not use
 (odohil/session/validation_drive.py); the wizard's put-back answer
 (odohil/session/start_pose.py); how a run that did not finish is told
 (odohil/session/run_text.py); what ``odohil plan`` prints of a plan
-(odohil/session/planning.py)."""
+(odohil/session/planning.py); the rows of predict and covariance
+(odohil/session/design_tools.py)."""
 
 from __future__ import annotations
 
@@ -19,7 +20,10 @@ import pytest
 import fakes
 from odohil.errors import JournalError, ParameterError
 from odohil.robots import __file__ as robots_init
+from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.parameters import NOMAD150
+from odohil.science.paths import Design
+from odohil.session.design_tools import covariance_rows, path_moments, predict_rows
 from odohil.session.engine import StopOutcome
 from odohil.session.lifecycle import open_session, preflight, require, run_session
 from odohil.session.path_planning import plan_outcome
@@ -178,3 +182,27 @@ def test_what_plan_prints_of_an_evaluated_plan() -> None:
     assert planned.time_lines()[1].startswith("free floor needed: ")
     meets = planned.plan.meets_targets
     assert planned.verdict().startswith("The plan meets" if meets else "The plan does NOT meet")
+
+
+def test_the_rows_of_predict_and_covariance() -> None:
+    """odohil/session/design_tools.py: predict's rows (phi1 and phi2 also in
+    degrees) and covariance's (the simulated column only when simulated)."""
+    design = Design(1, 2.0)
+    means = forth_and_back_means(design, NOMAD150)
+    rows = predict_rows(means)
+    assert [row[0] for row in rows] == list(means.as_dict())
+    assert rows[0] == (
+        "phi1",
+        "mean heading change",
+        f"{means.phi1:.6g}",
+        "rad",
+        f"{math.degrees(means.phi1):.6g} deg",
+    )
+    assert rows[2][4] == ""  # phi3: metres only
+    exact, sim = path_moments(design.path(), NOMAD150, None, None, 0.01)
+    assert sim is None
+    closed = covariance_rows(exact, None)
+    assert {len(row) for row in closed} == {2}
+    assert closed[0] == ("mean x (m)", f"{exact.mean[0]:.6g}")
+    exact, sim = path_moments(design.path(), NOMAD150, 50, 1, 0.01)
+    assert {len(row) for row in covariance_rows(exact, sim)} == {3}
