@@ -47,8 +47,8 @@ Metres = Annotated[float | None, option("--budget-m", bound="budget_m", help="Mo
 
 def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
     console = Console()
-    columns = ("k", "l (m)", "variant", "trials", "metres", "minutes")
-    console.print(table(planned.title, columns, rows=planned.design_rows()))
+    designs = ("k", "l (m)", "variant", "trials", "metres", "minutes")
+    console.print(table(planned.title, designs, rows=planned.design_rows()))
     columns = ("parameter", "prior", "stderr", "target", "unit")
     title = "Expected standard errors (Cramer-Rao)"
     rows = planned.error_rows(system)

@@ -95,7 +95,7 @@ def covariance_rows(exact: PoseMoments, sim: SimulatedMoments | None) -> list[tu
     unit, closed form, and when simulated the simulated value +- its Monte
     Carlo standard error) for the means, the covariance entries and the
     standard deviations (mm, deg)."""
-    rows = []
+    rows: list[tuple[str, ...]] = []
     for i, (name, unit) in enumerate(zip(COMPONENTS, COMPONENT_UNITS, strict=True)):
         simulated = "" if sim is None else f"{sim.mean[i]:.6g} +- {sim.mean_se[i]:.2g}"
         rows.append((f"mean {name} ({unit})", f"{exact.mean[i]:.6g}", simulated))
