@@ -176,11 +176,13 @@ def parameters_table(
 ) -> Table:
     """The four parameters with standard errors and 95 % intervals in
     ``system``'s units; with ``truth`` (SI values by name) a truth column in
-    the same units and whether the interval holds it."""
+    the same units and whether the interval holds it. The title: ``title
+    (method, N trials)``, else ``Estimate after N trials``."""
     columns = ["parameter", "estimate", "std. error", "95 % interval", "unit"]
     if truth is not None:
         columns += ["truth", "truth inside"]
-    title = title or f"Estimate after {units.plural(result.n_trials, 'trial')}"
+    trials = units.plural(result.n_trials, "trial")
+    title = f"{title} ({result.method}, {trials})" if title else f"Estimate after {trials}"
     shown = table(title, columns, ("parameter", "unit"), justify="left")
     for p in result.parameters:
         low, high = p.ci95

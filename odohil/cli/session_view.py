@@ -249,8 +249,7 @@ def finish(
     if json_out:
         typer.echo(json.dumps({**outcome.to_json_dict(code), **(extra or {})}))
     elif result is not None:
-        title = f"estimate ({result.method}, {units.plural(result.n_trials, 'trial')})"
-        table = parameters_table(result, system, title, truth)
+        table = parameters_table(result, system, "estimate", truth)
         Console(width=max(110, Console().width)).print(table)
     if code:
         raise typer.Exit(code)
