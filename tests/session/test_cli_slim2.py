@@ -7,7 +7,8 @@ tests again without driving, the options a trial file does not use
 (odohil/session/start_pose.py); how a run that did not finish is told
 (odohil/session/run_text.py); what ``odohil plan`` prints of a plan
 (odohil/session/planning.py); the rows of predict and covariance
-(odohil/session/design_tools.py)."""
+(odohil/session/design_tools.py); what report writes
+(odohil/session/report/command.py)."""
 
 from __future__ import annotations
 
@@ -23,12 +24,21 @@ from odohil.robots import __file__ as robots_init
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design
-from odohil.session.design_tools import covariance_rows, path_moments, predict_rows
+from odohil.science.simulator import simulate
+from odohil.session.design_tools import (
+    covariance_rows,
+    path_moments,
+    predict_rows,
+    write_simulated_trials,
+)
 from odohil.session.engine import StopOutcome
 from odohil.session.lifecycle import open_session, preflight, require, run_session
+from odohil.session.logs import ImportOptions
+from odohil.session.outcome import Selection, estimate_source
 from odohil.session.path_planning import plan_outcome
 from odohil.session.plan import Plan, PlanItem
 from odohil.session.planning import PlannedExperiment, PlanRequest, trial_minutes
+from odohil.session.report.command import session_report, write_any_report
 from odohil.session.robots import parse_description
 from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, run_ended
 from odohil.session.start_pose import StartPose, put_back
@@ -206,3 +216,30 @@ def test_the_rows_of_predict_and_covariance() -> None:
     assert closed[0] == ("mean x (m)", f"{exact.mean[0]:.6g}")
     exact, sim = path_moments(design.path(), NOMAD150, 50, 1, 0.01)
     assert {len(row) for row in covariance_rows(exact, sim)} == {3}
+
+
+def test_what_report_writes_of_a_session_and_of_a_trial_file(tmp_path: Path) -> None:
+    """odohil/session/report/command.py: a session folder gets its own report
+    (not when a path family is chosen); a trial file the summary page; both
+    with the exports beside."""
+    trials, design = tmp_path / "trials.csv", Design(1, 2.0)
+    poses = simulate(design.path(), NOMAD150, 12, seed=2, segment_m=0.01).pose_change
+    write_simulated_trials(trials, design, poses)
+    assert session_report([trials], (), ImportOptions(), Selection()) is None
+    outcome = estimate_source([trials])
+    files = write_any_report(outcome, tmp_path / "file-report", "trials.csv")
+    assert files[-1] == tmp_path / "file-report" / "index.html"
+    assert tmp_path / "file-report" / "parameters.json" in files
+    spec = validation_spec(
+        tmp_path / "v", parse_validation_path("forth-back:1,0.5"), tmp_path, _robot(), 2, "fake"
+    )
+    with open_session(require(preflight(replace(spec, port=PORT, seed=1)))) as opened:
+        assert run_session(opened, start_check=_anywhere).status == "finished"
+    chosen = Selection(family="straight")
+    assert session_report([spec.folder], (), ImportOptions(), chosen) is None
+    report = session_report([spec.folder], (), ImportOptions(), Selection())
+    assert report is not None
+    assert report.outcome is not None
+    assert len(report.outcome.trials) == 2
+    files = write_any_report(report, tmp_path / "session-report", "v")
+    assert [f.name for f in files][-1] == "index.html"
