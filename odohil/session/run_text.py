@@ -1,15 +1,19 @@
-"""What odohil says when a session run did not finish (odohil/session/lifecycle/
-running.py's :class:`RunOutcome`): what ended it, whether the robot reported its
-stop, whether the journal holds the end, and the command that continues. Each
-line is a :class:`Said`: its head carries the tone the CLI renders (a colour
-there), its text follows plain."""
+"""What odohil says of a session run: where a resumed one stands, and when
+one did not finish (odohil/session/lifecycle/running.py's :class:`RunOutcome`)
+what ended it, whether the robot reported its stop, whether the journal holds
+the end, and the command that continues. Each line of the latter is a
+:class:`Said`: its head carries the tone the CLI renders (a colour there), its
+text follows plain."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Literal
 
+from odohil import units
 from odohil.session.lifecycle import RunOutcome
+from odohil.session.state import SessionState
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
@@ -26,6 +30,14 @@ class Said:
     tone: Tone
     head: str
     text: str = ""
+
+
+def resuming(folder: Path, state: SessionState) -> str:
+    """``resuming FOLDER: 3 of 60 trials done, trial 4 open``."""
+    assert state.plan is not None
+    done = f"{len(state.completed)} of {units.plural(state.plan.n_trials, 'trial')} done"
+    opened = "" if state.open_trial is None else f", trial {state.open_trial.trial} open"
+    return f"resuming {folder}: {done}{opened}"
 
 
 def error_said(message: str) -> Said:
