@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import math
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any, NoReturn
 
@@ -56,6 +55,7 @@ from odohil.session.lifecycle import (
 )
 from odohil.session.lifecycle.opening import CheckSeen
 from odohil.session.operator_words import measured_again, remeasured
+from odohil.session.outcome_text import live_e_r
 from odohil.session.robots import fake_url_schemes
 from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, run_ended
 from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
@@ -192,11 +192,8 @@ class ProgressObserver:
 
     def estimated(self, result: EstimateResult, state: SessionState) -> None:
         """Show the live E_R beside the bar."""
-        e_r = result.parameter("E_R").value
-        if math.isfinite(e_r):
-            value = units.parameter_in("E_R", e_r, self.system)
-            unit = units.parameter_unit("E_R", self.system)
-            self.progress.update(self.task, description=f"E_R {value:+.4g} {unit}")
+        if (text := live_e_r(result, self.system)) is not None:
+            self.progress.update(self.task, description=text)
 
 
 def run_with_progress(

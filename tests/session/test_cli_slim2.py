@@ -8,7 +8,7 @@ tests again without driving, the options a trial file does not use
 (odohil/session/run_text.py); what ``odohil plan`` prints of a plan
 (odohil/session/planning.py); the rows of predict and covariance
 (odohil/session/design_tools.py); what report writes
-(odohil/session/report/command.py)."""
+(odohil/session/report/command.py); the live E_R and the demo's truth."""
 
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design
 from odohil.science.simulator import simulate
+from odohil.session.demo import demo_session
 from odohil.session.design_tools import (
     covariance_rows,
     path_moments,
@@ -35,12 +36,13 @@ from odohil.session.engine import StopOutcome
 from odohil.session.lifecycle import open_session, preflight, require, run_session
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome import Selection, estimate_source
+from odohil.session.outcome_text import live_e_r
 from odohil.session.path_planning import plan_outcome
 from odohil.session.plan import Plan, PlanItem
 from odohil.session.planning import PlannedExperiment, PlanRequest, trial_minutes
 from odohil.session.report.command import session_report, write_any_report
 from odohil.session.robots import parse_description
-from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, run_ended
+from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, resuming, run_ended
 from odohil.session.start_pose import StartPose, put_back
 from odohil.session.validation import parse_validation_path
 from odohil.session.validation_drive import check_file_options, journaled_trials, validation_spec
@@ -138,13 +140,15 @@ def test_the_operator_puts_the_robot_back_or_starts_here(tmp_path: Path) -> None
 
 def test_how_a_run_that_did_not_finish_is_told(tmp_path: Path) -> None:
     """odohil/session/run_text.py ``run_ended``: what ended the run, the robot's
-    stop (confirmed or not), the journal and the command that continues."""
+    stop (confirmed or not), the journal and the command that continues; and
+    ``resuming``: where a resumed session stands."""
     spec = validation_spec(
         tmp_path / "v", parse_validation_path("forth-back:1,0.5"), tmp_path, _robot(), 2, "fake"
     )
     with open_session(require(preflight(replace(spec, port=PORT, seed=1)))) as opened:
         done = run_session(opened, start_check=_anywhere)
     folder = done.folder
+    assert resuming(folder, done.state) == f"resuming {folder}: 2 of 2 trials done"
     stopped = StopOutcome(True, "x=+0.000 m", journaled=True)
     cut = replace(done, status="interrupted", stop=stopped, message="Ctrl-C", signal=2)
     assert run_ended(cut) == [
@@ -243,3 +247,20 @@ def test_what_report_writes_of_a_session_and_of_a_trial_file(tmp_path: Path) -> 
     assert len(report.outcome.trials) == 2
     files = write_any_report(report, tmp_path / "session-report", "v")
     assert [f.name for f in files][-1] == "index.html"
+
+
+def test_the_live_e_r_and_the_demo_truth(tmp_path: Path) -> None:
+    """odohil/session/outcome_text.py ``live_e_r`` (beside the progress bar, in
+    either unit system) and odohil/session/demo.py ``truth_document`` (demo --json)."""
+    trials, design = tmp_path / "trials.csv", Design(1, 2.0)
+    poses = simulate(design.path(), NOMAD150, 12, seed=2, segment_m=0.01).pose_change
+    write_simulated_trials(trials, design, poses)
+    result = estimate_source([trials]).result
+    assert result is not None
+    e_r = result.parameter("E_R").value
+    assert live_e_r(result, "paper") == f"E_R {math.degrees(e_r):+.4g} deg/m"
+    assert live_e_r(result, "si") == f"E_R {e_r:+.4g} rad/m"
+    demo = demo_session("nomad150", 1, tmp_path / "demo")
+    document = demo.truth_document()
+    assert document["truth"]["E_R"] == {"value": demo.truth["E_R"], "unit": "rad/m"}
+    assert set(document["truth"]) == {"E_R", "E_T", "K_theta", "K_rho"}
