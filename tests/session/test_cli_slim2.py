@@ -8,7 +8,8 @@ tests again without driving, the options a trial file does not use
 (odohil/session/run_text.py); what ``odohil plan`` prints of a plan
 (odohil/session/planning.py); the rows of predict and covariance
 (odohil/session/design_tools.py); what report writes
-(odohil/session/report/command.py); the live E_R and the demo's truth."""
+(odohil/session/report/command.py); the live E_R and the demo's truth;
+emulate's line."""
 
 from __future__ import annotations
 
@@ -41,7 +42,7 @@ from odohil.session.path_planning import plan_outcome
 from odohil.session.plan import Plan, PlanItem
 from odohil.session.planning import PlannedExperiment, PlanRequest, trial_minutes
 from odohil.session.report.command import session_report, write_any_report
-from odohil.session.robots import parse_description
+from odohil.session.robots import emulated_line, emulator, parse_description
 from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, resuming, run_ended
 from odohil.session.start_pose import StartPose, put_back
 from odohil.session.validation import parse_validation_path
@@ -264,3 +265,15 @@ def test_the_live_e_r_and_the_demo_truth(tmp_path: Path) -> None:
     document = demo.truth_document()
     assert document["truth"]["E_R"] == {"value": demo.truth["E_R"], "unit": "rad/m"}
     assert set(document["truth"]) == {"E_R", "E_T", "K_theta", "K_rho"}
+
+
+def test_the_emulated_line_is_the_robots_own_unless_given() -> None:
+    """odohil/session/robots.py ``emulated_line``: emulate's baud and time scale."""
+    facts, hooks, _ = emulator("nomad150")
+    assert emulated_line(facts, hooks, None, None) == (
+        facts.default_baud,
+        hooks.emulate_time_scale,
+    )
+    assert emulated_line(facts, hooks, 9600, 20.0) == (9600, 20.0)
+    with pytest.raises(ParameterError, match=r"the Nomad 150 speaks 4800, 9600, 19200, 38400"):
+        emulated_line(facts, hooks, 115200, None)
