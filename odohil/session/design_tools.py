@@ -11,6 +11,8 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.closed_forms import ObservableMeans, forth_and_back_means
@@ -162,6 +164,11 @@ def predict_document(
         "design": {"k": "1", "l_m": "m"},
     }
     return document
+
+
+def fresh_seed() -> int:
+    """A fresh random seed (63 bits) for a simulation given none, to report."""
+    return int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
 
 
 def check_simulation(design: Design, trials: int, segment_m: float, out: Path) -> None:

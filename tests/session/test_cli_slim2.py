@@ -9,7 +9,7 @@ tests again without driving, the options a trial file does not use
 (odohil/session/planning.py); the rows of predict and covariance
 (odohil/session/design_tools.py); what report writes
 (odohil/session/report/command.py); the live E_R and the demo's truth;
-emulate's line."""
+emulate's line; simulate's fresh seed."""
 
 from __future__ import annotations
 
@@ -29,6 +29,7 @@ from odohil.science.simulator import simulate
 from odohil.session.demo import demo_session
 from odohil.session.design_tools import (
     covariance_rows,
+    fresh_seed,
     path_moments,
     predict_rows,
     write_simulated_trials,
@@ -277,3 +278,10 @@ def test_the_emulated_line_is_the_robots_own_unless_given() -> None:
     assert emulated_line(facts, hooks, 9600, 20.0) == (9600, 20.0)
     with pytest.raises(ParameterError, match=r"the Nomad 150 speaks 4800, 9600, 19200, 38400"):
         emulated_line(facts, hooks, 115200, None)
+
+
+def test_a_fresh_seed_is_a_nonnegative_63_bit_number() -> None:
+    """odohil/session/design_tools.py ``fresh_seed``: simulate's seed given none."""
+    seeds = {fresh_seed() for _ in range(4)}
+    assert len(seeds) == 4
+    assert all(0 <= seed < 2**63 for seed in seeds)
