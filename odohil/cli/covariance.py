@@ -79,10 +79,8 @@ def covariance(
         return
     title = f"Pose change after {path.name} ({path.distance_m:g} m driven)"
     caption = parameters_line(params.to_si_dict(), unit_system(units_choice))
-    simulated = (
-        [] if sim is None else [f"simulated ({units.plural(sim.n_trials, 'trial')}) +- MC se"]
-    )
-    shown = table(title, ["quantity", "closed form", *simulated], ("quantity",), caption)
-    for quantity, closed, by_simulation in covariance_rows(exact, sim):
-        shown.add_row(quantity, closed, *([by_simulation] if sim is not None else []))
-    Console().print(shown)
+    columns = ["quantity", "closed form"]
+    if sim is not None:
+        columns.append(f"simulated ({units.plural(sim.n_trials, 'trial')}) +- MC se")
+    rows = covariance_rows(exact, sim)
+    Console().print(table(title, columns, ("quantity",), caption, rows=rows))

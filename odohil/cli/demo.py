@@ -15,10 +15,15 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil.cli.options import UNITS_DEFAULT, UnitsOption, option, unit_system, usage_errors
-from odohil.cli.robot_option import robot_protocol
+from odohil.cli.options import (
+    UNITS_DEFAULT,
+    UnitsOption,
+    option,
+    robot_protocol,
+    unit_system,
+    usage_errors,
+)
 from odohil.cli.session_view import drive, finish
-from odohil.science.parameters import SI_UNITS
 from odohil.session.demo import demo_session
 from odohil.session.lifecycle import Opened
 from odohil.session.outcome_text import parameters_line
@@ -62,5 +67,4 @@ def demo(
             console.print(f"{fake}: {parameters_line(truth, system)}", highlight=False)
 
         outcome = drive(console, made.spec, system, json_out, say)
-    extra = {"truth": {name: {"value": v, "unit": SI_UNITS[name]} for name, v in truth.items()}}
-    finish(outcome, json_out, console, extra=extra, truth=truth, system=system)
+    finish(outcome, json_out, console, extra=made.truth_document(), truth=truth, system=system)

@@ -16,12 +16,11 @@ from typing import Annotated
 
 import typer
 
-from odohil.cli.options import Parameters, option, parameters_option, usage_errors
-from odohil.cli.robot_option import robot_protocol
+from odohil.cli.options import Parameters, option, parameters_option, robot_protocol, usage_errors
 from odohil.science.robot_description import DEFAULT_PROTOCOL
 from odohil.science.robot_facts import RobotFacts
 from odohil.session.line import check_socket_path
-from odohil.session.robots import emulated_backends, emulator
+from odohil.session.robots import emulated_backends, emulated_line, emulator
 
 _FAULT_HELP = (
     "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
@@ -85,16 +84,14 @@ def emulate(
     protocol = robot_protocol(robot)
     with usage_errors("--robot"):
         facts, hooks, serve = emulator(protocol)
-    if baud is not None and not facts.speaks(baud):
-        raise typer.BadParameter(
-            f"the {facts.label} speaks {facts.rates_text()} baud, got {baud}", param_hint="--baud"
-        )
+    with usage_errors("--baud"):
+        baud, time_scale = emulated_line(facts, hooks, baud, time_scale)
     paper = params.to_paper_units()
     options = EmulateOptions(
         seed=seed,
         paper=(paper["E_R"], paper["E_T"], paper["K_theta"], paper["K_rho"]),
-        time_scale=hooks.emulate_time_scale if time_scale is None else time_scale,
-        baud=facts.default_baud if baud is None else baud,
+        time_scale=time_scale,
+        baud=baud,
         pacing=pacing,
         faults=tuple(fault or ()),
         truth_socket=truth_socket,

@@ -12,12 +12,10 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil import units
 from odohil.cli.exit_codes import exit_for_outcome
-from odohil.cli.options import UNITS_DEFAULT, JsonOption, UnitsOption, unit_system
+from odohil.cli.options import UNITS_DEFAULT, JsonOption, UnitsOption, robot_option, unit_system
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, print_outcome, torn_warning
-from odohil.cli.robot_option import robot_option
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome import EstimateOutcome, Selection, estimate_source
 from odohil.session.robot_file import load_robot_description
@@ -94,11 +92,6 @@ def estimate(
     if as_json:
         typer.echo(json.dumps(outcome.to_json_dict(), indent=2))
     else:
-        result = outcome.result
-        title = None
-        if result is not None:
-            trials = units.plural(result.n_trials, "trial")
-            title = f"odometry error parameters ({result.method}, {trials})"
         out = Console(width=max(120, Console().width))
-        print_outcome(out, outcome, unit_system(units_choice), title)
+        print_outcome(out, outcome, unit_system(units_choice), "odometry error parameters")
     raise typer.Exit(exit_for_outcome(outcome))

@@ -10,10 +10,9 @@ import typer
 from rich.console import Console
 
 from odohil.cli.estimate import SOURCES_HELP, load_outcome
-from odohil.cli.options import option
+from odohil.cli.options import option, robot_option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, verdict_or_refuse
-from odohil.cli.robot_option import robot_option
 from odohil.science.exports import (
     DEFAULT_RATE_HZ,
     DEFAULT_UPDATE_MIN_A_RAD,

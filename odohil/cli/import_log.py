@@ -11,9 +11,9 @@ import typer
 from rich.console import Console
 
 from odohil import units
+from odohil.cli.options import robot_option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, table
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.session.logs import ImportOptions, guess_format, read_recording
 from odohil.session.path_trial_file import summary_rows, write_path_trials
 from odohil.session.robot_file import load_robot_description
@@ -30,11 +30,9 @@ def import_log(
     ],
     robot: Annotated[
         Path,
-        typer.Option(
-            "--robot",
-            callback=robot_callback,
-            help=ROBOT_HELP + " Its \\[robot] geometry turns wheel counts into odometry; its "
-            "\\[measurement] pose_sigma, if given, is the ground truth's accuracy.",
+        robot_option(
+            " Its \\[robot] geometry turns wheel counts into odometry; its "
+            "\\[measurement] pose_sigma, if given, is the ground truth's accuracy."
         ),
     ],
     out: Annotated[

@@ -1,7 +1,10 @@
 """Command-line options shared by several commands, declared once: the four
 error parameters in the paper's units (defaults: the paper's Nomad 150 values),
-the forth-and-back variant, units, and the options of the commands that run a
-session (port, baud, truth socket, --json, --exclude, --allow-turns)."""
+the forth-and-back variant, units, ``--robot`` (a robot description file, or
+the name of a built-in one: odohil/session/robot_file.py finds it; anything
+else is a usage error, exit 2, naming the option and the names), and the
+options of the commands that run a session (port, baud, truth socket, --json,
+--exclude, --allow-turns)."""
 
 from __future__ import annotations
 
@@ -10,6 +13,7 @@ import functools
 import inspect
 from collections.abc import Callable, Iterator, Sequence
 from enum import StrEnum
+from pathlib import Path
 from typing import Annotated, Any, TypeVar
 
 import typer
@@ -18,6 +22,8 @@ from odohil import units
 from odohil.errors import OdohilError
 from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, ErrorParameters
+from odohil.session.robot_file import builtin_names, resolve_robot
+from odohil.session.robot_file import robot_protocol as protocol_of
 
 N = TypeVar("N", int, float, int | None, float | None)
 Command = Callable[..., None]
@@ -208,3 +214,26 @@ ALLOW_TURNS_HELP = (
     "the estimate is then not trusted."
 )
 AllowTurnsOption = Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)]
+ROBOT_HELP = f"Robot description (TOML file), or a built-in one: {', '.join(builtin_names())}."
+
+
+def robot_callback(
+    ctx: typer.Context, param: typer.CallbackParam, value: Path | None
+) -> Path | None:
+    """A typer callback for ``--robot``: the resolved file, or None when not given."""
+    if value is None:
+        return None
+    with usage_errors(param.opts[0]):
+        return resolve_robot(value)
+
+
+def robot_option(help_tail: str = "") -> Any:
+    """``--robot`` (:data:`ROBOT_HELP` and ``help_tail``), resolved by :func:`robot_callback`."""
+    return typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP + help_tail)
+
+
+def robot_protocol(value: str, option: str = "--robot") -> str:
+    """The ``[robot] protocol`` of the description ``value`` names: which fake
+    robot ``demo`` and ``emulate`` start; a usage error (exit 2) if none."""
+    with usage_errors(option):
+        return protocol_of(value)

@@ -18,13 +18,12 @@ from odohil.cli.options import (
     UnitsOption,
     option,
     parameters_option,
+    robot_option,
     unit_system,
 )
 from odohil.cli.render import table
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
 from odohil.errors import OdohilError
 from odohil.science.limits import RANGES
-from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.planner import (
     DEFAULT_FLOOR_M,
     DEFAULT_MAX_LEG_M,
@@ -34,66 +33,31 @@ from odohil.science.planner import (
     MAX_DESIGNS,
 )
 from odohil.science.robot_description import MAX_FLOOR_M
-from odohil.science.targets import TARGET_FRACTIONS
 from odohil.session import path_planning as paths
 from odohil.session.planning import (
     DEFAULT_SIGMA_M,
     PlannedExperiment,
     PlanRequest,
     plan_document,
-    trial_minutes,
 )
 
-DEFAULT_TARGETS_TEXT = (
-    f"{TARGET_FRACTIONS['E_R']:.0%} of |E_R|, {TARGET_FRACTIONS['E_T']:.0%} of |E_T|, "
-    f"{TARGET_FRACTIONS['K_theta']:.0%} of K_theta and K_rho (priors), with floors"
-)
 Metres = Annotated[float | None, option("--budget-m", bound="budget_m", help="Most metres "
                    "driven in all (needed unless --budget-min or --evaluate).")]  # fmt: skip
 
 
 def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
     console = Console()
-    plan = planned.plan
-    designs = table(planned.title, ("k", "l (m)", "variant", "trials", "metres", "minutes"))
-    for i, item in enumerate(plan.items):
-        d = item.design
-        minutes = f"{trial_minutes(plan, i):.0f}"
-        designs.add_row(f"{d.k:g}", f"{d.l_m:g}", d.variant, str(item.n_trials),
-                        f"{item.distance_m:g}", minutes)  # fmt: skip
-    console.print(designs)
-    op = plan.operator
+    designs = ("k", "l (m)", "variant", "trials", "metres", "minutes")
+    console.print(table(planned.title, designs, rows=planned.design_rows()))
     columns = ("parameter", "prior", "stderr", "target", "unit")
     title = "Expected standard errors (Cramer-Rao)"
-    errors = table(title, columns, ("parameter", "unit"), planned.measurement)
-    prior_si = planned.prior.to_si_dict()
-    for name, se in zip(PARAMETER_NAMES, plan.standard_errors, strict=True):
-        target, shown = plan.targets[name], units.parameter_in
-        source = "" if name in planned.given else " default"
-        errors.add_row(
-            name,
-            f"{shown(name, prior_si[name], system):.4g}",
-            f"{shown(name, float(se), system):.3g}",
-            f"{shown(name, target, system):.3g}{source} ({float(se) / target:.2f}x)",
-            units.unit_column(name, system),
-        )
-    lines = [
-        f"operator time: about {plan.duration_s / 60.0:.0f} min ({op.seconds_per_trial:g} s "
-        f"to mark and measure a trial, driving at {op.speed_m_per_s:g} m/s)",
-        f"free floor needed: {plan.excursion_m:g} m (one-way trials alternate and come back)",
-    ]
-    for text in lines:
+    rows = planned.error_rows(system)
+    errors = table(title, columns, ("parameter", "unit"), planned.measurement, rows=rows)
+    for text in planned.time_lines():
         console.print(text, highlight=False)
     console.print(errors)
-    if plan.meets_targets:
-        verdict = f"The plan meets every target (largest stderr/target = {plan.criterion:.3f})."
-    else:
-        verdict = (
-            f"The plan does NOT meet the targets of {', '.join(plan.unmet)} (largest "
-            f"stderr/target = {plan.criterion:.3f}); default targets: {DEFAULT_TARGETS_TEXT}."
-        )
-    console.print(verdict, highlight=False)
-    for note in plan.notes:
+    console.print(planned.verdict(), highlight=False)
+    for note in planned.plan.notes:
         console.print(f"[yellow]note:[/yellow] {note}", highlight=False)
 
 
@@ -101,11 +65,10 @@ def _print_paths(found: paths.PathsOutcome, as_json: bool, system: units.UnitSys
     if as_json:
         return typer.echo(json.dumps(paths.paths_document(found), indent=2))
     if isinstance(found, paths.ScoredPaths):
-        shown = table(found.title, ("parameter", "stderr", "target", "unit"),
-                      ("parameter", "unit"), found.measurement)  # fmt: skip
-        for row in found.rows(system):
-            shown.add_row(*row)
-        Console().print(shown)
+        columns, left = ("parameter", "stderr", "target", "unit"), ("parameter", "unit")
+        Console().print(
+            table(found.title, columns, left, found.measurement, rows=found.rows(system))
+        )
     for line in paths.paths_lines(found):
         Console().print(line, highlight=False, markup=False)
 
@@ -135,8 +98,8 @@ def plan(
     sigma_m: Annotated[float | None, option("--sigma-m", bound="sigma_m", help="Tape sigma of "
         f"one floor-mark distance, m (default {DEFAULT_SIGMA_M}), with three screws on a "
         "0.2 m radius circle and one cross distance.")] = None,
-    robot: Annotated[Path | None, typer.Option("--robot", callback=robot_callback,
-        help=ROBOT_HELP + " Gives screws, sigma_m, cross pairs, turns_exact.")] = None,
+    robot: Annotated[Path | None, robot_option(" Gives screws, sigma_m, cross pairs, "
+        "turns_exact.")] = None,
     target_e_r: Annotated[float | None, option("--target-E-R", bound="target_E_R",
         help="Wanted stderr, deg/m (default: 25 % of |prior|, at least 0.005).")] = None,
     target_e_t: Annotated[float | None, option("--target-E-T", bound="target_E_T",

@@ -8,7 +8,6 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil import units
 from odohil.cli.options import (
     K_OPTION,
     L_OPTION,
@@ -25,7 +24,7 @@ from odohil.cli.options import (
 from odohil.cli.render import table
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.paths import Design
-from odohil.session.design_tools import OBSERVABLES, predict_document
+from odohil.session.design_tools import predict_document, predict_rows
 from odohil.session.outcome_text import parameters_line
 
 
@@ -53,12 +52,5 @@ def predict(
     title = f"Expected observables, forth and back {design.label()} (rho = {design.distance_m:g} m)"
     caption = parameters_line(params.to_si_dict(), system) + f" (1+E_T = {1.0 + params.e_t:g})"
     columns = ("observable", "meaning", "value (SI)", "unit", "in degrees")
-    shown = table(title, columns, ("observable", "meaning", "unit"), caption)
-    degrees = {
-        "phi1": f"{units.radians_to_degrees(means.phi1):.6g} deg",
-        "phi2": f"{units.rad2_to_deg2(means.phi2):.6g} deg^2",
-    }
-    for key, value in means.as_dict().items():
-        unit, meaning = OBSERVABLES[key]
-        shown.add_row(key, meaning, f"{value:.6g}", unit, degrees.get(key, ""))
-    Console().print(shown)
+    left, rows = ("observable", "meaning", "unit"), predict_rows(means)
+    Console().print(table(title, columns, left, caption, rows=rows))

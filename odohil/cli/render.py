@@ -5,7 +5,7 @@ are the session's (odohil/session/outcome_text.py)."""
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from typing import Literal
 
 import typer
@@ -36,6 +36,7 @@ from odohil.session.outcome_text import (
     refusal_line,
     verdict_line,
 )
+from odohil.session.run_text import Said, error_said
 from odohil.session.state import CompletedTrial
 
 
@@ -45,20 +46,31 @@ def table(
     left: Sequence[str] = (),
     caption: str | None = None,
     justify: Literal["left", "center", "right"] | None = None,
+    rows: Iterable[Sequence[str]] = (),
 ) -> Table:
-    """A table of ``columns``, right-aligned (numbers) but for those in
-    ``left``; ``justify``: where the title stands (default: centred)."""
+    """A table of ``columns`` holding ``rows``, right-aligned (numbers) but for
+    those in ``left``; ``justify``: where the title stands (default: centred)."""
     made = Table(title=title, caption=caption, title_justify=justify or "center")
     for column in columns:
         made.add_column(column, justify="left" if column in left else "right")
+    for row in rows:
+        made.add_row(*row)
     return made
+
+
+_TONES = {"plain": "", "note": "yellow", "error": "red", "alarm": "bold red"}
+"""The colour of each tone of odohil/session/run_text.py's lines."""
+
+
+def print_said(console: Console, *said: Said) -> None:
+    """Lines for the operator, each head in its tone's colour, the text plain."""
+    for line in said:
+        console.print(Text.assemble((line.head, _TONES[line.tone]), line.text), soft_wrap=True)
 
 
 def bad_input(exc: BaseException | str, console: Console | None = None) -> typer.Exit:
     """Print ``error: <message>`` on stderr; the exit of bad input (2) to raise."""
-    (console or Console(stderr=True)).print(
-        f"[red]error:[/red] {escape(str(exc))}", soft_wrap=True, highlight=False
-    )
+    print_said(console or Console(stderr=True), error_said(str(exc)))
     return typer.Exit(EXIT_BAD_INPUT)
 
 
@@ -164,11 +176,13 @@ def parameters_table(
 ) -> Table:
     """The four parameters with standard errors and 95 % intervals in
     ``system``'s units; with ``truth`` (SI values by name) a truth column in
-    the same units and whether the interval holds it."""
+    the same units and whether the interval holds it. The title: ``title
+    (method, N trials)``, else ``Estimate after N trials``."""
     columns = ["parameter", "estimate", "std. error", "95 % interval", "unit"]
     if truth is not None:
         columns += ["truth", "truth inside"]
-    title = title or f"Estimate after {units.plural(result.n_trials, 'trial')}"
+    trials = units.plural(result.n_trials, "trial")
+    title = f"{title} ({result.method}, {trials})" if title else f"Estimate after {trials}"
     shown = table(title, columns, ("parameter", "unit"), justify="left")
     for p in result.parameters:
         low, high = p.ci95

@@ -10,14 +10,12 @@ import typer
 from rich.console import Console
 
 from odohil.cli.estimate import SOURCES_HELP, load_outcome
+from odohil.cli.options import robot_option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, verdict_or_refuse
-from odohil.cli.robot_option import robot_option
-from odohil.session.exports import export_files
 from odohil.session.logs import ImportOptions
-from odohil.session.outcome import Selection, source_kind
-from odohil.session.report import SessionReport, load_report, write_report
-from odohil.session.report.path_page import write_path_report
+from odohil.session.outcome import Selection
+from odohil.session.report.command import session_report, write_any_report
 
 
 @source_options()
@@ -52,23 +50,16 @@ def report(
     nothing written) unless --force; exit 2 on a bad source or --exclude.
     """
     console = Console(stderr=True)
-    data: SessionReport | None = None
     with bad_inputs(console):
-        if source_kind(sources, recording) == "session" and not selection.chosen:
-            data = load_report(sources[0], exclude)
+        data = session_report(sources, exclude, recording, selection)
     if data is not None:
         assert data.outcome is not None  # load_report always sets it
         outcome = data.outcome
     else:
         outcome = load_outcome(sources, robot, exclude, console, "robust", recording, selection)
     verdict_or_refuse(console, outcome, force, "write the report")
-    result = outcome.result
     with bad_inputs(console):
-        extra = () if result is None else export_files(result, source=sources[0].name)
-        if data is not None:
-            files = write_report(data, out, extra)
-        else:
-            files = write_path_report(outcome, out, extra)
+        files = write_any_report(outcome if data is None else data, out, sources[0].name)
     if not outcome.exportable:
         console.print("written with --force although refused without it")
     console.print(f"wrote {len(files)} files; open {out / 'index.html'}")

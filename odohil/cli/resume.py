@@ -8,7 +8,6 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
 from odohil.cli.options import (
     UNITS_DEFAULT,
@@ -21,6 +20,7 @@ from odohil.cli.options import (
 )
 from odohil.cli.session_view import drive, finish
 from odohil.session.lifecycle import Opened, SessionSpec
+from odohil.session.run_text import resuming
 from odohil.session.start_pose import (
     HEADING_TOLERANCE_DEG,
     POSITION_TOLERANCE_M,
@@ -63,13 +63,7 @@ def resume(
     def say(opened: Opened) -> None:
         if opened.torn is not None:
             console.print(f"[yellow]warning[/]: {opened.torn.describe()}")
-        state = opened.state
-        assert state.plan is not None
-        console.print(
-            f"resuming {session}: {len(state.completed)} of "
-            f"{units.plural(state.plan.n_trials, 'trial')} done"
-            + (f", trial {state.open_trial.trial} open" if state.open_trial else "")
-        )
+        console.print(resuming(session, opened.state))
         console.print(f"robot: {opened.prepared.line.describe()}", soft_wrap=True, markup=False)
 
     def start_check(start: StartPose) -> None:

@@ -25,10 +25,10 @@ from odohil.cli.options import (
     TruthSocketOption,
     UnitsOption,
     option,
+    robot_option,
     unit_system,
 )
 from odohil.cli.render import bad_inputs
-from odohil.cli.robot_option import robot_option
 from odohil.cli.session_view import drive, finish
 from odohil.session.lifecycle import Opened, SessionSpec, default_session_folder
 from odohil.session.outcome import parse_exclude

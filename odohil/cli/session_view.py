@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import math
 from collections.abc import Callable, Iterator, Mapping
 from typing import Any, NoReturn
 
@@ -19,14 +18,13 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, T
 
 from odohil import units
 from odohil.cli.exit_codes import (
-    EXIT_BAD_INPUT,
     EXIT_ERROR,
     EXIT_STOP_UNCONFIRMED,
     exit_for_check,
     exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.render import parameters_table, print_lines, print_verdict
+from odohil.cli.render import bad_input, parameters_table, print_lines, print_said, print_verdict
 from odohil.errors import (
     JournalError,
     OdohilError,
@@ -57,14 +55,13 @@ from odohil.session.lifecycle import (
 )
 from odohil.session.lifecycle.opening import CheckSeen
 from odohil.session.operator_words import measured_again, remeasured
+from odohil.session.outcome_text import live_e_r
 from odohil.session.robots import fake_url_schemes
+from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, run_ended
 from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
 from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState
 from odohil.session.tape_records import MeasurementsRejected, Remeasured
-
-MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
-"""What odohil says, prominently, when it could not confirm the robot's stop."""
 
 
 def register_fake_urls(port: str) -> None:
@@ -101,7 +98,7 @@ def refuse(
     """A failed pre-flight check: its message (the wizard: its tick, unless
     ``ticked`` already), exit by its class."""
     if tick is None:
-        console.print(f"[red]error[/]: {escape(check.message)}; nothing moved", soft_wrap=True)
+        print_said(console, error_said(f"{check.message}; nothing moved"))
     else:
         if not ticked:
             tick(check)
@@ -127,16 +124,18 @@ def drive(
     json_out: bool,
     say: Callable[[Opened], None],
     start_check: StartCheck | None = None,
+    verdict: bool = True,
 ) -> RunOutcome:
     """Pre-flight, open (``say`` tells what was opened), run with the progress
-    bar and say how the run ended; what escapes exits by its status
-    (:func:`session_exit_codes`)."""
+    bar and say how the run ended (a finished one: its verdict line unless not
+    ``verdict``); what escapes exits by its status (:func:`session_exit_codes`)."""
     with session_exit_codes(console, json_out):
         prepared = prepared_or_exit(preflight(spec), console)
         with open_session(prepared, say_opened(console)) as opened:
             say(opened)
             outcome = run_with_progress(console, opened, system, start_check)
-            report_run(console, outcome)
+            if verdict or outcome.status != "finished":
+                report_run(console, outcome)
     return outcome
 
 
@@ -193,11 +192,8 @@ class ProgressObserver:
 
     def estimated(self, result: EstimateResult, state: SessionState) -> None:
         """Show the live E_R beside the bar."""
-        e_r = result.parameter("E_R").value
-        if math.isfinite(e_r):
-            value = units.parameter_in("E_R", e_r, self.system)
-            unit = units.parameter_unit("E_R", self.system)
-            self.progress.update(self.task, description=f"E_R {value:+.4g} {unit}")
+        if (text := live_e_r(result, self.system)) is not None:
+            self.progress.update(self.task, description=text)
 
 
 def run_with_progress(
@@ -225,43 +221,12 @@ def report_run(
     interrupted: str = "interrupted",
 ) -> None:
     """How the run ended: the verdict line (and why it may not be exported)
-    when it finished; else what ended it, then what was checked on the way
-    out: the robot's stop ("robot stopped" only when the robot reported it),
-    the journal ("journaled" only when the closing record is on disk) and the
-    command that continues the session (``continue_with``; default ``odohil
-    resume FOLDER``)."""
+    when it finished; else what ended it and what was checked on the way out
+    (odohil/session/run_text.py ``run_ended``)."""
     if outcome.status == "finished":
         print_verdict(console, outcome.estimate)
-        return
-    if outcome.status == "stop unconfirmed":
-        console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]", soft_wrap=True)
-        if outcome.cause:
-            console.print(f"the run ended on: {outcome.cause}", soft_wrap=True, markup=False)
-        if outcome.stop is None:
-            text = f"st sent but not confirmed: {outcome.message}"
-            console.print(text, soft_wrap=True, markup=False)
-            return
-    elif outcome.status == "interrupted":
-        console.print(f"[yellow]{interrupted}[/] ({outcome.message})", soft_wrap=True)
     else:
-        console.print(f"[red]error[/]: {escape(outcome.message)}", soft_wrap=True)
-    stop, folder = outcome.stop, outcome.folder
-    again = continue_with or f"odohil resume {folder}"
-    if stop is None:
-        return
-    if stop.robot_stopped:
-        console.print(f"robot stopped (it reports {escape(stop.detail)})", soft_wrap=True)
-    else:
-        console.print(f"[bold red]{MAY_STILL_MOVE}[/]: {escape(stop.detail)}", soft_wrap=True)
-    if stop.journaled:
-        console.print(f"session journaled in {folder}; continue with `{again}`", soft_wrap=True)
-    else:
-        console.print(
-            f"[bold red]the journal could not be written[/]: {escape(stop.journal_error)}; "
-            f"the records before this failure are kept in {folder}; free the disk, then "
-            f"`{again}`",
-            soft_wrap=True,
-        )
+        print_said(console, *run_ended(outcome, continue_with, interrupted))
 
 
 def finish(
@@ -281,8 +246,7 @@ def finish(
     if json_out:
         typer.echo(json.dumps({**outcome.to_json_dict(code), **(extra or {})}))
     elif result is not None:
-        title = f"estimate ({result.method}, {units.plural(result.n_trials, 'trial')})"
-        table = parameters_table(result, system, title, truth)
+        table = parameters_table(result, system, "estimate", truth)
         Console(width=max(110, Console().width)).print(table)
     if code:
         raise typer.Exit(code)
@@ -301,19 +265,17 @@ def session_exit_codes(console: Console, json_out: bool = False) -> Iterator[Non
         with signals_raise(), ctrl_c_in_words():
             yield
     except KeyboardInterrupt as exc:
-        console.print(f"[yellow]interrupted[/] ({interrupt_text(exc)})", soft_wrap=True)
+        print_said(console, Said("note", "interrupted", f" ({interrupt_text(exc)})"))
         if json_out:
             typer.echo(json.dumps(interrupted_before_run(exc)))
         raise typer.Exit(exit_for_signal(signal_of(exc))) from None
     except StopUnconfirmedError as exc:
-        console.print(f"[bold red]WARNING: {MAY_STILL_MOVE}[/]: {escape(str(exc))}", soft_wrap=True)
+        print_said(console, Said("alarm", f"WARNING: {MAY_STILL_MOVE}", f": {exc}"))
         raise typer.Exit(EXIT_STOP_UNCONFIRMED) from None
     except PreflightFailed as exc:
         refuse(console, exc.check)
     except (ParameterError, RobotDescriptionError, TrialFileError, JournalError) as exc:
-        # found before anything moved
-        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
-        raise typer.Exit(EXIT_BAD_INPUT) from None
+        raise bad_input(exc, console) from None  # found before anything moved
     except (OdohilError, OSError) as exc:
-        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
+        print_said(console, error_said(str(exc)))
         raise typer.Exit(EXIT_ERROR) from None

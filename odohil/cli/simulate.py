@@ -7,7 +7,6 @@ import time
 from pathlib import Path
 from typing import Annotated
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TimeRemainingColumn
@@ -27,7 +26,7 @@ from odohil.cli.options import (
 from odohil.science.paths import Design
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.science.simulator import simulate as run_simulation
-from odohil.session.design_tools import check_simulation, write_simulated_trials
+from odohil.session.design_tools import check_simulation, fresh_seed, write_simulated_trials
 
 _PROGRESS_AFTER_S = 1.0
 
@@ -81,7 +80,7 @@ def simulate(
         design = Design(k, l_m, variant.value)
         check_simulation(design, trials, segment_m, out)
     if seed is None:
-        seed = int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
+        seed = fresh_seed()
         err.print(f"seed {seed}", highlight=False)
     progress = _LazyProgress(trials, err)
     try:

@@ -5,26 +5,19 @@ odohil/science/validation.py)."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 from rich.console import Console
-from rich.markup import escape
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED, exit_for_run
-from odohil.cli.options import JsonOption, option
+from odohil.cli.options import JsonOption, option, robot_option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, print_refusal, table
-from odohil.cli.robot_option import ROBOT_HELP, robot_callback
-from odohil.cli.session_view import (
-    prepared_or_exit,
-    report_run,
-    run_with_progress,
-    say_opened,
-    session_exit_codes,
-)
+from odohil.cli.render import bad_input, bad_inputs, print_refusal, print_said, table
+from odohil.cli.session_view import drive
 from odohil.errors import (
     JournalError,
     MeasurementError,
@@ -32,22 +25,24 @@ from odohil.errors import (
     ParameterError,
     RobotDescriptionError,
 )
-from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
-from odohil.session.lifecycle import SessionSpec, open_session, preflight
+from odohil.session.lifecycle import Opened, SessionSpec
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome_text import outcome_line
-from odohil.session.plan import Plan
 from odohil.session.robot_file import load_robot_description
-from odohil.session.state import load_session
+from odohil.session.run_text import error_said
 from odohil.session.validation import (
     PATH_SYNTAX,
-    ValidationPath,
     ValidationTrials,
     check_trials,
     load_calibration,
     parse_validation_path,
     trials_of_session,
+)
+from odohil.session.validation_drive import (
+    check_file_options,
+    journaled_trials,
+    validation_spec,
 )
 from odohil.session.validation_steps import (
     calibration_robot,
@@ -99,8 +94,7 @@ def validate(
                        "--port.")] = None,
     port: Annotated[str | None, option("--port", help="Serial device, pty path or pyserial "
                     "URL.")] = None,
-    robot_file: Annotated[Path | None, typer.Option("--robot", callback=robot_callback,
-                          help=ROBOT_HELP + " Default: the session's.")] = None,
+    robot_file: Annotated[Path | None, robot_option(" Default: the session's.")] = None,
     baud: Annotated[int | None, option("--baud", bound="baud", help="Line speed.")] = None,
     truth_socket: Annotated[str | None, option("--truth-socket", help="The fake robot's truth "
                             "socket (--measure fake).")] = None,
@@ -118,14 +112,12 @@ def validate(
 ) -> None:  # fmt: skip
     console = Console(stderr=True)
     bad = (ParameterError, RobotDescriptionError, JournalError, MeasurementError, OSError)
-    try:
+    with bad_inputs(console):
         check_alpha(alpha)
         vpath = parse_validation_path(path_text)
         given = None if robot_file is None else load_robot_description(robot_file)
         calibration = load_calibration(session, exclude, given, recording)
         robot = calibration_robot(calibration, robot_file)
-    except (OdohilError, OSError) as exc:
-        raise bad_input(exc, console) from None
     outcome = calibration.outcome
     result = outcome.result
     if result is None or not (result.verdict.trusted or force):
@@ -134,8 +126,7 @@ def validate(
     console.print(outcome_line(outcome), highlight=False)  # the calibration's verdict
     folder: Path | None = None
     try:
-        if vpath.kind == "file":
-            _no_robot(vpath, port, measure)
+        check_file_options(vpath, port, measure)
         if not drives(vpath, port, measure):
             measured = measured_trials(
                 vpath, calibration, robot.description, recording, port, measure
@@ -143,28 +134,21 @@ def validate(
             measured = first_trials(measured, trials)
         else:
             folder = drive_folder(vpath, calibration, session, out)
-            measured = _drive_or_reload(
-                folder,
-                vpath,
-                trials,
-                measure,
-                port,
-                baud,
-                truth_socket,
-                seed,
-                robot.description,
-                robot.toml,
-                robot.path,
-                session,
-                console,
-            )
+            reread = journaled_trials(folder, vpath)
+            if reread is not None:
+                console.print(f"re-testing the trials journaled in {folder} (nothing driven)")
+            else:
+                spec = validation_spec(folder, vpath, session, robot, trials, measure)
+                spec = replace(spec, port=port, baud=baud, truth_socket=truth_socket, seed=seed)
+                reread = _drive(console, spec)
+            measured = reread
             # a driven trial the tape found ambiguous is left out, not redone
             measured = first_trials(measured, min(trials or len(measured), len(measured)))
         tested = check_trials(measured, result, alpha)
     except bad as exc:
         raise bad_input(exc, console) from None
     except OdohilError as exc:
-        console.print(f"[red]error[/]: {escape(str(exc))}", soft_wrap=True)
+        print_said(console, error_said(str(exc)))
         raise typer.Exit(EXIT_ERROR) from None
     data = validation_document(session, vpath, folder, measured, calibration, tested)
     if as_json:
@@ -174,65 +158,17 @@ def validate(
     raise typer.Exit(EXIT_OK if tested.passed else EXIT_UNTRUSTED)
 
 
-def _no_robot(vpath: ValidationPath, port: str | None, measure: str | None) -> None:
-    if port is not None or measure is not None:
-        raise ParameterError(
-            f"--path {vpath.text} reads its trials from the file: --port and --measure "
-            "are not used (to drive, give --path forth-back:K,L or square:SIDE)"
-        )
+def _drive(console: Console, spec: SessionSpec) -> ValidationTrials:
+    """Drive the validation session ``spec`` (its exit status if it does not finish)."""
 
+    def say(opened: Opened) -> None:
+        console.print(f"validation session {spec.folder}")
+        console.print(f"robot: {opened.prepared.line.describe()}", soft_wrap=True, markup=False)
 
-def _drive_or_reload(
-    folder: Path,
-    vpath: ValidationPath,
-    trials: int | None,
-    measure: str | None,
-    port: str | None,
-    baud: int | None,
-    truth_socket: str | None,
-    seed: int,
-    description: RobotDescription,
-    toml: str,
-    robot_path: str,
-    session: Path,
-    console: Console,
-) -> ValidationTrials:
-    """Drive a validation session of ``vpath`` in ``folder``, or re-read a finished one."""
-    drivable = vpath.drivable
-    assert drivable is not None
-    if (folder / "journal.jsonl").is_file():
-        state = load_session(folder).state
-        settings = state.header.get("settings", {})
-        if settings.get("validation_path") != vpath.text or not state.finished:
-            raise JournalError(
-                f"{folder} holds {'another' if state.finished else 'an unfinished'} "
-                "validation session: give --out NEW_FOLDER"
-                + ("" if state.finished else f", or `odohil resume {folder}` first")
-            )
-        console.print(f"re-testing the trials journaled in {folder} (nothing driven)")
-        return trials_of_session(state, source=str(folder))
-    if trials is None:
-        raise ParameterError("--trials N is needed to drive a validation path (N in 1..10000)")
-    if measure is None:
-        raise ParameterError(
-            "--measure is needed to drive: `fake`, `tcp://HOST:PORT` or a trial file (CSV)"
-        )
-    spec = SessionSpec(
-        folder, "new", Path(robot_path) if robot_path else None, robot_toml=toml,
-        plan=Plan.of([(drivable, trials)]), measure=measure, port=port, baud=baud,
-        truth_socket=truth_socket, seed=seed, purpose="validate",
-        settings={"validation_of": str(session.resolve()), "validation_path": vpath.text},
-    )  # fmt: skip
-    with session_exit_codes(console):
-        prepared = prepared_or_exit(preflight(spec), console)
-        with open_session(prepared, say_opened(console)) as opened:
-            console.print(f"validation session {folder}")
-            console.print(f"robot: {prepared.line.describe()}", soft_wrap=True, markup=False)
-            outcome = run_with_progress(console, opened)
+    outcome = drive(console, spec, units.DEFAULT_UNIT_SYSTEM, False, say, verdict=False)
     if outcome.status != "finished":
-        report_run(console, outcome)
         raise typer.Exit(exit_for_run(outcome))
-    return trials_of_session(outcome.state, source=str(folder))
+    return trials_of_session(outcome.state, source=str(spec.folder))
 
 
 def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationTrials) -> None:

@@ -42,6 +42,7 @@ from odohil.cli.options import (
     PortOption,
     UnitsOption,
     option,
+    robot_option,
     unit_system,
 )
 from odohil.cli.render import (
@@ -53,8 +54,7 @@ from odohil.cli.render import (
     print_refusal,
     print_verdict,
 )
-from odohil.cli.robot_option import robot_option
-from odohil.cli.session_view import MAY_STILL_MOVE, prepared_or_exit, refuse, report_run
+from odohil.cli.session_view import prepared_or_exit, refuse, report_run
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import InconsistentMeasurementError, MeasurementError
 from odohil.science.estimators import EstimateResult
@@ -77,7 +77,6 @@ from odohil.session.lifecycle import (
 )
 from odohil.session.operator_words import (
     END_MARKS,
-    HERE,
     encoders_at_end,
     entered_so_far,
     extra_distance_prompt,
@@ -91,9 +90,10 @@ from odohil.session.operator_words import (
 from odohil.session.outcome_text import outcome_line
 from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
+from odohil.session.run_text import MAY_STILL_MOVE
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.sources import OperatorSource, TapeSource
-from odohil.session.start_pose import StartPose
+from odohil.session.start_pose import StartPose, put_back
 from odohil.session.state import SessionState
 from odohil.session.tape_entry import INSTRUCTIONS, TapeEntries, parse_optional_metres
 from odohil.session.tape_records import TapeContext
@@ -192,13 +192,9 @@ class WizardPrompts:
 
         def check(start: StartPose) -> None:
             self.console.print(f"Robot: {start.describe()}")
-            if start.ok or start.expected is None:
-                return
-            if self._input(put_back_prompt(start.trial), "bold").strip().lower() == HERE:
-                self.console.print("The trial starts where the robot stands.")
-                return
-            robot.zero(start.expected)
-            self.console.print("Encoders set to the trial's start.")
+            if not (start.ok or start.expected is None):
+                reply = self._input(put_back_prompt(start.trial), "bold")
+                self.console.print(put_back(start, reply, robot))
 
         return check
 

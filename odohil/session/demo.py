@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from odohil.errors import ParameterError
-from odohil.science.parameters import ErrorParameters
+from odohil.science.parameters import SI_UNITS, ErrorParameters
 from odohil.session.lifecycle import SessionSpec
 from odohil.session.robots import backend_names, robot_facts
 
@@ -48,6 +48,10 @@ class Demo:
     spec: SessionSpec
     port: str
     truth: Mapping[str, float]
+
+    def truth_document(self) -> dict[str, dict[str, dict[str, float | str]]]:
+        """For ``odohil demo --json``: ``{"truth": {name: {"value", "unit"}}}`` (SI)."""
+        return {"truth": {n: {"value": v, "unit": SI_UNITS[n]} for n, v in self.truth.items()}}
 
 
 def demo_session(protocol: str, seed: int, folder: Path) -> Demo:

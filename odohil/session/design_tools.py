@@ -1,7 +1,7 @@
 """What the design tools (``odohil predict``, ``covariance``, ``simulate``)
 compute beyond calling science: the path their options name, their JSON
-documents (SI), the covariance table's rows, and the simulated trials written
-as a trial file."""
+documents (SI), the rows of their tables, and the simulated trials written as
+a trial file."""
 
 from __future__ import annotations
 
@@ -10,6 +10,8 @@ import os
 import tempfile
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from odohil import units
 from odohil.errors import ParameterError
@@ -90,12 +92,12 @@ def _matrix(matrix: FloatArray) -> list[list[float]]:
     return [[float(v) for v in row] for row in matrix]
 
 
-def covariance_rows(exact: PoseMoments, sim: SimulatedMoments | None) -> list[tuple[str, str, str]]:
+def covariance_rows(exact: PoseMoments, sim: SimulatedMoments | None) -> list[tuple[str, ...]]:
     """The rows of ``odohil covariance``'s table for people: (quantity and its
-    unit, closed form, simulated +- its Monte Carlo standard error or "" when
-    not simulated) for the means, the covariance entries and the standard
-    deviations (mm, deg)."""
-    rows = []
+    unit, closed form, and when simulated the simulated value +- its Monte
+    Carlo standard error) for the means, the covariance entries and the
+    standard deviations (mm, deg)."""
+    rows: list[tuple[str, ...]] = []
     for i, (name, unit) in enumerate(zip(COMPONENTS, COMPONENT_UNITS, strict=True)):
         simulated = "" if sim is None else f"{sim.mean[i]:.6g} +- {sim.mean_se[i]:.2g}"
         rows.append((f"mean {name} ({unit})", f"{exact.mean[i]:.6g}", simulated))
@@ -108,6 +110,20 @@ def covariance_rows(exact: PoseMoments, sim: SimulatedMoments | None) -> list[tu
     sd = [math.sqrt(max(exact.cov[i, i], 0.0)) for i in range(3)]
     sds = f"{sd[0] * 1e3:.4g}, {sd[1] * 1e3:.4g}; {math.degrees(sd[2]):.4g}"
     rows.append(("sd x, y (mm); sd Delta (deg)", sds, ""))
+    return rows if sim is not None else [row[:2] for row in rows]
+
+
+def predict_rows(means: ObservableMeans) -> list[tuple[str, str, str, str, str]]:
+    """The rows of ``odohil predict``'s table for people: observable, meaning,
+    value (SI), unit, and phi1 and phi2 in degrees."""
+    degrees = {
+        "phi1": f"{units.radians_to_degrees(means.phi1):.6g} deg",
+        "phi2": f"{units.rad2_to_deg2(means.phi2):.6g} deg^2",
+    }
+    rows = []
+    for key, value in means.as_dict().items():
+        unit, meaning = OBSERVABLES[key]
+        rows.append((key, meaning, f"{value:.6g}", unit, degrees.get(key, "")))
     return rows
 
 
@@ -148,6 +164,11 @@ def predict_document(
         "design": {"k": "1", "l_m": "m"},
     }
     return document
+
+
+def fresh_seed() -> int:
+    """A fresh random seed (63 bits) for a simulation given none, to report."""
+    return int(np.random.SeedSequence().generate_state(1, dtype=np.uint64)[0] >> 1)
 
 
 def check_simulation(design: Design, trials: int, segment_m: float, out: Path) -> None:

@@ -137,3 +137,12 @@ def more_trials_lines(result: EstimateResult, remaining_in_plan: int) -> list[st
     remain = "remains" if remaining_in_plan == 1 else "remain"
     lines.append(f"  ({units.plural(remaining_in_plan, 'trial')} {remain} in the plan)")
     return lines
+
+
+def live_e_r(result: EstimateResult, system: units.UnitSystem) -> str | None:
+    """``E_R -0.2021 deg/m``: the live E_R beside a progress bar; None while not finite."""
+    e_r = result.parameter("E_R").value
+    if not math.isfinite(e_r):
+        return None
+    value = units.parameter_in("E_R", e_r, system)
+    return f"E_R {value:+.4g} {units.parameter_unit('E_R', system)}"

@@ -24,12 +24,18 @@ from odohil.science.planner import (
     plan_experiment,
 )
 from odohil.science.robot_description import MAX_FLOOR_M, RobotDescription
+from odohil.science.targets import TARGET_FRACTIONS
 from odohil.session.plan import parse_plan
 from odohil.session.preflight import default_variant, turn_designs
 from odohil.session.robot_file import load_robot_description
 
 DEFAULT_SIGMA_M = 0.001
 """Tape sigma of one floor-mark distance without a robot description, m."""
+DEFAULT_TARGETS_TEXT = (
+    f"{TARGET_FRACTIONS['E_R']:.0%} of |E_R|, {TARGET_FRACTIONS['E_T']:.0%} of |E_T|, "
+    f"{TARGET_FRACTIONS['K_theta']:.0%} of K_theta and K_rho (priors), with floors"
+)
+"""The default targets in words."""
 
 
 @dataclass(frozen=True)
@@ -87,6 +93,54 @@ class PlannedExperiment:
     title: str
     given: frozenset[str]
     turn_designs: tuple[str, ...] = ()
+
+    def design_rows(self) -> list[tuple[str, ...]]:
+        """Per design: k, l (m), variant, trials, metres, operator minutes."""
+        rows: list[tuple[str, ...]] = []
+        for i, item in enumerate(self.plan.items):
+            d = item.design
+            minutes = f"{trial_minutes(self.plan, i):.0f}"
+            row = (f"{d.k:g}", f"{d.l_m:g}", d.variant, str(item.n_trials), f"{item.distance_m:g}")
+            rows.append((*row, minutes))
+        return rows
+
+    def error_rows(self, system: units.UnitSystem) -> list[tuple[str, ...]]:
+        """Per parameter in ``system``'s units: name, prior, expected standard
+        error, target (" default" when not given; the stderr/target ratio), unit."""
+        rows: list[tuple[str, ...]] = []
+        prior_si, shown = self.prior.to_si_dict(), units.parameter_in
+        for name, se in zip(PARAMETER_NAMES, self.plan.standard_errors, strict=True):
+            target = self.plan.targets[name]
+            source = "" if name in self.given else " default"
+            rows.append(
+                (
+                    name,
+                    f"{shown(name, prior_si[name], system):.4g}",
+                    f"{shown(name, float(se), system):.3g}",
+                    f"{shown(name, target, system):.3g}{source} ({float(se) / target:.2f}x)",
+                    units.unit_column(name, system),
+                )
+            )
+        return rows
+
+    def time_lines(self) -> list[str]:
+        """The operator time and the free floor the plan needs."""
+        plan, op = self.plan, self.plan.operator
+        return [
+            f"operator time: about {plan.duration_s / 60.0:.0f} min ({op.seconds_per_trial:g} s "
+            f"to mark and measure a trial, driving at {op.speed_m_per_s:g} m/s)",
+            f"free floor needed: {plan.excursion_m:g} m (one-way trials alternate and come back)",
+        ]
+
+    def verdict(self) -> str:
+        """Whether the plan meets every target (the largest stderr/target)."""
+        plan = self.plan
+        if plan.meets_targets:
+            return f"The plan meets every target (largest stderr/target = {plan.criterion:.3f})."
+        return (
+            f"The plan does NOT meet the targets of {', '.join(plan.unmet)} (largest "
+            f"stderr/target = {plan.criterion:.3f}); default targets: {DEFAULT_TARGETS_TEXT}."
+        )
 
 
 def measurement_of(request: PlanRequest) -> tuple[RobotDescription, str]:

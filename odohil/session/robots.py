@@ -250,3 +250,19 @@ def emulator(protocol: str) -> tuple[RobotFacts, FakeHooks, Any]:
     if hooks is None or not hooks.emulator:
         raise InitError(f"the {protocol} backend declares no fake robot to emulate")
     return facts, hooks, hooks.emulator_function()
+
+
+def emulated_line(
+    facts: RobotFacts, hooks: FakeHooks, baud: int | None, time_scale: float | None
+) -> tuple[int, float]:
+    """``odohil emulate``'s line rate (baud) and time scale (simulated seconds
+    per wall second): those given, else the backend's default baud and its
+    fake's default time scale.
+
+    Raises:
+        ParameterError: a baud rate the robot does not speak.
+    """
+    if baud is not None and not facts.speaks(baud):
+        raise ParameterError(f"the {facts.label} speaks {facts.rates_text()} baud, got {baud}")
+    scale = hooks.emulate_time_scale if time_scale is None else time_scale
+    return (facts.default_baud if baud is None else baud), scale

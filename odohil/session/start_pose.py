@@ -23,6 +23,8 @@ from dataclasses import dataclass
 
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import SafetyError
+from odohil.session.operator_words import HERE
+from odohil.session.robot import Robot
 from odohil.session.state import Phase, SessionState
 from odohil.units import wrap_angle
 
@@ -141,3 +143,15 @@ def refuse_off_start(start: StartPose) -> None:
         "Put it back there and run the command again, or give --from-here to "
         "start the trial where it stands"
     )
+
+
+def put_back(start: StartPose, reply: str, robot: Robot) -> str:
+    """For the operator, asked to put the robot back at trial ``start.trial``'s
+    start (``put_back_prompt``): ``reply`` ``here`` starts the trial where the
+    robot stands; anything else means it was put back, so the encoders are set
+    to the trial's start. What to tell the operator."""
+    if reply.strip().lower() == HERE:
+        return "The trial starts where the robot stands."
+    assert start.expected is not None
+    robot.zero(start.expected)
+    return "Encoders set to the trial's start."

@@ -1,0 +1,86 @@
+"""What odohil says of a session run: where a resumed one stands, and when
+one did not finish (odohil/session/lifecycle/running.py's :class:`RunOutcome`)
+what ended it, whether the robot reported its stop, whether the journal holds
+the end, and the command that continues. Each line of the latter is a
+:class:`Said`: its head carries the tone the CLI renders (a colour there), its
+text follows plain."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+from odohil import units
+from odohil.session.lifecycle import RunOutcome
+from odohil.session.state import SessionState
+
+MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
+"""What odohil says, prominently, when it could not confirm the robot's stop."""
+
+Tone = Literal["plain", "note", "error", "alarm"]
+"""How loud a line is: plain, a note (an interrupt), an error, an alarm (the
+robot may still be moving, the journal could not be written)."""
+
+
+@dataclass(frozen=True)
+class Said:
+    """One line for the operator: ``head`` said in ``tone``, then ``text``."""
+
+    tone: Tone
+    head: str
+    text: str = ""
+
+
+def resuming(folder: Path, state: SessionState) -> str:
+    """``resuming FOLDER: 3 of 60 trials done, trial 4 open``."""
+    assert state.plan is not None
+    done = f"{len(state.completed)} of {units.plural(state.plan.n_trials, 'trial')} done"
+    opened = "" if state.open_trial is None else f", trial {state.open_trial.trial} open"
+    return f"resuming {folder}: {done}{opened}"
+
+
+def error_said(message: str) -> Said:
+    """``error: <message>``."""
+    return Said("error", "error", f": {message}")
+
+
+def run_ended(
+    outcome: RunOutcome, continue_with: str | None = None, interrupted: str = "interrupted"
+) -> list[Said]:
+    """How a run that did not finish ended: what ended it (``interrupted``: the
+    word for a signal), then what was checked on the way out: the robot's stop
+    ("robot stopped" only when the robot reported it), the journal
+    ("journaled" only when the closing record is on disk) and the command that
+    continues the session (``continue_with``; default ``odohil resume FOLDER``)."""
+    said: list[Said] = []
+    if outcome.status == "stop unconfirmed":
+        said.append(Said("alarm", f"WARNING: {MAY_STILL_MOVE}"))
+        if outcome.cause:
+            said.append(Said("plain", f"the run ended on: {outcome.cause}"))
+        if outcome.stop is None:
+            return [*said, Said("plain", f"st sent but not confirmed: {outcome.message}")]
+    elif outcome.status == "interrupted":
+        said.append(Said("note", interrupted, f" ({outcome.message})"))
+    else:
+        said.append(error_said(outcome.message))
+    stop, folder = outcome.stop, outcome.folder
+    again = continue_with or f"odohil resume {folder}"
+    if stop is None:
+        return said
+    if stop.robot_stopped:
+        said.append(Said("plain", f"robot stopped (it reports {stop.detail})"))
+    else:
+        said.append(Said("alarm", MAY_STILL_MOVE, f": {stop.detail}"))
+    if stop.journaled:
+        said.append(Said("plain", f"session journaled in {folder}; continue with `{again}`"))
+    else:
+        said.append(
+            Said(
+                "alarm",
+                "the journal could not be written",
+                f": {stop.journal_error}; the records before this failure are kept in "
+                f"{folder}; free the disk, then `{again}`",
+            )
+        )
+    return said
