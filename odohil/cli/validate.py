@@ -138,7 +138,15 @@ def validate(
             if reread is not None:
                 console.print(f"re-testing the trials journaled in {folder} (nothing driven)")
             else:
-                spec = validation_spec(folder, vpath, session, robot, trials, measure)
+                spec = validation_spec(
+                    folder,
+                    vpath,
+                    session,
+                    robot,
+                    trials,
+                    measure,
+                    calibration=outcome.result,
+                )
                 spec = replace(spec, port=port, baud=baud, truth_socket=truth_socket, seed=seed)
                 reread = _drive(console, spec)
             measured = reread

@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from odohil.errors import JournalError, ParameterError
+from odohil.science.estimators import EstimateResult
 from odohil.session.lifecycle import SessionSpec
 from odohil.session.plan import Plan
 from odohil.session.state import load_session
@@ -57,10 +58,13 @@ def validation_spec(
     robot: CalibrationRobot,
     trials: int | None,
     measure: str | None,
+    *,
+    calibration: EstimateResult | None = None,
 ) -> SessionSpec:
     """The session that drives ``trials`` of ``vpath`` into ``folder`` with
     ``measure`` as a validation of the calibration ``session``, with
-    ``robot``'s description (the line and the seed: the spec's defaults).
+    ``robot``'s description (the line and the seed: the spec's defaults); its
+    trials predicted under ``calibration``, the calibration's estimate.
 
     Raises:
         ParameterError: no ``--trials`` or no ``--measure``.
@@ -82,4 +86,5 @@ def validation_spec(
         measure=measure,
         purpose="validate",
         settings={"validation_of": str(session.resolve()), "validation_path": vpath.text},
+        calibration=calibration,
     )

@@ -15,14 +15,18 @@ from typing import Any
 
 import numpy as np
 
+from odohil.cli.exit_codes import EXIT_OK, EXIT_UNTRUSTED
 from odohil.science.parameters import ErrorParameters
 from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.session.engine import SessionEngine, start_session
+from odohil.session.journal import read_journal
 from odohil.session.plan import parse_plan
 from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
 from odohil.session.sources import TruthPoseSource
+from odohil.session.tape_records import Remeasured
 from odohil.session.validation import load_calibration
 from odohil.session.validation_wizard import guided_validation
+from tests.cli.test_validate_paths import ROBOTS, odohil, robot_option
 from tests.session.helpers import FAST, ROBOT_TOML, fake_robot
 from tests.wizard.test_wizard_validation import calibrate
 
@@ -76,3 +80,28 @@ def test_the_wizards_validation_is_predicted_under_its_calibration(tmp_path: Pat
     guided = guided_validation(session, "square:0.5,cw", 3, port="fakerobot://?seed=1")
     assert guided.spec.calibration is not None
     assert guided.spec.calibration.parameters == load_calibration(session).result.parameters
+
+
+def test_validate_measures_a_driven_path_under_the_calibration(tmp_path: Path) -> None:
+    """`odohil validate --port ... --measure fake`: on a fake whose E_R is three
+    and K_theta nine times the calibration's, every square disagrees with the
+    calibration's prediction, so the slip check asks again (the fake's tape
+    re-measures) before the validation fails; under the priors (before) it
+    never asked: 0 re-measures in either direction at seed 2."""
+    nomad = ROBOTS["nomad150"]
+    calibration = tmp_path / "calibration"
+    code, _, err = odohil(
+        "run", "--allow-few-trials", "--robot", robot_option("nomad150", tmp_path),
+        "--port", nomad["url"].format(seed=2), "--plan", nomad["plan"], "--measure", "fake",
+        "--seed", "2", "--session", str(calibration), "--json",
+    )  # fmt: skip
+    assert code == EXIT_OK, err
+    folder = tmp_path / "validation"
+    code, _, err = odohil(
+        "validate", str(calibration), "--port", nomad["url"].format(seed=102) + nomad["wrong"],
+        "--path", "square:1.0,cw", "--trials", "15", "--measure", "fake", "--seed", "102",
+        "--out", str(folder), "--json",
+    )  # fmt: skip
+    assert code == EXIT_UNTRUSTED, err
+    kinds = [record.kind for record in read_journal(folder).records]
+    assert kinds.count(Remeasured.KIND) > 0
