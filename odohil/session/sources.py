@@ -598,7 +598,22 @@ class TruthPoseSource:
         )
 
 
-class PoseFileSource:
+class _FileRows:
+    """What the pose sources of a file share: row k serves trial k (every
+    attempt at it), and there is nothing to mark on the floor."""
+
+    origin: str
+
+    def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Nothing to mark; journal which row serves the trial."""
+        return {"row": ctx.trial, "origin": self.origin}
+
+    def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
+        """Nothing to mark."""
+        return {}
+
+
+class PoseFileSource(_FileRows):
     """A trial file of poses, read as poses: row k serves trial k of the plan
     (every attempt at it) and must be of its design. A row's covariance is the
     file's, else what the description's floor marks would give at that pose
@@ -624,14 +639,6 @@ class PoseFileSource:
             )
         return trial
 
-    def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
-        """Nothing to mark; journal which row serves the trial."""
-        return {"row": ctx.trial, "origin": self.origin}
-
-    def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
-        """Nothing to mark."""
-        return {}
-
     def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
         """The trial's row as it stands in the file."""
         trial = self._row(ctx)
@@ -647,7 +654,7 @@ class PoseFileSource:
         )
 
 
-class PathPoseSource:
+class PathPoseSource(_FileRows):
     """A pose file or a general-path trial file (odohil/session/path_pose_files.py)
     as a :class:`PoseSource`: row k serves trial k of the plan (every attempt
     at it) and must be of its path (the pre-flight checked the whole file). A
@@ -673,14 +680,6 @@ class PathPoseSource:
                 f"trial {ctx.trial}: {problem}"
             )
         return row
-
-    def at_start(self, ctx: TrialContext) -> Mapping[str, Any]:
-        """Nothing to mark; journal which row serves the trial."""
-        return {"row": ctx.trial, "origin": self.origin}
-
-    def at_end(self, ctx: TrialContext) -> Mapping[str, Any]:
-        """Nothing to mark."""
-        return {}
 
     def pose_change(self, ctx: TrialContext, log: MeasurementLog) -> MeasuredPose:
         """The trial's row as it stands in the file.
