@@ -20,9 +20,11 @@ from odohil.science.parameters import ErrorParameters
 from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.session.engine import SessionEngine, start_session
 from odohil.session.journal import read_journal
+from odohil.session.lifecycle.running import validation_calibration
 from odohil.session.plan import parse_plan
 from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
 from odohil.session.sources import TruthPoseSource
+from odohil.session.state import load_session
 from odohil.session.tape_records import Remeasured
 from odohil.session.validation import load_calibration
 from odohil.session.validation_wizard import guided_validation
@@ -105,3 +107,9 @@ def test_validate_measures_a_driven_path_under_the_calibration(tmp_path: Path) -
     assert code == EXIT_UNTRUSTED, err
     kinds = [record.kind for record in read_journal(folder).records]
     assert kinds.count(Remeasured.KIND) > 0
+    # `odohil resume` of the validation measures under the same calibration:
+    # its header names it (validation_of); a calibration session names none
+    resumed = validation_calibration(None, load_session(folder).state)
+    assert resumed is not None
+    assert resumed.parameters == load_calibration(calibration).result.parameters
+    assert validation_calibration(None, load_session(calibration).state) is None

@@ -208,6 +208,26 @@ def progress_estimator(opened: Opened) -> LiveEstimator:
     return IncrementalLiveEstimator(exclude)
 
 
+def validation_calibration(
+    given: EstimateResult | None, state: SessionState
+) -> EstimateResult | None:
+    """The calibration a validation session's trials are measured under:
+    ``given`` (the spec's), else the estimate of the calibration session its
+    header names (``validation_of``: a resumed validation, `odohil resume`),
+    else None (a calibration session, or a calibration that gives no estimate
+    any more: the trials are then measured under the live estimate or the
+    priors)."""
+    if given is not None:
+        return given
+    folder = state.header.settings.get("validation_of")
+    if not folder:
+        return None
+    try:
+        return estimate_state(load_session(Path(str(folder))).state).result
+    except (OdohilError, OSError):
+        return None
+
+
 def run_session(
     opened: Opened,
     observer: SessionObserver | None = None,
@@ -227,7 +247,7 @@ def run_session(
     exclude = opened.prepared.spec.exclude
     chosen = source or opened.source
     assert chosen is not None, "the operator's source is the caller's to give"
-    calibration = opened.prepared.spec.calibration
+    calibration = validation_calibration(opened.prepared.spec.calibration, opened.state)
     belief = None if calibration is None else (
         ParameterBelief.from_result(calibration, opened.prepared.description.priors)
     )  # fmt: skip
