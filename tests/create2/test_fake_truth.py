@@ -8,6 +8,7 @@ truth socket); the commands run in process through typer's runner.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 from typer.testing import CliRunner, Result
@@ -54,8 +55,18 @@ def test_run_reads_the_create2_truth_socket_and_validate_accepts_its_fake_url(
     assert "verdict: TRUSTED" in ran.output
     checked = invoke(
         "validate", session, "--path", "forth-back:2,0.5,reverse", "--trials", "2",
-        "--measure", "fake", "--port", FAKE,
+        "--measure", "fake", "--port", FAKE, "--json",
     )  # fmt: skip
     assert "truth side channel" not in checked.output
-    assert checked.exit_code == 0, checked.output
-    assert "pass" in checked.output
+    verdict = json.loads(checked.output[checked.output.index("{") :])
+    assert verdict["n_trials"] == 2, checked.output
+    # The claim is that validate drives the fake URL and reads its truth; its
+    # statistical verdict on a four-trial calibration is not: that calibration's
+    # K_rho interval spans a factor of 30 and the validation's prediction takes
+    # the spread at the point estimate (odohil/science/validation.py: the delta
+    # method leaves the spread's uncertainty out), so on a busy host, where the
+    # real-time fake's draws differ, a low K_rho now and then fails two trials
+    # whose x spread it underpredicts (seen once: x mean residual -12.5 mm, SE
+    # 1.9 mm). The exit status must be the verdict's, exactly.
+    status = verdict["verdict"]["status"]
+    assert checked.exit_code == {"pass": 0, "fail": 3}[status], checked.output
