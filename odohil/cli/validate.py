@@ -37,6 +37,7 @@ from odohil.session.validation import (
     check_trials,
     load_calibration,
     parse_validation_path,
+    sensitivity_text,
     trials_of_session,
 )
 from odohil.session.validation_drive import (
@@ -162,7 +163,7 @@ def validate(
     if as_json:
         typer.echo(json.dumps(data))
     else:
-        _print(data, tested, measured)
+        _print(data, tested, measured, sensitivity_text(tested, result))
     raise typer.Exit(EXIT_OK if tested.passed else EXIT_UNTRUSTED)
 
 
@@ -179,7 +180,9 @@ def _drive(console: Console, spec: SessionSpec) -> ValidationTrials:
     return trials_of_session(outcome.state, source=str(spec.folder))
 
 
-def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationTrials) -> None:
+def _print(
+    data: dict[str, Any], tested: ValidationResult, measured: ValidationTrials, sensitivity: str
+) -> None:
     out = Console(width=max(100, Console().width))
     status = "PASS" if tested.passed else "FAIL"
     failed = tested.failed()
@@ -188,6 +191,7 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
     out.print(text, highlight=False)
     for reason in tested.reasons():
         out.print(f"  {reason}", highlight=False)
+    out.print(sensitivity, highlight=False)
     title = "chi-square tests (NEES: the spread; bias: the mean residual), each at level"
     title += f" {tested.level:g}"
     columns = ("test", "statistic", "dof", "p-value", "threshold", "result")

@@ -39,6 +39,16 @@ Eight tests (NEES and bias, each overall, x, y, theta) each at level alpha/8
 (Bonferroni): the set fails when any one rejects, so the false-rejection rate
 of the verdict is at most alpha.
 
+**What a pass rules out** (:class:`Detectable`): a true parameter Delta_j away
+from the estimate moves every trial's mean by J_i e_j Delta_j, so the mean
+residual by J-bar_j Delta_j (J-bar the trials' mean Jacobian) while W stays
+the same. The overall bias test then has noncentrality Delta_j^2 J-bar_j^T
+W^-1 J-bar_j (chi-square(3)), the axis-a test Delta_j^2 J-bar_aj^2 / W_aa
+(chi-square(1)). The smallest |Delta_j| that one of them rejects with
+probability ``power`` bounds what the verdict misses: it rejects whenever any
+test does, so it catches that error at least as often. A validation of few or
+noisy trials passes errors a user would call large; the number says how large.
+
 What the delta method leaves out: the dependence of C_i on theta-hat (an
 error in K_theta or K_rho scales the predicted spread rather than moving the
 mean). It is second order for the mean but not for the spread: with many
@@ -55,7 +65,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from scipy import special, stats
 
 from odohil.errors import ParameterError
 from odohil.science.moments import pose_moments, turn_errors_from
@@ -70,6 +80,9 @@ DEFAULT_ALPHA = 0.01
 N_TESTS = 8
 """NEES and bias, each overall plus one per axis; each run at alpha / N_TESTS
 (Bonferroni)."""
+
+DETECTION_POWER = 0.9
+"""The probability with which :attr:`ValidationResult.detectable` errors are caught."""
 
 _RELATIVE_STEP = 1e-4
 _ABSOLUTE_STEPS = (1e-7, 1e-7, 1e-10, 1e-10)
@@ -212,6 +225,26 @@ class ChiSquareTest:
 
 
 @dataclass(frozen=True)
+class Detectable:
+    """The smallest error of one parameter the bias tests catch (module docs).
+
+    Attributes:
+        index: the parameter's column in the predictions' Jacobians (E_R, E_T,
+            K_theta, K_rho, then a general-path fit's turn errors).
+        shift: the smallest |true - estimated| value, in the parameter's SI
+            unit, that ``test`` rejects with probability ``power`` (math.inf
+            when the predicted mean does not move with the parameter).
+        test: the bias test that catches it first (``bias``, ``bias x``, ...).
+        power: the probability of catching it.
+    """
+
+    index: int
+    shift: float
+    test: str
+    power: float
+
+
+@dataclass(frozen=True)
 class ValidationResult:
     """The NEES and bias tests of one validation set.
 
@@ -228,6 +261,8 @@ class ValidationResult:
         parameter_uncertainty: whether the estimate's covariance was included.
         bias: the mean-residual tests: overall (chi-square(3)), then x, y,
             theta (chi-square(1), i.e. two-sided z).
+        detectable: per parameter (Jacobian column), the smallest error the
+            bias tests catch with probability :data:`DETECTION_POWER`.
     """
 
     passed: bool
@@ -239,6 +274,7 @@ class ValidationResult:
     trial_nees: FloatArray
     parameter_uncertainty: bool
     bias: tuple[ChiSquareTest, ...] = ()
+    detectable: tuple[Detectable, ...] = ()
 
     @property
     def level(self) -> float:
@@ -354,10 +390,8 @@ def _bias_tests(
     residuals: FloatArray, blocks: FloatArray, loadings: FloatArray, level: float
 ) -> list[ChiSquareTest]:
     """The mean residual's tests (module docstring): overall, then per axis."""
-    n = residuals.shape[0]
     mean = residuals.mean(axis=0)
-    shared = loadings.sum(axis=0)  # (3, q): sum J_i L
-    cov = (blocks.sum(axis=0) + shared @ shared.T) / n**2
+    cov = _bias_covariance(blocks, loadings)
     se = np.sqrt(np.diag(cov))
     try:
         overall = float(mean @ np.linalg.solve(cov, mean))
@@ -370,6 +404,46 @@ def _bias_tests(
         z2 = float(mean[a] ** 2 / cov[a, a])
         tests.append(_test(f"bias {name}", z2, 1, level, (values[a],), (errors[a],)))
     return tests
+
+
+def _bias_covariance(blocks: FloatArray, loadings: FloatArray) -> FloatArray:
+    """W, the mean residual's predicted covariance (module docstring)."""
+    n = blocks.shape[0]
+    shared = loadings.sum(axis=0)  # (3, q): sum J_i L
+    cov: FloatArray = (blocks.sum(axis=0) + shared @ shared.T) / n**2
+    return cov
+
+
+def detectable_errors(
+    mean_jacobian: FloatArray, bias_cov: FloatArray, level: float, power: float = DETECTION_POWER
+) -> tuple[Detectable, ...]:
+    """Per parameter, the smallest error the bias tests (each at ``level``)
+    catch with probability ``power`` (module docstring, "What a pass rules out").
+
+    Args:
+        mean_jacobian: (3, q) the trials' mean d mean / d parameters (SI).
+        bias_cov: (3, 3) W, the mean residual's predicted covariance.
+        level: each test's level (alpha / 8).
+        power: the probability of catching the error, in (level, 1).
+    """
+    if not (level < power < 1.0):
+        raise ParameterError(f"power must be in ({level:g}, 1), got {power!r}")
+    w_inv = np.linalg.inv(bias_cov)
+    needed_overall = float(special.chndtrinc(float(stats.chi2.isf(level, 3)), 3, 1.0 - power))
+    needed_axis = float(special.chndtrinc(float(stats.chi2.isf(level, 1)), 1, 1.0 - power))
+    out = []
+    for j in range(mean_jacobian.shape[1]):
+        a = mean_jacobian[:, j]
+        # noncentrality per unit error squared: overall, then each axis
+        per_unit = [("bias", float(a @ w_inv @ a), needed_overall)]
+        per_unit += [
+            (f"bias {name}", float(a[k] ** 2 / bias_cov[k, k]), needed_axis)
+            for k, name in enumerate(AXES)
+        ]
+        shifts = [(math.sqrt(needed / unit), name) for name, unit, needed in per_unit if unit > 0.0]
+        shift, test = min(shifts) if shifts else (math.inf, "")
+        out.append(Detectable(index=j, shift=shift, test=test, power=power))
+    return tuple(out)
 
 
 def validation_test(
@@ -439,6 +513,9 @@ def validation_test(
         )
         tests.append(_test(name, axis_nees, n, level))
     bias = _bias_tests(residuals, blocks, loadings, level)
+    detectable = detectable_errors(
+        jacobians.mean(axis=0), _bias_covariance(blocks, loadings), level
+    )
     return ValidationResult(
         passed=all(t.passed for t in (*tests, *bias)),
         alpha=alpha,
@@ -449,6 +526,7 @@ def validation_test(
         trial_nees=trial_nees,
         parameter_uncertainty=parameter_cov is not None,
         bias=tuple(bias),
+        detectable=detectable,
     )
 
 

@@ -48,6 +48,7 @@ from odohil.science.paths import Design, EncoderPath, FloatArray, Variant
 from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import (
     DEFAULT_ALPHA,
+    Detectable,
     EllipseData,
     PathPrediction,
     ValidationResult,
@@ -79,6 +80,7 @@ from odohil.session.state import (
     session_trials,
 )
 from odohil.session.trial_files import TrialSet, read_trials
+from odohil.units import paper_text
 
 VALIDATION_FOLDER = "validation"
 """Sub-folder of a calibration session that holds its validation sessions."""
@@ -483,6 +485,43 @@ def check_trials(
         trials.covs,
         parameter_covariance(calibration),
         alpha=alpha,
+    )
+
+
+VARIANCE_RATES = ("K_theta", "K_rho", "K_spin")
+"""Parameters that scale the predicted spread rather than move its mean: the
+NEES tests, not the bias tests, are theirs."""
+
+
+def detectable_by_name(
+    tested: ValidationResult, calibration: EstimateResult
+) -> dict[str, Detectable]:
+    """The smallest error of each mean parameter (E_R, E_T, turn-scale errors)
+    the validation's bias tests catch with probability
+    :data:`~odohil.science.validation.DETECTION_POWER`, by name (SI), in the
+    calibration's order; a parameter the trials' mean does not follow is left out."""
+    names = [p.name for p in calibration.parameters]
+    if len(names) <= len(PARAMETER_NAMES):
+        names = list(PARAMETER_NAMES)
+    return {
+        names[d.index]: d
+        for d in tested.detectable
+        if d.index < len(names) and names[d.index] not in VARIANCE_RATES and math.isfinite(d.shift)
+    }
+
+
+def sensitivity_text(tested: ValidationResult, calibration: EstimateResult) -> str:
+    """For people: ``what a pass rules out: with probability 90 % the bias
+    tests catch E_R off by 0.62 deg/m or more, E_T by 1.2 %, ...``."""
+    found = detectable_by_name(tested, calibration)
+    if not found:
+        return "what a pass rules out: no mean parameter moves these trials' mean"
+    power = next(iter(found.values())).power
+    parts = [f"{name} off by {paper_text(name, d.shift)}" for name, d in found.items()]
+    return (
+        f"what a pass rules out: with probability {100 * power:.0f} % the bias tests catch "
+        + ", ".join(parts)
+        + " or more (smaller errors can pass)"
     )
 
 

@@ -25,6 +25,7 @@ from odohil.session.validation import (
     ValidationTrials,
     check_not_fitted,
     default_folder,
+    detectable_by_name,
     held_out_trials,
     parameter_covariance,
     predictions_of,
@@ -192,6 +193,10 @@ def validation_document(
         tested.trial_nees,
         strict=True,
     )
+    verdict["detectable"] = {
+        name: {"error": d.shift, "power": d.power, "test": d.test}
+        for name, d in detectable_by_name(tested, result).items()
+    }
     return {
         "verdict": verdict,
         "path": vpath.text,

@@ -38,6 +38,7 @@ from odohil.session.validation import (
     default_folder,
     load_calibration,
     parse_validation_path,
+    sensitivity_text,
     trials_of_session,
 )
 from odohil.session.validation_steps import calibration_robot, drive_folder
@@ -121,7 +122,9 @@ class GuidedValidation:
         failed = tested.failed()
         head = f"validation: {status} ({units.plural(tested.n_trials, 'trial')} of "
         head += f"{self.vpath.text}" + (f"; rejected by {', '.join(failed)})" if failed else ")")
-        return tested.passed, (head, *(f"  {reason}" for reason in tested.reasons()), where)
+        reasons = tuple(f"  {reason}" for reason in tested.reasons())
+        sensitivity = sensitivity_text(tested, self.calibration.result)
+        return tested.passed, (head, *reasons, sensitivity, where)
 
 
 def guided_validation(

@@ -150,6 +150,10 @@ def test_validate_prints_the_calibrations_verdict_line_then_its_own(trusted: Pat
     assert done.exit_code == EXIT_OK, done.output
     assert done.stderr.splitlines()[0] == "verdict: TRUSTED"
     assert done.stdout.startswith("validation: PASS (60 trials of file:")
+    # and what that pass rules out, in the paper's units
+    assert "what a pass rules out: with probability 90 % the bias tests catch E_R off by" in (
+        done.stdout.replace("\n", " ")
+    )
 
 
 def test_import_refuses_a_log_that_is_not_there(tmp_path: Path) -> None:

@@ -99,6 +99,13 @@ def test_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(tmp_path: Path, 
     assert good["n_trials"] == VALIDATION_TRIALS
     assert good["verdict"]["overall"]["dof"] == 3 * VALIDATION_TRIALS
     assert good["verdict"]["parameter_uncertainty"].startswith("included")
+    # what the pass rules out: the mean parameters, SI, caught by a bias test
+    detectable = good["verdict"]["detectable"]
+    assert list(detectable) == ["E_R", "E_T"]
+    for name in detectable:
+        assert 0 < detectable[name]["error"] < 1, detectable
+        assert detectable[name]["test"].startswith("bias")
+        assert detectable[name]["power"] == 0.9
     code, bad = validate(session, f"seed={other}&time_scale=2000&{WRONG}", other, bad_folder)
     assert (code, bad["verdict"]["status"]) == (3, "fail"), bad["verdict"]
     assert "theta" in bad["verdict"]["failed"]

@@ -136,6 +136,7 @@ def test_the_wizard_validates_a_square_with_the_tape(tmp_path: Path) -> None:
         child.expect(r"Session complete:\S* 3 trials")
         # the calibrated fake passes
         child.expect(re.escape(f"validation: PASS ({tested} trials of square:0.5,cw)"))
+        child.expect(r"what a pass rules out: with probability 90 % the bias tests catch E_R")
         child.expect(re.escape(f"journaled in {folder}"))
         child.expect(pexpect.EOF)
         child.close()
