@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import subprocess
 import sys
@@ -78,7 +79,7 @@ def one_seed(robot: str, seed: int, root: Path) -> list[dict[str, object]]:
     option = robot_option(robot, folder)
     session = folder / "calibration"
     started = time.monotonic()
-    code, _, err = odohil(
+    code, out, err = odohil(
         "run", "--allow-few-trials", "--port", ROBOTS[robot]["url"].format(seed=seed),
         "--robot", option, "--plan", ROBOTS[robot]["plan"], "--measure", "fake",
         "--seed", str(seed), "--session", str(session), "--json",
@@ -90,6 +91,10 @@ def one_seed(robot: str, seed: int, root: Path) -> list[dict[str, object]]:
         note = last_error(err)
         return [{"robot": robot, "seed": seed, "cell": "calibration", "exit": code, "note": note}]
     calibrated_s = time.monotonic() - started
+    try:
+        calibration_e_r = json.loads(out)["parameters"]["E_R"]["value"]
+    except (ValueError, KeyError):
+        calibration_e_r = math.nan  # resumed: the JSON is the resume's, not read here
     other = seed + 100
     for direction in DIRECTIONS:
         for fake in ("calibrated", "wrong"):
@@ -128,6 +133,10 @@ def one_seed(robot: str, seed: int, root: Path) -> list[dict[str, object]]:
                 row["dof"] = verdict["overall"]["dof"]
                 row["failed"] = verdict["failed"]
                 row["left_out"] = data["left_out_ambiguous"]
+                # what a pass rules out, beside how far off the fake is (deg/m)
+                found = verdict["detectable"].get("E_R", {}).get("error", math.nan)
+                row["detectable_E_R_deg_m"] = round(math.degrees(found), 3)
+                row["calibration_E_R_deg_m"] = round(math.degrees(calibration_e_r), 3)
             except (ValueError, KeyError):
                 row["note"] = err.strip().splitlines()[-1] if err.strip() else ""
             rows.append(row)

@@ -585,6 +585,7 @@ class ValidationReport:
         result: the NEES tests, or None when they could not be made.
         plots: per path, the trials against the predicted ellipse.
         problem: why there is no result ("" otherwise).
+        sensitivity: what a pass rules out (:func:`sensitivity_text`; "" without a result).
     """
 
     folder: Path
@@ -592,6 +593,7 @@ class ValidationReport:
     result: ValidationResult | None
     plots: tuple[ValidationPlot, ...] = ()
     problem: str = ""
+    sensitivity: str = ""
 
 
 def load_validations(
@@ -611,5 +613,6 @@ def load_validations(
         except OdohilError as exc:
             reports.append(ValidationReport(folder, path, None, problem=str(exc)))
             continue
-        reports.append(ValidationReport(folder, path, result, plots))
+        sensitivity = sensitivity_text(result, calibration)
+        reports.append(ValidationReport(folder, path, result, plots, sensitivity=sensitivity))
     return tuple(reports)

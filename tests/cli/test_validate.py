@@ -131,6 +131,7 @@ def test_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(tmp_path: Path, 
     assert section.count('<figure id="validation-') == 2
     assert "PASS" in section
     assert "FAIL" in section
+    assert section.count("what a pass rules out: with probability 90 %") == 2
     # a finished validation is tested again without a robot
     again = odohil(
         "validate", str(session), "--path", VALIDATION_PATH, "--json",

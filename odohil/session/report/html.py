@@ -148,6 +148,7 @@ def _validations(report: SessionReport, by_key: Mapping[str, Plot]) -> str:
             f"{units.plural(r.n_trials, 'trial')}, each test at level {r.level:g}"
             f"{': ' + e('; '.join(r.reasons())) if r.reasons() else ''}.</p>"
         )
+        parts.append(f"<p>{e(v.sensitivity)}.</p>")
         parts.append(
             "<table><tr><th>test</th><th>statistic</th><th>dof</th><th>p-value</th>"
             "<th>threshold</th><th>result</th></tr>"
