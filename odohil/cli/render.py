@@ -58,14 +58,27 @@ def table(
     return made
 
 
-_TONES = {"plain": "", "note": "yellow", "error": "red", "alarm": "bold red"}
+_TONES = {
+    "plain": "",
+    "note": "yellow",
+    "error": "red",
+    "alarm": "bold red",
+    "title": "bold",
+    "good": "green",
+    "done": "bold green",
+}
 """The colour of each tone of odohil/session/run_text.py's lines."""
 
 
-def print_said(console: Console, *said: Said) -> None:
-    """Lines for the operator, each head in its tone's colour, the text plain."""
+def said_text(line: Said) -> Text:
+    """A line for the operator: its head in its tone's colour, the text plain."""
+    return Text.assemble((line.head, _TONES[line.tone]), line.text)
+
+
+def print_said(console: Console, *said: Said, soft_wrap: bool = True) -> None:
+    """Lines for the operator (:func:`said_text`), not wrapped unless not ``soft_wrap``."""
     for line in said:
-        console.print(Text.assemble((line.head, _TONES[line.tone]), line.text), soft_wrap=True)
+        console.print(said_text(line), soft_wrap=soft_wrap)
 
 
 def bad_input(exc: BaseException | str, console: Console | None = None) -> typer.Exit:

@@ -18,9 +18,11 @@ from odohil.session.state import SessionState
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
 
-Tone = Literal["plain", "note", "error", "alarm"]
+Tone = Literal["plain", "note", "error", "alarm", "title", "good", "done"]
 """How loud a line is: plain, a note (an interrupt), an error, an alarm (the
-robot may still be moving, the journal could not be written)."""
+robot may still be moving, the journal could not be written); the wizard's
+also a title (a trial's header, a question that stops the operator), good
+news (a solved trial) and done (the session complete)."""
 
 
 @dataclass(frozen=True)
