@@ -5,7 +5,7 @@ are the session's (odohil/session/outcome_text.py)."""
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
 from typing import Literal
 
 import typer
@@ -22,17 +22,16 @@ from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
 from odohil.science.paths import Drivable
-from odohil.session.design_observables import observables_by_design
+from odohil.session.design_observables import OBSERVABLE_COLUMNS, observables_rows
 from odohil.session.lifecycle import PreflightCheck
 from odohil.session.motion_steps import MotionSteps, pose_text
 from odohil.session.outcome import EstimateOutcome
 from odohil.session.outcome_text import (
     export_refusal_lines,
-    inside,
     more_trials_lines,
-    number_text,
     outcome_line,
     outcome_notes,
+    parameter_rows,
     refusal_line,
     verdict_line,
 )
@@ -47,14 +46,17 @@ def table(
     caption: str | None = None,
     justify: Literal["left", "center", "right"] | None = None,
     rows: Iterable[Sequence[str]] = (),
+    flagged: Collection[str] = (),
 ) -> Table:
     """A table of ``columns`` holding ``rows``, right-aligned (numbers) but for
-    those in ``left``; ``justify``: where the title stands (default: centred)."""
+    those in ``left``, a cell that is one of the words ``flagged`` (a failed
+    check: ``FAIL``, ``NO``) in red; ``justify``: where the title stands
+    (default: centred)."""
     made = Table(title=title, caption=caption, title_justify=justify or "center")
     for column in columns:
         made.add_column(column, justify="left" if column in left else "right")
     for row in rows:
-        made.add_row(*row)
+        made.add_row(*(f"[red]{cell}[/]" if cell in flagged else cell for cell in row))
     return made
 
 
@@ -161,26 +163,6 @@ def check_line(check: PreflightCheck) -> Text:
     return Text.assemble(mark, (check.name, "bold"), ": ", check.message)
 
 
-def observables_table(trials: Sequence[CompletedTrial]) -> Table:
-    """phi1..phi5 of every design with at least two completed trials."""
-    columns = ("design", "n", "phi1 deg", "phi2 deg^2", "phi3 mm", "phi4 mm", "phi5 mm^2")
-    shown = table("Observables per design", columns, ("design",), justify="left")
-    for label, n, phi in observables_by_design(trials):
-        if phi is None:
-            shown.add_row(label, str(n), "needs 2 trials", "", "", "", "")
-            continue
-        shown.add_row(
-            label,
-            str(phi.n_trials),
-            f"{units.radians_to_degrees(phi.phi1):.4g}",
-            f"{units.rad2_to_deg2(phi.phi2):.3g}",
-            f"{1e3 * phi.phi3:.3g}",
-            f"{1e3 * phi.phi4:.3g}",
-            f"{1e6 * phi.phi5:.3g}",
-        )
-    return shown
-
-
 def parameters_table(
     result: EstimateResult,
     system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
@@ -196,21 +178,8 @@ def parameters_table(
         columns += ["truth", "truth inside"]
     trials = units.plural(result.n_trials, "trial")
     title = f"{title} ({result.method}, {trials})" if title else f"Estimate after {trials}"
-    shown = table(title, columns, ("parameter", "unit"), justify="left")
-    for p in result.parameters:
-        low, high = p.ci95
-        row = [
-            p.name,
-            number_text(p.name, p.value, system),
-            number_text(p.name, p.stderr, system, digits=2),
-            f"[{number_text(p.name, low, system)}, {number_text(p.name, high, system)}]",
-            units.unit_column(p.name, system),
-        ]
-        if truth is not None:
-            row.append(number_text(p.name, truth[p.name], system))
-            row.append("yes" if inside(p, truth[p.name]) else "[red]NO[/]")
-        shown.add_row(*row)
-    return shown
+    rows = parameter_rows(result, system, truth)
+    return table(title, columns, ("parameter", "unit"), justify="left", rows=rows, flagged=("NO",))
 
 
 def estimate_panel(
@@ -223,7 +192,13 @@ def estimate_panel(
     needed (green once the target precision is reached), model check, verdict."""
     style = "green" if result.sufficiency.sufficient else "yellow"
     return Group(
-        observables_table(trials),
+        table(
+            "Observables per design",
+            OBSERVABLE_COLUMNS,
+            ("design",),
+            justify="left",
+            rows=observables_rows(trials),
+        ),
         parameters_table(result, system),
         Text("\n".join(more_trials_lines(result, remaining)), style=style),
         Text(f"Model check: {result.model_check.verdict}"),

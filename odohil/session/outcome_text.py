@@ -72,6 +72,32 @@ def inside(entry: ParameterEstimate, value: float) -> bool:
     return (not math.isfinite(low) or low <= value) and (not math.isfinite(high) or value <= high)
 
 
+def parameter_rows(
+    result: EstimateResult,
+    system: units.UnitSystem,
+    truth: Mapping[str, float] | None = None,
+) -> list[list[str]]:
+    """Each parameter's row of the parameters table: name, estimate, standard
+    error, 95 % interval and unit in ``system``'s units; with ``truth`` (SI
+    values by name) also the truth in the same units and whether the interval
+    holds it (``yes``, else ``NO``)."""
+    rows = []
+    for p in result.parameters:
+        low, high = p.ci95
+        row = [
+            p.name,
+            number_text(p.name, p.value, system),
+            number_text(p.name, p.stderr, system, digits=2),
+            f"[{number_text(p.name, low, system)}, {number_text(p.name, high, system)}]",
+            units.unit_column(p.name, system),
+        ]
+        if truth is not None:
+            row.append(number_text(p.name, truth[p.name], system))
+            row.append("yes" if inside(p, truth[p.name]) else "NO")
+        rows.append(row)
+    return rows
+
+
 def gaussian_line(
     result: EstimateResult, system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
 ) -> str:
