@@ -37,9 +37,9 @@ from odohil.session.validation import (
     trials_of_session,
 )
 from odohil.session.validation_drive import (
-    TESTS_COLUMNS,
+    CHI_SQUARE_COLUMNS,
+    chi_square_rows,
     held_out,
-    tests_rows,
     validation_setup,
     verdict_lines,
 )
@@ -155,8 +155,8 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
     out = Console(width=max(100, Console().width))
     for line in verdict_lines(tested, data["path"]):
         out.print(line, highlight=False)
-    title, rows = tests_rows(tested)
-    out.print(table(title, TESTS_COLUMNS, ("test", "result"), rows=rows, flagged=("FAIL",)))
+    title, rows = chi_square_rows(tested)
+    out.print(table(title, CHI_SQUARE_COLUMNS, ("test", "result"), rows=rows, flagged=("FAIL",)))
     out.print(f"parameter uncertainty: {data['verdict']['parameter_uncertainty']}", highlight=False)
     if measured.left_out:
         out.print(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")

@@ -5,7 +5,7 @@ options a trial file does not use, the finished validation session it tests
 again without driving, the session spec of one it drives, and the held-out
 trials it tests (:func:`held_out`), read from a file or driven by the
 caller; and the lines that tell the verdict (:func:`verdict_lines`,
-:func:`tests_rows`)."""
+:func:`chi_square_rows`)."""
 
 from __future__ import annotations
 
@@ -218,12 +218,12 @@ def verdict_lines(tested: ValidationResult, path: str) -> list[str]:
     return [text, *(f"  {reason}" for reason in tested.reasons())]
 
 
-TESTS_COLUMNS = ("test", "statistic", "dof", "p-value", "threshold", "result")
-"""The columns of :func:`tests_rows`."""
+CHI_SQUARE_COLUMNS = ("test", "statistic", "dof", "p-value", "threshold", "result")
+"""The columns of :func:`chi_square_rows`."""
 
 
-def tests_rows(tested: ValidationResult) -> tuple[str, list[tuple[str, ...]]]:
-    """The title and rows (:data:`TESTS_COLUMNS`) of the table of the chi-square
+def chi_square_rows(tested: ValidationResult) -> tuple[str, list[tuple[str, ...]]]:
+    """The title and rows (:data:`CHI_SQUARE_COLUMNS`) of the table of the chi-square
     tests, each ``pass`` or ``FAIL``."""
     title = "chi-square tests (NEES: the spread; bias: the mean residual), each at level"
     rows = [

@@ -10,27 +10,48 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 
 import pytest
 
+import fakes
 from odohil.driver.odometry import OdometrySample
-from odohil.errors import InconsistentMeasurementError, MeasurementError
+from odohil.errors import InconsistentMeasurementError, MeasurementError, ParameterError
+from odohil.robots import __file__ as robots_init
 from odohil.science.estimators import EstimateResult
 from odohil.science.floor_marks import distance_labels
-from odohil.science.paths import Drivable
+from odohil.science.parameters import NOMAD150
+from odohil.science.paths import Design, Drivable
+from odohil.science.simulator import simulate
+from odohil.session.design_observables import OBSERVABLE_COLUMNS, observables_rows
+from odohil.session.design_tools import write_simulated_trials
 from odohil.session.events import Void, encode
 from odohil.session.interrupts import Interrupts
 from odohil.session.journal import Record
+from odohil.session.lifecycle import SessionSpec, open_session, preflight, require, run_session
+from odohil.session.logs import ImportOptions
 from odohil.session.operator_dialogue import OperatorDialogue, OperatorWatch
 from odohil.session.operator_words import HERE
+from odohil.session.outcome import estimate_source
+from odohil.session.outcome_text import number_text, parameter_rows
 from odohil.session.plan import parse_plan
 from odohil.session.run_text import Said
 from odohil.session.start_pose import StartPose
 from odohil.session.state import CompletedTrial
 from odohil.session.tape_entry import INSTRUCTIONS
 from odohil.session.tape_records import TapeContext, TapeReadings
+from odohil.session.validation import ValidationTrials, check_trials, trials_of_session
+from odohil.session.validation_drive import (
+    CHI_SQUARE_COLUMNS,
+    chi_square_rows,
+    held_out,
+    validation_setup,
+    verdict_lines,
+)
 from tests.session.helpers import description
 
+ROBOT = Path(robots_init).parent / "nomad150.toml"
+PORT = "fakerobot://?seed=2&time_scale=2000"
 DESIGN = parse_plan("k=1,l=1,n=2", "reverse").items[0].design
 LABELS = distance_labels(description())
 
@@ -162,3 +183,123 @@ def test_a_voided_attempt_closes_the_bar_and_says_why() -> None:
     watch.record(record, None)  # type: ignore[arg-type]
     assert screen.motions == [None]
     assert screen.said == [Said("note", "Trial 3 attempt voided:", " the robot did not answer")]
+
+
+def _trial_file(folder: Path, design: Design, n: int, seed: int) -> Path:
+    trials = folder / f"trials-{seed}.csv"
+    poses = simulate(design.path(), NOMAD150, n, seed=seed, segment_m=0.01).pose_change
+    write_simulated_trials(trials, design, poses)
+    return trials
+
+
+FILE = {"trials": 4, "measure": None, "port": None, "out": None}
+"""held_out's options for trials read from a file."""
+
+
+def _anywhere(start: StartPose) -> None:
+    """Start every trial where the robot stands."""
+
+
+def test_the_rows_of_the_parameters_table(tmp_path: Path) -> None:
+    """odohil/session/outcome_text.py ``parameter_rows`` (a truth column: yes or NO)."""
+    result = estimate_source([_trial_file(tmp_path, Design(1, 2.0), 12, 2)]).result
+    assert result is not None
+    truth = {p.name: p.value for p in result.parameters} | {"K_rho": 1.0}
+    rows = {row[0]: row for row in parameter_rows(result, "si", truth)}
+    assert list(rows) == ["E_R", "E_T", "K_theta", "K_rho"]
+    assert rows["E_R"][1:] == [
+        number_text("E_R", result.parameter("E_R").value, "si"),
+        number_text("E_R", result.parameter("E_R").stderr, "si", digits=2),
+        rows["E_R"][3],
+        "rad/m",
+        number_text("E_R", result.parameter("E_R").value, "si"),
+        "yes",
+    ]
+    assert rows["K_rho"][-1] == "NO"
+    assert all(len(row) == 5 for row in parameter_rows(result, "paper"))
+
+
+def test_a_file_validation_is_set_up_read_and_told(tmp_path: Path) -> None:
+    """odohil/session/validation_drive.py: ``validation_setup`` (a bad --alpha
+    refused before anything is read), ``held_out`` of a file (nothing driven),
+    the verdict lines and the tests' rows."""
+    calibration = _trial_file(tmp_path, Design(1, 2.0), 12, 2)
+    held = _trial_file(tmp_path, Design(0.5, 2.0), 6, 3)
+    with pytest.raises(ParameterError, match="--alpha"):
+        validation_setup(calibration, f"file:{held}", ROBOT, frozenset(), ImportOptions(), 0.9)
+    setup = validation_setup(calibration, f"file:{held}", ROBOT, frozenset(), ImportOptions(), 0.05)
+    assert setup.calibration.outcome.result is not None
+    assert setup.robot.path == str(ROBOT)
+
+    def no_drive(spec: SessionSpec) -> ValidationTrials:
+        raise AssertionError("a file is not driven")
+
+    found = held_out(setup, calibration, ImportOptions(), no_drive, **FILE)  # type: ignore[arg-type]
+    assert (len(found.measured), found.folder, found.reread) == (4, None, False)
+    with pytest.raises(ParameterError, match="--port and --measure are not used"):
+        held_out(
+            setup,
+            calibration,
+            ImportOptions(),
+            no_drive,
+            trials=4,
+            measure="fake",
+            port=None,
+            out=None,
+        )
+    tested = check_trials(found.measured, setup.calibration.outcome.result, 0.05)
+    lines = verdict_lines(tested, "file:held.csv")
+    status = "PASS" if tested.passed else "FAIL"
+    assert lines[0].startswith(f"validation: {status} (4 trials of file:held.csv")
+    assert len(lines) == 1 + len(tested.reasons())
+    title, rows = chi_square_rows(tested)
+    assert title.endswith(f"each at level {tested.level:g}")
+    assert [row[0] for row in rows] == [t.name for t in tested.tests]
+    assert {row[-1] for row in rows} <= {"pass", "FAIL"}
+    assert all(len(row) == len(CHI_SQUARE_COLUMNS) for row in rows)
+
+
+def test_a_driven_validation_is_driven_once_then_tested_again(tmp_path: Path) -> None:
+    """``held_out`` of a driven path: the spec handed to the caller's drive,
+    then, the validation finished, its trials tested again without driving;
+    and the observables table of the calibration's trials."""
+    fakes.register_url_handlers()
+    calibration = tmp_path / "calibration"
+    spec = SessionSpec(
+        calibration,
+        "new",
+        ROBOT,
+        plan="k=1,l=0.5,n=3;k=0.5,l=0.5,n=3",
+        measure="fake",
+        port=PORT,
+        allow_few_trials=True,
+    )
+    with open_session(require(preflight(spec))) as opened:
+        ran = run_session(opened, start_check=_anywhere)
+    assert ran.status == "finished"
+    shown = observables_rows(ran.state.completed)  # design_observables.py: the wizard's table
+    assert shown[0][:2] == ("k=1 l=0.5 m turn", "3")
+    assert all(shown[0])
+    assert len(shown[0]) == len(OBSERVABLE_COLUMNS)
+    assert observables_rows(ran.state.completed[:1]) == [
+        ("k=1 l=0.5 m turn", "1", "needs 2 trials", "", "", "", "")
+    ]
+    setup = validation_setup(
+        calibration, "forth-back:1,1", None, frozenset(), ImportOptions(), 0.05
+    )
+    driven: list[SessionSpec] = []
+
+    def drive(spec: SessionSpec) -> ValidationTrials:
+        driven.append(spec)
+        with open_session(require(preflight(replace(spec, port=PORT, seed=1)))) as opened:
+            outcome = run_session(opened, start_check=_anywhere)
+        return trials_of_session(outcome.state, source=str(spec.folder))
+
+    options = {"trials": 2, "measure": "fake", "port": PORT, "out": None}
+    first = held_out(setup, calibration, ImportOptions(), drive, **options)  # type: ignore[arg-type]
+    assert (len(first.measured), first.reread) == (2, False)
+    assert first.folder == calibration / "validation" / driven[0].folder.name
+    assert driven[0].purpose == "validate"
+    again = held_out(setup, calibration, ImportOptions(), drive, **options)  # type: ignore[arg-type]
+    assert (len(again.measured), again.folder, again.reread) == (2, first.folder, True)
+    assert len(driven) == 1
