@@ -226,7 +226,7 @@ def chi_square_rows(tested: ValidationResult) -> tuple[str, list[tuple[str, ...]
     """The title and rows (:data:`CHI_SQUARE_COLUMNS`) of the table of the chi-square
     tests, each ``pass`` or ``FAIL``."""
     title = "chi-square tests (NEES: the spread; bias: the mean residual), each at level"
-    rows = [
+    rows: list[tuple[str, ...]] = [
         (
             t.name,
             f"{t.statistic:.4g}",
