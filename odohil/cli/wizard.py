@@ -67,25 +67,19 @@ from odohil.session.lifecycle import (
     PreflightCheck,
     PreflightFailed,
     SessionSpec,
-    default_session_folder,
     final_estimate,
     open_session,
     preflight,
 )
-from odohil.session.operator_dialogue import continue_with, guided_run
+from odohil.session.operator_dialogue import WIZARD_PLAN, continue_with, guided_run, wizard_spec
 from odohil.session.outcome_text import outcome_line
-from odohil.session.pose_sources import OPERATOR
 from odohil.session.run_text import MAY_STILL_MOVE, Said
 from odohil.session.signals import signal_of, signals_raise
 from odohil.session.state import CompletedTrial, SessionState
 from odohil.session.validation import PATH_SYNTAX
 from odohil.session.validation_wizard import (
     GuidedValidation,
-    guided_validation,
-    validation_target,
 )
-
-DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
 
 
 @dataclass
@@ -131,7 +125,7 @@ def wizard(
     robot_file: Annotated[Path | None, robot_option(" For new sessions.")] = None,
     plan_text: Annotated[
         str | None,
-        typer.Option("--plan", help=f'Designs and trial counts (default "{DEFAULT_PLAN}").'),
+        typer.Option("--plan", help=f'Designs and trial counts (default "{WIZARD_PLAN}").'),
     ] = None,
     session: Annotated[
         Path | None,
@@ -165,23 +159,20 @@ def wizard(
         MAY_STILL_MOVE,
     )
     interrupts.install()
-    folder = session or default_session_folder()
-    note = {"by": "wizard", "port": port}
-    spec = SessionSpec(
-        folder, "auto", robot_file, plan=plan_text, default_plan=DEFAULT_PLAN,
-        measure=OPERATOR, port=port, baud=baud, max_leg_m=max_leg_m, allow_turns=allow_turns,
-        allow_few_trials=True, note=note,
-    )  # fmt: skip
-    guide = None
     with bad_inputs():  # --validate, or a validation session continued by --session alone
-        target = validation_target(validate, path_text, trials, session)
-        if target is not None:
-            guide = guided_validation(
-                *target, trials, folder=session, robot_file=robot_file, port=port, baud=baud,
-                max_leg_m=max_leg_m, note=note,
-            )  # fmt: skip
+        spec, guide = wizard_spec(
+            session,
+            robot_file,
+            plan_text,
+            port,
+            baud,
+            max_leg_m,
+            allow_turns,
+            validate,
+            path_text,
+            trials,
+        )
     if guide is not None:
-        spec = guide.spec
         if not guide.trusted:
             print_refusal(console, guide.calibration.outcome, None, "nothing driven")
             raise typer.Exit(EXIT_UNTRUSTED)

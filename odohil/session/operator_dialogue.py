@@ -12,12 +12,14 @@ the session unfold: the motion bar, a voided attempt, the solved pose, then
 the live estimate by the one recipe (odohil/session/lifecycle), or a guided
 validation's test so far. The words are odohil/session/operator_words.py's;
 each line is a :class:`~odohil.session.run_text.Said`, its tone the screen's
-to render."""
+to render. Also which session the wizard guides (:func:`wizard_spec`) and
+the command that continues it (:func:`continue_with`)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Protocol
 
 from odohil import units
@@ -30,7 +32,14 @@ from odohil.session.engine import StartCheck
 from odohil.session.events import Finished, MotionStart, Solved, Void
 from odohil.session.interrupts import Interrupts
 from odohil.session.journal import Record
-from odohil.session.lifecycle import Opened, RunOutcome, final_estimate, run_session
+from odohil.session.lifecycle import (
+    Opened,
+    RunOutcome,
+    SessionSpec,
+    default_session_folder,
+    final_estimate,
+    run_session,
+)
 from odohil.session.operator_words import (
     END_MARKS,
     encoders_at_end,
@@ -43,6 +52,7 @@ from odohil.session.operator_words import (
     start_marks,
     trial_header,
 )
+from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
 from odohil.session.run_text import Said, Tone
 from odohil.session.sources import OperatorSource, TapeSource
@@ -50,7 +60,14 @@ from odohil.session.start_pose import StartPose, put_back
 from odohil.session.state import CompletedTrial, SessionState
 from odohil.session.tape_entry import INSTRUCTIONS, Reply, TapeEntries, parse_optional_metres
 from odohil.session.tape_records import TapeContext
-from odohil.session.validation_wizard import GuidedValidation
+from odohil.session.validation_wizard import (
+    GuidedValidation,
+    guided_validation,
+    validation_target,
+)
+
+WIZARD_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
+"""The plan of a new wizard session given no ``--plan``."""
 
 
 class OperatorScreen(Protocol):
@@ -268,3 +285,57 @@ def continue_with(opened: Opened, validation: GuidedValidation | None) -> str:
     if validation is not None:
         return validation.again
     return f"odohil wizard --session {opened.journal.folder}"
+
+
+def wizard_spec(
+    session: Path | None,
+    robot_file: Path | None,
+    plan: str | None,
+    port: str | None,
+    baud: int | None,
+    max_leg_m: float,
+    allow_turns: bool,
+    validate: Path | None,
+    path_text: str | None,
+    trials: int | None,
+) -> tuple[SessionSpec, GuidedValidation | None]:
+    """The session the wizard guides, measured with the operator's tape: a
+    calibration, new or continued in ``session`` (default
+    ``odohil-session-<time>`` here; ``plan`` else :data:`WIZARD_PLAN`, few
+    trials a design allowed); or, with ``validate`` (``--validate SESSION
+    --path PATH``, or a validation session ``session`` continues), a guided
+    validation of that calibration and the validation's spec.
+
+    Raises:
+        ParameterError, JournalError, RobotDescriptionError: a validation
+            that cannot be guided (:func:`~odohil.session.validation_wizard.guided_validation`).
+    """
+    note = {"by": "wizard", "port": port}
+    target = validation_target(validate, path_text, trials, session)
+    if target is not None:
+        guide = guided_validation(
+            *target,
+            trials,
+            folder=session,
+            robot_file=robot_file,
+            port=port,
+            baud=baud,
+            max_leg_m=max_leg_m,
+            note=note,
+        )
+        return guide.spec, guide
+    spec = SessionSpec(
+        session or default_session_folder(),
+        "auto",
+        robot_file,
+        plan=plan,
+        default_plan=WIZARD_PLAN,
+        measure=OPERATOR,
+        port=port,
+        baud=baud,
+        max_leg_m=max_leg_m,
+        allow_turns=allow_turns,
+        allow_few_trials=True,
+        note=note,
+    )
+    return spec, None
