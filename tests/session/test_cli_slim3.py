@@ -25,21 +25,26 @@ from odohil.science.paths import Design, Drivable
 from odohil.science.simulator import simulate
 from odohil.session.design_observables import OBSERVABLE_COLUMNS, observables_rows
 from odohil.session.design_tools import write_simulated_trials
-from odohil.session.events import Void, encode
+from odohil.session.events import Event, Void, encode
 from odohil.session.interrupts import Interrupts
 from odohil.session.journal import Record
 from odohil.session.lifecycle import SessionSpec, open_session, preflight, require, run_session
 from odohil.session.logs import ImportOptions
 from odohil.session.operator_dialogue import OperatorDialogue, OperatorWatch
-from odohil.session.operator_words import HERE
+from odohil.session.operator_words import HERE, measured_again, remeasured
 from odohil.session.outcome import estimate_source
 from odohil.session.outcome_text import number_text, parameter_rows
 from odohil.session.plan import parse_plan
-from odohil.session.run_text import Said
+from odohil.session.run_text import RunWatch, Said
 from odohil.session.start_pose import StartPose
-from odohil.session.state import CompletedTrial
+from odohil.session.state import CompletedTrial, SessionState
 from odohil.session.tape_entry import INSTRUCTIONS
-from odohil.session.tape_records import TapeContext, TapeReadings
+from odohil.session.tape_records import (
+    MeasurementsRejected,
+    Remeasured,
+    TapeContext,
+    TapeReadings,
+)
 from odohil.session.validation import ValidationTrials, check_trials, trials_of_session
 from odohil.session.validation_drive import (
     CHI_SQUARE_COLUMNS,
@@ -303,3 +308,49 @@ def test_a_driven_validation_is_driven_once_then_tested_again(tmp_path: Path) ->
     again = held_out(setup, calibration, ImportOptions(), drive, **options)  # type: ignore[arg-type]
     assert (len(again.measured), again.folder, again.reread) == (2, first.folder, True)
     assert len(driven) == 1
+
+
+@dataclass
+class View:
+    """A :class:`~odohil.session.run_text.RunView` that keeps what it was shown."""
+
+    shown: list[object] = field(default_factory=list)
+
+    def advance(self, completed: int) -> None:
+        self.shown.append(("advance", completed))
+
+    def describe(self, text: str) -> None:
+        self.shown.append(("describe", text))
+
+    def status(self, text: str) -> None:
+        self.shown.append(("status", text))
+
+    def say(self, *said: Said) -> None:
+        self.shown.extend(said)
+
+
+def _record(event: Event) -> Record:
+    kind, data = encode(event)
+    return Record(1, kind, 0.0, data)
+
+
+def test_what_a_run_shows_as_it_runs() -> None:
+    """odohil/session/run_text.py ``RunWatch``: the progress at each solved
+    trial, a voided attempt, distances taken again after a rejection, and the
+    slip check's summary of the trials whose doubted distance was taken again."""
+    view = View()
+    watch = RunWatch(view)
+    state = SessionState(header={})
+    watch.record(_record(Void(trial=2, attempt=1, reason="no answer")), state)
+    watch.record(_record(MeasurementsRejected(trial=3, attempt=1, reason="x")), state)
+    for trial, kept in ((5, False), (4, True), (5, False), (1, False)):
+        remeasure = Remeasured(trial=trial, attempt=1, index=0, reason="slip", kept=kept)
+        watch.record(_record(remeasure), state)
+    watch.show_start(StartPose(1, None, (0.0, 0.0, 0.0)))
+    assert view.shown == [
+        ("status", "trial 2 attempt 1 void: no answer"),
+        Said("plain", measured_again(3, "the simulated operator")),
+        ("status", f"robot: {StartPose(1, None, (0.0, 0.0, 0.0)).describe()}"),
+    ]
+    assert watch.summary() == [Said("plain", remeasured([5, 1], "the simulated operator"))]
+    assert RunWatch(View()).summary() == []
