@@ -35,6 +35,7 @@ from odohil.session.operator_words import HERE, measured_again, remeasured
 from odohil.session.outcome import estimate_source
 from odohil.session.outcome_text import number_text, parameter_rows
 from odohil.session.plan import parse_plan
+from odohil.session.robots import emulate_help, emulated_backends
 from odohil.session.run_text import RunWatch, Said
 from odohil.session.start_pose import StartPose
 from odohil.session.state import CompletedTrial, SessionState
@@ -354,3 +355,13 @@ def test_what_a_run_shows_as_it_runs() -> None:
     ]
     assert watch.summary() == [Said("plain", remeasured([5, 1], "the simulated operator"))]
     assert RunWatch(View()).summary() == []
+
+
+def test_emulate_help_names_each_fake_and_its_own_defaults() -> None:
+    """odohil/session/robots.py ``emulate_help``: from the backends' facts."""
+    shown = emulate_help()
+    for facts in emulated_backends():
+        assert f"{facts.name} (the {facts.label})" in shown.robot
+        assert f"{facts.name} {facts.default_baud:g}" in shown.baud
+        assert f"{facts.name} " in shown.time_scale
+    assert shown.robot.endswith("\\[robot] protocol is one of them.")
