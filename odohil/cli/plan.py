@@ -20,9 +20,9 @@ from odohil.cli.options import (
     parameters_option,
     robot_option,
     unit_system,
+    usage_errors,
 )
 from odohil.cli.render import table
-from odohil.errors import OdohilError
 from odohil.science.limits import RANGES
 from odohil.science.planner import (
     DEFAULT_FLOOR_M,
@@ -137,19 +137,12 @@ def plan(
     request = PlanRequest(params, targets, budget_m, budget_min, evaluate,
                           sigma_m, robot, min_trials_per_design, measure_s, speed, max_trials,
                           max_designs, max_leg_m, floor_m, compare, split)  # fmt: skip
-    try:
+    with usage_errors():
         planned = paths.plan_outcome(request)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc)) from exc
     if not isinstance(planned, PlannedExperiment):
         return _print_paths(planned, as_json, unit_system(units_choice))
-    if planned.turn_designs:
-        Console(stderr=True).print(
-            "[yellow]warning:[/] turn designs on a robot whose turns carry error "
-            f"({', '.join(planned.turn_designs)}): the estimate will not be trusted; "
-            "use variant=reverse",
-            soft_wrap=True,
-        )
+    if (warning := planned.turn_warning()) is not None:
+        Console(stderr=True).print(f"[yellow]warning:[/] {warning}", soft_wrap=True)
     if as_json:
         typer.echo(json.dumps(plan_document(planned), indent=2))
     else:

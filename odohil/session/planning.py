@@ -123,6 +123,15 @@ class PlannedExperiment:
             )
         return rows
 
+    def turn_warning(self) -> str | None:
+        """Why the plan's turn designs would not be trusted (None: it has none)."""
+        if not self.turn_designs:
+            return None
+        return (
+            f"turn designs on a robot whose turns carry error ({', '.join(self.turn_designs)}): "
+            "the estimate will not be trusted; use variant=reverse"
+        )
+
     def time_lines(self) -> list[str]:
         """The operator time and the free floor the plan needs."""
         plan, op = self.plan, self.plan.operator

@@ -34,7 +34,9 @@ from odohil.session.operator_dialogue import OperatorDialogue, OperatorWatch
 from odohil.session.operator_words import HERE, measured_again, remeasured
 from odohil.session.outcome import estimate_source
 from odohil.session.outcome_text import number_text, parameter_rows
+from odohil.session.path_planning import plan_outcome
 from odohil.session.plan import parse_plan
+from odohil.session.planning import PlannedExperiment, PlanRequest
 from odohil.session.robots import emulate_help, emulated_backends
 from odohil.session.run_text import RunWatch, Said
 from odohil.session.start_pose import StartPose
@@ -365,3 +367,20 @@ def test_emulate_help_names_each_fake_and_its_own_defaults() -> None:
         assert f"{facts.name} {facts.default_baud:g}" in shown.baud
         assert f"{facts.name} " in shown.time_scale
     assert shown.robot.endswith("\\[robot] protocol is one of them.")
+
+
+def test_a_plan_of_turn_designs_on_turns_with_error_is_warned_of() -> None:
+    """odohil/session/planning.py ``PlannedExperiment.turn_warning``: on the
+    Create 2 (turns carry error) a turn design is named; reverse ones are not."""
+    create2 = Path(robots_init).parent / "create2.toml"
+    for variant, named in (("turn", True), ("reverse", False)):
+        plan = f"k=1,l=1,n=10,variant={variant};k=0.5,l=1,n=10,variant={variant}"
+        planned = plan_outcome(PlanRequest(NOMAD150, {}, evaluate=plan, robot=create2))
+        assert isinstance(planned, PlannedExperiment)
+        warning = planned.turn_warning()
+        if named:
+            assert warning is not None
+            assert warning.startswith("turn designs on a robot whose turns carry error (k=1 l=1")
+            assert warning.endswith("the estimate will not be trusted; use variant=reverse")
+        else:
+            assert warning is None
