@@ -1,5 +1,5 @@
 """Rich renderings shared by the commands: an error, an estimate's outcome
-(verdict line and table), checks, live estimate, motion progress. The words
+(verdict line and table), checks, the live estimate. The words
 are the session's (odohil/session/outcome_text.py)."""
 
 from __future__ import annotations
@@ -11,20 +11,16 @@ from typing import Literal
 import typer
 from rich.console import Console, Group, RenderableType
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 from rich.table import Table
 from rich.text import Text
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
-from odohil.driver.odometry import OdometrySample
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
-from odohil.science.paths import Drivable
 from odohil.session.design_observables import OBSERVABLE_COLUMNS, observables_rows
 from odohil.session.lifecycle import PreflightCheck
-from odohil.session.motion_steps import MotionSteps, pose_text
 from odohil.session.outcome import EstimateOutcome
 from odohil.session.outcome_text import (
     export_refusal_lines,
@@ -209,46 +205,3 @@ def estimate_panel(
 def verdict_text(verdict: Verdict) -> Text:
     """The verdict line, green when trusted, else red."""
     return Text(verdict_line(verdict), style="green" if verdict.trusted else "bold red")
-
-
-class MotionProgress:
-    """A progress bar of one forth-and-back motion with the live encoder pose;
-    progress counts steps (legs and turns), each filled by how far its
-    distance or angle has been covered (odohil/session/motion_steps.py)."""
-
-    def __init__(self, console: Console) -> None:
-        self.console = console
-        self._progress: Progress | None = None
-        self._task: TaskID | None = None
-        self._steps: MotionSteps | None = None
-
-    def start(self, design: Drivable) -> None:
-        """Show a new motion of ``design``."""
-        self.stop()
-        self._steps = MotionSteps(design)
-        self._progress = Progress(
-            TextColumn("driving {task.description}"),
-            BarColumn(),
-            TextColumn("{task.percentage:>3.0f}%"),
-            TimeElapsedColumn(),
-            TextColumn("{task.fields[pose]}"),
-            console=self.console,
-            refresh_per_second=8,
-        )
-        total = len(self._steps.steps)
-        self._task = self._progress.add_task(design.label(), total=total, pose="")
-        self._progress.start()
-
-    def sample(self, sample: OdometrySample) -> None:
-        """An encoder sample of the motion."""
-        if self._steps is None or self._progress is None or self._task is None:
-            return
-        if (done := self._steps.sample(sample)) is not None:
-            self._progress.update(self._task, completed=done, pose=pose_text(sample))
-
-    def stop(self) -> None:
-        """Close the bar (idempotent)."""
-        if self._progress is not None:
-            self._progress.stop()
-        self._progress = None
-        self._task = None

@@ -14,15 +14,14 @@ the same ``--session`` continues where the journal stops.
 
 from __future__ import annotations
 
-import os
 import sys
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
+from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 
 from odohil import units
 from odohil.cli.exit_codes import (
@@ -46,7 +45,6 @@ from odohil.cli.options import (
     unit_system,
 )
 from odohil.cli.render import (
-    MotionProgress,
     bad_inputs,
     check_line,
     estimate_panel,
@@ -71,6 +69,7 @@ from odohil.session.lifecycle import (
     open_session,
     preflight,
 )
+from odohil.session.motion_steps import MotionSteps, pose_text
 from odohil.session.operator_dialogue import WIZARD_PLAN, continue_with, guided_run, wizard_spec
 from odohil.session.outcome_text import outcome_line
 from odohil.session.run_text import MAY_STILL_MOVE, Said
@@ -82,15 +81,20 @@ from odohil.session.validation_wizard import (
 )
 
 
-@dataclass
 class WizardScreen:
     """The wizard's console, the :class:`~odohil.session.operator_dialogue.OperatorScreen`
-    of the operator's dialogue: it renders lines and the motion bar, and reads
-    replies; what is said and asked when is odohil/session/operator_dialogue.py's."""
+    of the operator's dialogue: it renders lines, the motion bar and the live
+    panel, and reads replies; what is said and asked when is
+    odohil/session/operator_dialogue.py's. The motion bar counts a motion's
+    steps (legs and turns), each filled by how far its distance or angle has
+    been covered (odohil/session/motion_steps.py), beside the live encoder pose."""
 
-    console: Console
-    progress: MotionProgress
-    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
+    def __init__(
+        self, console: Console, system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
+    ) -> None:
+        self.console = console
+        self.system = system
+        self._bar: tuple[Progress, TaskID, MotionSteps] | None = None
 
     def ask(self, prompt: Said) -> str:
         """Show ``prompt`` and read the line typed (once input is ready)."""
@@ -103,15 +107,33 @@ class WizardScreen:
         print_said(self.console, *said, soft_wrap=not wrap)
 
     def motion(self, design: Drivable | None) -> None:
-        """Show the motion bar of ``design``; None closes it."""
+        """Show the motion bar of a new motion of ``design``; None closes it."""
+        if self._bar is not None:
+            self._bar[0].stop()
+            self._bar = None
         if design is None:
-            self.progress.stop()
-        else:
-            self.progress.start(design)
+            return
+        steps = MotionSteps(design)
+        progress = Progress(
+            TextColumn("driving {task.description}"),
+            BarColumn(),
+            TextColumn("{task.percentage:>3.0f}%"),
+            TimeElapsedColumn(),
+            TextColumn("{task.fields[pose]}"),
+            console=self.console,
+            refresh_per_second=8,
+        )
+        task = progress.add_task(design.label(), total=len(steps.steps), pose="")
+        progress.start()
+        self._bar = (progress, task, steps)
 
     def motion_sample(self, sample: OdometrySample) -> None:
-        """An encoder sample of the motion."""
-        self.progress.sample(sample)
+        """An encoder sample of the motion shown."""
+        if self._bar is None:
+            return
+        progress, task, steps = self._bar
+        if (done := steps.sample(sample)) is not None:
+            progress.update(task, completed=done, pose=pose_text(sample))
 
     def estimate(
         self, trials: Sequence[CompletedTrial], result: EstimateResult, remaining: int
@@ -152,12 +174,7 @@ def wizard(
     """Guide a calibration session beside the robot, one trial at a time
     (with --validate SESSION --path PATH: a validation of it)."""
     console = Console(highlight=False)
-    interrupts = Interrupts(
-        lambda text: os.write(2, text.encode()),
-        EXIT_INTERRUPTED,
-        EXIT_STOP_UNCONFIRMED,
-        MAY_STILL_MOVE,
-    )
+    interrupts = Interrupts.on_stderr(EXIT_INTERRUPTED, EXIT_STOP_UNCONFIRMED, MAY_STILL_MOVE)
     interrupts.install()
     with bad_inputs():  # --validate, or a validation session continued by --session alone
         spec, guide = wizard_spec(
@@ -220,7 +237,7 @@ def _run(
     guide: GuidedValidation | None,
 ) -> int:
     """The session with the operator's prompts and screens, to the final screen."""
-    screen = WizardScreen(console, MotionProgress(console), system)
+    screen = WizardScreen(console, system)
     outcome = guided_run(opened, screen, interrupts, guide)
     if outcome.status == "finished" and guide is not None:
         passed, lines = guide.final(outcome.state)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 from rich.console import Console
 
-from odohil.cli.render import MotionProgress, parameters_table
+from odohil.cli.render import parameters_table
 from odohil.cli.wizard import WizardScreen
 from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
 from odohil.session.interrupts import Interrupts
@@ -36,7 +36,7 @@ def test_live_estimate_after_the_last_trial_is_the_final_recipes(tmp_path: Path)
             tmp_path / "s", ROBOT_TOML, parse_plan("k=1,l=1,n=3"), measure="fake", settings={}
         )
         interrupts = Interrupts(print, 130, 4, "the robot may still be moving")
-        observer = OperatorWatch(WizardScreen(console, MotionProgress(console)), interrupts)
+        observer = OperatorWatch(WizardScreen(console), interrupts)
         with journal:
             final = SessionEngine(
                 journal,
