@@ -119,14 +119,31 @@ def drive(
     start_check: StartCheck | None = None,
     verdict: bool = True,
 ) -> RunOutcome:
-    """Pre-flight, open (``say`` tells what was opened), run with the progress
-    bar and say how the run ended (a finished one: its verdict line unless not
-    ``verdict``); what escapes exits by its status (:func:`session_exit_codes`)."""
+    """Pre-flight, open (``say`` tells what was opened), run with a progress
+    bar (what it shows: odohil/session/run_text.py :class:`RunWatch`;
+    afterwards the slip check's summary) and say how the run ended (a finished
+    one: its verdict line unless not ``verdict``); what escapes exits by its
+    status (:func:`session_exit_codes`). The bar shows a live E_R value only,
+    so the cheap incremental fit serves it instead of the recipe's robust fit
+    per trial where it can (``progress_estimator``: not for a plan with
+    general paths); the verdict is the recipe's (odohil/session/lifecycle)."""
     with session_exit_codes(console, json_out):
         prepared = prepared_or_exit(preflight(spec), console)
         with open_session(prepared, say_opened(console)) as opened:
             say(opened)
-            outcome = run_with_progress(console, opened, system, start_check)
+            bar = ProgressBar(console, opened.state)
+            watch = RunWatch(bar, system)
+            bar.progress.start()
+            try:
+                outcome = run_session(
+                    opened,
+                    watch,
+                    estimator=progress_estimator(opened),
+                    start_check=start_check or watch.show_start,
+                )
+            finally:
+                bar.progress.stop()
+                print_said(console, *watch.summary())
             if verdict or outcome.status != "finished":
                 report_run(console, outcome)
     return outcome
@@ -167,30 +184,6 @@ class ProgressBar:
     def say(self, *said: Said) -> None:
         """Lines above the bar."""
         print_said(self.progress.console, *said)
-
-
-def run_with_progress(
-    console: Console,
-    opened: Opened,
-    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
-    start_check: StartCheck | None = None,
-) -> RunOutcome:
-    """Run the session with a progress bar (what it shows: odohil/session/run_text.py
-    :class:`RunWatch`), afterwards the slip check's summary. The bar shows a
-    live E_R value only, so the cheap incremental fit serves it instead of the
-    recipe's robust fit per trial where it can (``progress_estimator``: not for
-    a plan with general paths); the verdict is the recipe's (odohil/session/lifecycle)."""
-    bar = ProgressBar(console, opened.state)
-    watch = RunWatch(bar, system)
-    estimator = progress_estimator(opened)
-    bar.progress.start()
-    try:
-        return run_session(
-            opened, watch, estimator=estimator, start_check=start_check or watch.show_start
-        )
-    finally:
-        bar.progress.stop()
-        print_said(console, *watch.summary())
 
 
 def report_run(
