@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import fakes
@@ -30,13 +31,17 @@ from odohil.session.interrupts import Interrupts
 from odohil.session.journal import Record
 from odohil.session.lifecycle import SessionSpec, open_session, preflight, require, run_session
 from odohil.session.logs import ImportOptions
+from odohil.session.logs.csv_log import write_csv_log
+from odohil.session.logs.recording import Recording
 from odohil.session.operator_dialogue import OperatorDialogue, OperatorWatch
 from odohil.session.operator_words import HERE, measured_again, remeasured
 from odohil.session.outcome import estimate_source
 from odohil.session.outcome_text import number_text, parameter_rows
 from odohil.session.path_planning import plan_outcome
+from odohil.session.path_trial_file import read_path_trials
 from odohil.session.plan import parse_plan
 from odohil.session.planning import PlannedExperiment, PlanRequest
+from odohil.session.recording_import import import_recording
 from odohil.session.robots import emulate_help, emulated_backends
 from odohil.session.run_text import RunWatch, Said
 from odohil.session.start_pose import StartPose
@@ -56,6 +61,7 @@ from odohil.session.validation_drive import (
     validation_setup,
     verdict_lines,
 )
+from tests.logs.synth import synth_log, varied_motions
 from tests.session.helpers import description
 
 ROBOT = Path(robots_init).parent / "nomad150.toml"
@@ -384,3 +390,25 @@ def test_a_plan_of_turn_designs_on_turns_with_error_is_warned_of() -> None:
             assert warning.endswith("the estimate will not be trusted; use variant=reverse")
         else:
             assert warning is None
+
+
+def test_an_imported_recording_is_written_and_summed_up(tmp_path: Path) -> None:
+    """odohil/session/recording_import.py ``import_recording``: the trials
+    written, their rows per family and direction, the distance driven."""
+    log = synth_log(varied_motions())
+    path = tmp_path / "log.csv"
+    lines = np.arange(2, 2 + len(log.t_s))
+    write_csv_log(path, Recording("s", log.t_s, log.odometry, log.truth, lines))
+    create2 = Path(robots_init).parent / "create2.toml"
+    out = tmp_path / "trials.jsonl"
+    summary = import_recording([path], create2, ImportOptions(), out)
+    assert summary.title == "4 trials from 1 log path, read as csv"
+    assert [row[:3] for row in summary.rows] == [
+        ("straight", "forward", "1"),
+        ("spin", "cw", "1"),
+        ("straight", "backward", "1"),
+        ("arc", "ccw", "1"),
+    ]
+    assert summary.rows[0][3] == "1.000"
+    total = sum(t.path.distance_m for t in read_path_trials(out))
+    assert summary.wrote == f"wrote 4 trials ({total:.3f} m driven) to {out}"
