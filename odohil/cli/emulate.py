@@ -15,9 +15,10 @@ from typing import Annotated
 
 import typer
 
-from odohil.cli.options import Parameters, option, parameters_option, robot_protocol, usage_errors
+from odohil.cli.options import Parameters, option, parameters_option, usage_errors
 from odohil.science.robot_description import DEFAULT_PROTOCOL
 from odohil.session.line import check_socket_path
+from odohil.session.robot_file import robot_protocol
 from odohil.session.robots import emulate_help, emulated_line, emulator
 
 _FAULT_HELP = (
@@ -61,9 +62,8 @@ def emulate(
         with usage_errors("--truth-socket"):
             check_socket_path(truth_socket)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
-    protocol = robot_protocol(robot)
     with usage_errors("--robot"):
-        facts, hooks, serve = emulator(protocol)
+        facts, hooks, serve = emulator(robot_protocol(robot))
     with usage_errors("--baud"):
         baud, time_scale = emulated_line(facts, hooks, baud, time_scale)
     paper = params.to_paper_units()
