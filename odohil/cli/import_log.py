@@ -12,9 +12,9 @@ from rich.console import Console
 
 from odohil.cli.options import robot_option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_inputs, table
+from odohil.cli.render import bad_inputs, drawn
 from odohil.session.logs import ImportOptions
-from odohil.session.recording_import import SUMMARY_COLUMNS, import_recording
+from odohil.session.recording_import import import_recording
 
 
 @source_options(selection=False, exclude=False)
@@ -47,5 +47,5 @@ def import_log(
     console = Console()
     with bad_inputs(Console(stderr=True)):
         summary = import_recording(logs, robot, recording, out)
-    console.print(table(summary.title, SUMMARY_COLUMNS, ("family", "direction"), rows=summary.rows))
+    console.print(drawn(summary.table))
     console.print(summary.wrote, highlight=False)

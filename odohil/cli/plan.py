@@ -22,7 +22,7 @@ from odohil.cli.options import (
     unit_system,
     usage_errors,
 )
-from odohil.cli.render import table
+from odohil.cli.render import drawn
 from odohil.science.limits import RANGES
 from odohil.science.planner import (
     DEFAULT_FLOOR_M,
@@ -47,15 +47,10 @@ Metres = Annotated[float | None, option("--budget-m", bound="budget_m", help="Mo
 
 def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
     console = Console()
-    designs = ("k", "l (m)", "variant", "trials", "metres", "minutes")
-    console.print(table(planned.title, designs, rows=planned.design_rows()))
-    columns = ("parameter", "prior", "stderr", "target", "unit")
-    title = "Expected standard errors (Cramer-Rao)"
-    rows = planned.error_rows(system)
-    errors = table(title, columns, ("parameter", "unit"), planned.measurement, rows=rows)
+    console.print(drawn(planned.designs_table()))
     for text in planned.time_lines():
         console.print(text, highlight=False)
-    console.print(errors)
+    console.print(drawn(planned.errors_table(system)))
     console.print(planned.verdict(), highlight=False)
     for note in planned.plan.notes:
         console.print(f"[yellow]note:[/yellow] {note}", highlight=False)
@@ -65,10 +60,7 @@ def _print_paths(found: paths.PathsOutcome, as_json: bool, system: units.UnitSys
     if as_json:
         return typer.echo(json.dumps(paths.paths_document(found), indent=2))
     if isinstance(found, paths.ScoredPaths):
-        columns, left = ("parameter", "stderr", "target", "unit"), ("parameter", "unit")
-        Console().print(
-            table(found.title, columns, left, found.measurement, rows=found.rows(system))
-        )
+        Console().print(drawn(found.table(system)))
     for line in paths.paths_lines(found):
         Console().print(line, highlight=False, markup=False)
 

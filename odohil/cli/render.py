@@ -5,7 +5,7 @@ are the session's (odohil/session/outcome_text.py)."""
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Collection, Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from typing import Literal
 
 import typer
@@ -19,7 +19,7 @@ from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
-from odohil.session.design_observables import OBSERVABLE_COLUMNS, observables_rows
+from odohil.session.design_observables import observables_table
 from odohil.session.lifecycle import PreflightCheck
 from odohil.session.outcome import EstimateOutcome
 from odohil.session.outcome_text import (
@@ -27,32 +27,24 @@ from odohil.session.outcome_text import (
     more_trials_lines,
     outcome_line,
     outcome_notes,
-    parameter_rows,
+    parameters_text,
     refusal_line,
     verdict_line,
 )
 from odohil.session.run_text import Said, error_said
 from odohil.session.state import CompletedTrial
+from odohil.session.table_text import TableText
 
 
-def table(
-    title: str,
-    columns: Sequence[str],
-    left: Sequence[str] = (),
-    caption: str | None = None,
-    justify: Literal["left", "center", "right"] | None = None,
-    rows: Iterable[Sequence[str]] = (),
-    flagged: Collection[str] = (),
-) -> Table:
-    """A table of ``columns`` holding ``rows``, right-aligned (numbers) but for
-    those in ``left``, a cell that is one of the words ``flagged`` (a failed
-    check: ``FAIL``, ``NO``) in red; ``justify``: where the title stands
-    (default: centred)."""
-    made = Table(title=title, caption=caption, title_justify=justify or "center")
-    for column in columns:
-        made.add_column(column, justify="left" if column in left else "right")
-    for row in rows:
-        made.add_row(*(f"[red]{cell}[/]" if cell in flagged else cell for cell in row))
+def drawn(text: TableText) -> Table:
+    """A table of the session's words (:class:`~odohil.session.table_text.TableText`):
+    numbers right-aligned, words left, a flagged cell (a failed check) in red."""
+    justify: Literal["left", "center"] = "left" if text.title_left else "center"
+    made = Table(title=text.title, caption=text.caption, title_justify=justify)
+    for column in text.columns:
+        made.add_column(column, justify="left" if column in text.words else "right")
+    for row in text.rows:
+        made.add_row(*(f"[red]{cell}[/]" if cell in text.flagged else cell for cell in row))
     return made
 
 
@@ -165,17 +157,8 @@ def parameters_table(
     title: str | None = None,
     truth: Mapping[str, float] | None = None,
 ) -> Table:
-    """The four parameters with standard errors and 95 % intervals in
-    ``system``'s units; with ``truth`` (SI values by name) a truth column in
-    the same units and whether the interval holds it. The title: ``title
-    (method, N trials)``, else ``Estimate after N trials``."""
-    columns = ["parameter", "estimate", "std. error", "95 % interval", "unit"]
-    if truth is not None:
-        columns += ["truth", "truth inside"]
-    trials = units.plural(result.n_trials, "trial")
-    title = f"{title} ({result.method}, {trials})" if title else f"Estimate after {trials}"
-    rows = parameter_rows(result, system, truth)
-    return table(title, columns, ("parameter", "unit"), justify="left", rows=rows, flagged=("NO",))
+    """The parameters table (odohil/session/outcome_text.py :func:`parameters_text`)."""
+    return drawn(parameters_text(result, system, title, truth))
 
 
 def estimate_panel(
@@ -188,13 +171,7 @@ def estimate_panel(
     needed (green once the target precision is reached), model check, verdict."""
     style = "green" if result.sufficiency.sufficient else "yellow"
     return Group(
-        table(
-            "Observables per design",
-            OBSERVABLE_COLUMNS,
-            ("design",),
-            justify="left",
-            rows=observables_rows(trials),
-        ),
+        drawn(observables_table(trials)),
         parameters_table(result, system),
         Text("\n".join(more_trials_lines(result, remaining)), style=style),
         Text(f"Model check: {result.model_check.verdict}"),

@@ -16,7 +16,7 @@ from odohil import units
 from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED, exit_for_run
 from odohil.cli.options import JsonOption, option, robot_option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, bad_inputs, print_refusal, print_said, table
+from odohil.cli.render import bad_input, bad_inputs, drawn, print_refusal, print_said
 from odohil.cli.session_view import drive
 from odohil.errors import (
     JournalError,
@@ -37,8 +37,7 @@ from odohil.session.validation import (
     trials_of_session,
 )
 from odohil.session.validation_drive import (
-    CHI_SQUARE_COLUMNS,
-    chi_square_rows,
+    chi_square_table,
     held_out,
     validation_setup,
     verdict_lines,
@@ -155,8 +154,7 @@ def _print(data: dict[str, Any], tested: ValidationResult, measured: ValidationT
     out = Console(width=max(100, Console().width))
     for line in verdict_lines(tested, data["path"]):
         out.print(line, highlight=False)
-    title, rows = chi_square_rows(tested)
-    out.print(table(title, CHI_SQUARE_COLUMNS, ("test", "result"), rows=rows, flagged=("FAIL",)))
+    out.print(drawn(chi_square_table(tested)))
     out.print(f"parameter uncertainty: {data['verdict']['parameter_uncertainty']}", highlight=False)
     if measured.left_out:
         out.print(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")

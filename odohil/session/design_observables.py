@@ -11,6 +11,7 @@ from odohil import units
 from odohil.science.grouping import by_design
 from odohil.science.observables import Observables, observables
 from odohil.session.state import CompletedTrial
+from odohil.session.table_text import TableText
 
 
 def observables_by_design(
@@ -32,6 +33,13 @@ def observables_by_design(
 
 OBSERVABLE_COLUMNS = ("design", "n", "phi1 deg", "phi2 deg^2", "phi3 mm", "phi4 mm", "phi5 mm^2")
 """The columns of :func:`observables_rows`."""
+
+
+def observables_table(trials: Sequence[CompletedTrial]) -> TableText:
+    """The wizard's table of observables per design (:func:`observables_rows`)."""
+    rows = observables_rows(trials)
+    title = "Observables per design"
+    return TableText(title, OBSERVABLE_COLUMNS, rows, ("design",), title_left=True)
 
 
 def observables_rows(trials: Sequence[CompletedTrial]) -> list[tuple[str, ...]]:

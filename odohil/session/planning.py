@@ -28,6 +28,7 @@ from odohil.science.targets import TARGET_FRACTIONS
 from odohil.session.plan import parse_plan
 from odohil.session.preflight import default_variant, turn_designs
 from odohil.session.robot_file import load_robot_description
+from odohil.session.table_text import TableText
 
 DEFAULT_SIGMA_M = 0.001
 """Tape sigma of one floor-mark distance without a robot description, m."""
@@ -103,6 +104,18 @@ class PlannedExperiment:
             row = (f"{d.k:g}", f"{d.l_m:g}", d.variant, str(item.n_trials), f"{item.distance_m:g}")
             rows.append((*row, minutes))
         return rows
+
+    def designs_table(self) -> TableText:
+        """The table of :meth:`design_rows` under the plan's title."""
+        designs = ("k", "l (m)", "variant", "trials", "metres", "minutes")
+        return TableText(self.title, designs, self.design_rows())
+
+    def errors_table(self, system: units.UnitSystem) -> TableText:
+        """The table of :meth:`error_rows`, the measurement below it."""
+        columns = ("parameter", "prior", "stderr", "target", "unit")
+        title = "Expected standard errors (Cramer-Rao)"
+        rows = self.error_rows(system)
+        return TableText(title, columns, rows, ("parameter", "unit"), self.measurement)
 
     def error_rows(self, system: units.UnitSystem) -> list[tuple[str, ...]]:
         """Per parameter in ``system``'s units: name, prior, expected standard

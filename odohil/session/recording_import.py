@@ -12,9 +12,7 @@ from odohil import units
 from odohil.session.logs import ImportOptions, guess_format, read_recording
 from odohil.session.path_trial_file import summary_rows, write_path_trials
 from odohil.session.robot_file import load_robot_description
-
-SUMMARY_COLUMNS = ("family", "direction", "trials", "distance (m)")
-"""The columns of :attr:`ImportSummary.rows`."""
+from odohil.session.table_text import TableText
 
 
 @dataclass(frozen=True)
@@ -22,14 +20,12 @@ class ImportSummary:
     """What was imported.
 
     Attributes:
-        title: ``12 trials from 2 log paths, read as tum``.
-        rows: per path family and direction: the trials and the distance
-            driven, m (:data:`SUMMARY_COLUMNS`).
+        table: ``12 trials from 2 log paths, read as tum``: per path family
+            and direction the trials and the distance driven, m.
         wrote: ``wrote 12 trials (20.965 m driven) to FILE``.
     """
 
-    title: str
-    rows: list[tuple[str, str, str, str]]
+    table: TableText
     wrote: str
 
 
@@ -54,4 +50,6 @@ def import_recording(
     ]
     total = sum(trial.path.distance_m for trial in trials)
     wrote = f"wrote {units.plural(written, 'trial')} ({total:.3f} m driven) to {out}"
-    return ImportSummary(f"{title}, read as {read_as}", rows, wrote)
+    columns = ("family", "direction", "trials", "distance (m)")
+    table = TableText(f"{title}, read as {read_as}", columns, rows, ("family", "direction"))
+    return ImportSummary(table, wrote)

@@ -5,7 +5,7 @@ options a trial file does not use, the finished validation session it tests
 again without driving, the session spec of one it drives, and the held-out
 trials it tests (:func:`held_out`), read from a file or driven by the
 caller; and the lines that tell the verdict (:func:`verdict_lines`,
-:func:`chi_square_rows`)."""
+:func:`chi_square_table`)."""
 
 from __future__ import annotations
 
@@ -22,6 +22,7 @@ from odohil.session.logs import ImportOptions
 from odohil.session.plan import Plan
 from odohil.session.robot_file import load_robot_description
 from odohil.session.state import load_session
+from odohil.session.table_text import TableText
 from odohil.session.validation import (
     Calibration,
     ValidationPath,
@@ -218,13 +219,8 @@ def verdict_lines(tested: ValidationResult, path: str) -> list[str]:
     return [text, *(f"  {reason}" for reason in tested.reasons())]
 
 
-CHI_SQUARE_COLUMNS = ("test", "statistic", "dof", "p-value", "threshold", "result")
-"""The columns of :func:`chi_square_rows`."""
-
-
-def chi_square_rows(tested: ValidationResult) -> tuple[str, list[tuple[str, ...]]]:
-    """The title and rows (:data:`CHI_SQUARE_COLUMNS`) of the table of the chi-square
-    tests, each ``pass`` or ``FAIL``."""
+def chi_square_table(tested: ValidationResult) -> TableText:
+    """The table of the chi-square tests, each ``pass`` or ``FAIL``."""
     title = "chi-square tests (NEES: the spread; bias: the mean residual), each at level"
     rows: list[tuple[str, ...]] = [
         (
@@ -237,4 +233,6 @@ def chi_square_rows(tested: ValidationResult) -> tuple[str, list[tuple[str, ...]
         )
         for t in tested.tests
     ]
-    return f"{title} {tested.level:g}", rows
+    columns = ("test", "statistic", "dof", "p-value", "threshold", "result")
+    title = f"{title} {tested.level:g}"
+    return TableText(title, columns, rows, ("test", "result"), flagged=("FAIL",))

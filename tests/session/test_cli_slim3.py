@@ -19,13 +19,20 @@ import fakes
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import InconsistentMeasurementError, MeasurementError, ParameterError
 from odohil.robots import __file__ as robots_init
+from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.estimators import EstimateResult
 from odohil.science.floor_marks import distance_labels
 from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design, Drivable
 from odohil.science.simulator import simulate
 from odohil.session.design_observables import OBSERVABLE_COLUMNS, observables_rows
-from odohil.session.design_tools import write_simulated_trials
+from odohil.session.design_tables import covariance_table, predict_table
+from odohil.session.design_tools import (
+    named_path,
+    path_moments,
+    predict_rows,
+    write_simulated_trials,
+)
 from odohil.session.events import Event, Void, encode
 from odohil.session.interrupts import Interrupts
 from odohil.session.journal import Record
@@ -36,8 +43,8 @@ from odohil.session.logs.recording import Recording
 from odohil.session.operator_dialogue import OperatorDialogue, OperatorWatch
 from odohil.session.operator_words import HERE, measured_again, remeasured
 from odohil.session.outcome import estimate_source
-from odohil.session.outcome_text import number_text, parameter_rows
-from odohil.session.path_planning import plan_outcome
+from odohil.session.outcome_text import number_text, parameter_rows, parameters_text
+from odohil.session.path_planning import ScoredPaths, plan_outcome
 from odohil.session.path_trial_file import read_path_trials
 from odohil.session.plan import parse_plan
 from odohil.session.planning import PlannedExperiment, PlanRequest
@@ -55,8 +62,7 @@ from odohil.session.tape_records import (
 )
 from odohil.session.validation import ValidationTrials, check_trials, trials_of_session
 from odohil.session.validation_drive import (
-    CHI_SQUARE_COLUMNS,
-    chi_square_rows,
+    chi_square_table,
     held_out,
     validation_setup,
     verdict_lines,
@@ -266,11 +272,13 @@ def test_a_file_validation_is_set_up_read_and_told(tmp_path: Path) -> None:
     status = "PASS" if tested.passed else "FAIL"
     assert lines[0].startswith(f"validation: {status} (4 trials of file:held.csv")
     assert len(lines) == 1 + len(tested.reasons())
-    title, rows = chi_square_rows(tested)
+    shown = chi_square_table(tested)
+    title, rows = shown.title, shown.rows
     assert title.endswith(f"each at level {tested.level:g}")
     assert [row[0] for row in rows] == [t.name for t in tested.tests]
     assert {row[-1] for row in rows} <= {"pass", "FAIL"}
-    assert all(len(row) == len(CHI_SQUARE_COLUMNS) for row in rows)
+    assert all(len(row) == len(shown.columns) for row in rows)
+    assert (shown.words, shown.flagged) == (("test", "result"), ("FAIL",))
 
 
 def test_a_driven_validation_is_driven_once_then_tested_again(tmp_path: Path) -> None:
@@ -402,13 +410,52 @@ def test_an_imported_recording_is_written_and_summed_up(tmp_path: Path) -> None:
     create2 = Path(robots_init).parent / "create2.toml"
     out = tmp_path / "trials.jsonl"
     summary = import_recording([path], create2, ImportOptions(), out)
-    assert summary.title == "4 trials from 1 log path, read as csv"
-    assert [row[:3] for row in summary.rows] == [
+    assert summary.table.title == "4 trials from 1 log path, read as csv"
+    assert [row[:3] for row in summary.table.rows] == [
         ("straight", "forward", "1"),
         ("spin", "cw", "1"),
         ("straight", "backward", "1"),
         ("arc", "ccw", "1"),
     ]
-    assert summary.rows[0][3] == "1.000"
+    assert summary.table.rows[0][3] == "1.000"
     total = sum(t.path.distance_m for t in read_path_trials(out))
     assert summary.wrote == f"wrote 4 trials ({total:.3f} m driven) to {out}"
+
+
+def test_the_tables_commands_print_are_the_sessions_words(tmp_path: Path) -> None:
+    """odohil/session/table_text.py: predict's and covariance's tables
+    (design_tables.py), plan's (planning.py, path_planning.py) and the
+    parameters table (outcome_text.py ``parameters_text``): title, column heads
+    as wide as every row, the columns of words."""
+    design = Design(1, 2.0)
+    means = forth_and_back_means(design, NOMAD150)
+    predicted = predict_table(design, NOMAD150, means, "paper")
+    assert predicted.title == f"Expected observables, forth and back {design.label()} (rho = 4 m)"
+    assert predicted.rows == predict_rows(means)
+    assert predicted.caption is not None
+    assert predicted.caption.endswith(f"(1+E_T = {1.0 + NOMAD150.e_t:g})")
+    path = named_path("square", None, None, "turn", 1.0)
+    exact, sim = path_moments(path, NOMAD150, 50, 3, 0.05)
+    moments = covariance_table(path, NOMAD150, exact, sim, "si")
+    assert moments.columns[-1] == "simulated (50 trials) +- MC se"
+    assert moments.words == ("quantity",)
+    request = PlanRequest(NOMAD150, {"E_R": 0.01}, evaluate="k=1,l=6,n=30;k=20,l=0.5,n=30")
+    planned = plan_outcome(request)
+    assert isinstance(planned, PlannedExperiment)
+    assert planned.designs_table().rows == planned.design_rows()
+    errors = planned.errors_table("si")
+    assert (errors.caption, errors.rows) == (planned.measurement, planned.error_rows("si"))
+    evaluate = "path=square:1,cw,n=10;path=square:1,ccw,n=10"
+    create2 = Path(robots_init).parent / "create2.toml"
+    scored = plan_outcome(PlanRequest(NOMAD150, {}, evaluate=evaluate, robot=create2))
+    assert isinstance(scored, ScoredPaths)
+    assert scored.table("paper").rows == scored.rows("paper")
+    result = estimate_source([_trial_file(tmp_path, Design(1, 2.0), 12, 2)]).result
+    assert result is not None
+    shown = parameters_text(result, "si", "estimate")
+    assert shown.title == f"estimate ({result.method}, 12 trials)"
+    assert (shown.title_left, shown.flagged) == (True, ("NO",))
+    assert parameters_text(result).title == "Estimate after 12 trials"
+    for table in (predicted, moments, planned.designs_table(), errors, shown):
+        assert all(len(row) == len(table.columns) for row in table.rows)
+        assert set(table.words) <= set(table.columns)
