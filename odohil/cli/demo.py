@@ -25,7 +25,6 @@ from odohil.cli.options import (
 from odohil.cli.session_view import drive, finish
 from odohil.session.demo import demo_session
 from odohil.session.lifecycle import Opened
-from odohil.session.outcome_text import parameters_line
 from odohil.session.robot_file import robot_protocol
 
 _ROBOT_HELP = (
@@ -59,11 +58,9 @@ def demo(
     with tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
         with usage_errors("--robot"):
             made = demo_session(robot_protocol(robot_name), seed, session or Path(tmp) / "session")
-        truth = made.truth
 
         def say(opened: Opened) -> None:
-            fake = f"fake robot at {made.port}; its true parameters"
-            console.print(f"{fake}: {parameters_line(truth, system)}", highlight=False)
+            console.print(made.heading(system), highlight=False)
 
         outcome = drive(console, made.spec, system, json_out, say)
-    finish(outcome, json_out, console, extra=made.truth_document(), truth=truth, system=system)
+    finish(outcome, json_out, console, extra=made.truth_document(), truth=made.truth, system=system)

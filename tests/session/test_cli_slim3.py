@@ -25,6 +25,7 @@ from odohil.science.floor_marks import distance_labels
 from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design, Drivable
 from odohil.science.simulator import simulate
+from odohil.session.demo import demo_session
 from odohil.session.design_observables import OBSERVABLE_COLUMNS, observables_rows
 from odohil.session.design_tables import covariance_table, predict_table
 from odohil.session.design_tools import (
@@ -43,7 +44,12 @@ from odohil.session.logs.recording import Recording
 from odohil.session.operator_dialogue import OperatorDialogue, OperatorWatch
 from odohil.session.operator_words import HERE, measured_again, remeasured
 from odohil.session.outcome import estimate_source
-from odohil.session.outcome_text import number_text, parameter_rows, parameters_text
+from odohil.session.outcome_text import (
+    number_text,
+    parameter_rows,
+    parameters_line,
+    parameters_text,
+)
 from odohil.session.path_planning import ScoredPaths, plan_outcome
 from odohil.session.path_trial_file import read_path_trials
 from odohil.session.plan import parse_plan
@@ -459,3 +465,13 @@ def test_the_tables_commands_print_are_the_sessions_words(tmp_path: Path) -> Non
     for table in (predicted, moments, planned.designs_table(), errors, shown):
         assert all(len(row) == len(table.columns) for row in table.rows)
         assert set(table.words) <= set(table.columns)
+
+
+def test_the_demo_says_where_its_fake_is_and_its_truth(tmp_path: Path) -> None:
+    """odohil/session/demo.py ``Demo.heading``, in either unit system."""
+    demo = demo_session("nomad150", 1, tmp_path / "demo")
+    for system in ("paper", "si"):
+        truth = parameters_line(demo.truth, system)  # type: ignore[arg-type]
+        assert demo.heading(system) == (  # type: ignore[arg-type]
+            f"fake robot at {demo.port}; its true parameters: {truth}"
+        )
