@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import fakes
+from odohil import units
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import InconsistentMeasurementError, MeasurementError, ParameterError
 from odohil.robots import __file__ as robots_init
@@ -470,8 +471,7 @@ def test_the_tables_commands_print_are_the_sessions_words(tmp_path: Path) -> Non
 def test_the_demo_says_where_its_fake_is_and_its_truth(tmp_path: Path) -> None:
     """odohil/session/demo.py ``Demo.heading``, in either unit system."""
     demo = demo_session("nomad150", 1, tmp_path / "demo")
-    for system in ("paper", "si"):
-        truth = parameters_line(demo.truth, system)  # type: ignore[arg-type]
-        assert demo.heading(system) == (  # type: ignore[arg-type]
-            f"fake robot at {demo.port}; its true parameters: {truth}"
-        )
+    systems: tuple[units.UnitSystem, ...] = ("paper", "si")
+    for system in systems:
+        truth = parameters_line(demo.truth, system)
+        assert demo.heading(system) == f"fake robot at {demo.port}; its true parameters: {truth}"
