@@ -5,7 +5,7 @@ are the session's (odohil/session/outcome_text.py)."""
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from typing import Literal
 
 import typer
@@ -139,7 +139,7 @@ def print_outcome(
     notes and refusals, the Gaussian fit beside, and the trials left out."""
     print_lines(out, [outcome_line(outcome)])
     if (result := outcome.result) is not None:
-        out.print(parameters_table(result, system, title))
+        out.print(drawn(parameters_text(result, system, title)))
         checks = [f"model check: {result.model_check.verdict}"]
         print_lines(out, [*checks, f"sufficiency: {result.sufficiency.verdict}"])
         print_lines(out, outcome_notes(outcome, system))
@@ -149,16 +149,6 @@ def check_line(check: PreflightCheck) -> Text:
     """``[ok] name: detail`` (or ``[FAIL]``), coloured."""
     mark = Text("[ok]  ", style="green") if check.passed else Text("[FAIL] ", style="bold red")
     return Text.assemble(mark, (check.name, "bold"), ": ", check.message)
-
-
-def parameters_table(
-    result: EstimateResult,
-    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
-    title: str | None = None,
-    truth: Mapping[str, float] | None = None,
-) -> Table:
-    """The parameters table (odohil/session/outcome_text.py :func:`parameters_text`)."""
-    return drawn(parameters_text(result, system, title, truth))
 
 
 def estimate_panel(
@@ -172,7 +162,7 @@ def estimate_panel(
     style = "green" if result.sufficiency.sufficient else "yellow"
     return Group(
         drawn(observables_table(trials)),
-        parameters_table(result, system),
+        drawn(parameters_text(result, system)),
         Text("\n".join(more_trials_lines(result, remaining)), style=style),
         Text(f"Model check: {result.model_check.verdict}"),
         verdict_text(result.verdict),

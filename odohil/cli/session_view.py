@@ -24,7 +24,7 @@ from odohil.cli.exit_codes import (
     exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.render import bad_input, parameters_table, print_said, print_verdict
+from odohil.cli.render import bad_input, drawn, print_said, print_verdict
 from odohil.errors import (
     JournalError,
     OdohilError,
@@ -51,6 +51,7 @@ from odohil.session.lifecycle import (
     run_session,
 )
 from odohil.session.lifecycle.opening import CheckSeen
+from odohil.session.outcome_text import parameters_text
 from odohil.session.robots import fake_url_schemes
 from odohil.session.run_text import MAY_STILL_MOVE, RunWatch, Said, error_said, run_ended
 from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
@@ -218,7 +219,7 @@ def finish(
     if json_out:
         typer.echo(json.dumps({**outcome.to_json_dict(code), **(extra or {})}))
     elif result is not None:
-        table = parameters_table(result, system, "estimate", truth)
+        table = drawn(parameters_text(result, system, "estimate", truth))
         Console(width=max(110, Console().width)).print(table)
     if code:
         raise typer.Exit(code)

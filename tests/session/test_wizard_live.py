@@ -11,12 +11,13 @@ from pathlib import Path
 
 from rich.console import Console
 
-from odohil.cli.render import parameters_table
+from odohil.cli.render import drawn
 from odohil.cli.wizard import WizardScreen
 from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
 from odohil.session.interrupts import Interrupts
 from odohil.session.lifecycle import final_estimate
 from odohil.session.operator_dialogue import OperatorWatch
+from odohil.session.outcome_text import parameters_text
 from odohil.session.plan import parse_plan
 from odohil.session.sources import FakeTruthSource, TapeSource
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
@@ -50,4 +51,4 @@ def test_live_estimate_after_the_last_trial_is_the_final_recipes(tmp_path: Path)
     assert outcome.result is not None
     shown = out.getvalue()
     last = shown.rsplit("Trial 3 solved", 1)[1]
-    assert _text(parameters_table(outcome.result)) in last
+    assert _text(drawn(parameters_text(outcome.result))) in last
