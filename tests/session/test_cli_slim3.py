@@ -42,7 +42,12 @@ from odohil.session.lifecycle import SessionSpec, open_session, preflight, requi
 from odohil.session.logs import ImportOptions
 from odohil.session.logs.csv_log import write_csv_log
 from odohil.session.logs.recording import Recording
-from odohil.session.operator_dialogue import OperatorDialogue, OperatorWatch
+from odohil.session.operator_dialogue import (
+    WIZARD_PLAN,
+    OperatorDialogue,
+    OperatorWatch,
+    wizard_spec,
+)
 from odohil.session.operator_words import HERE, measured_again, remeasured
 from odohil.session.outcome import estimate_source
 from odohil.session.outcome_text import (
@@ -55,6 +60,7 @@ from odohil.session.path_planning import ScoredPaths, plan_outcome
 from odohil.session.path_trial_file import read_path_trials
 from odohil.session.plan import parse_plan
 from odohil.session.planning import PlannedExperiment, PlanRequest
+from odohil.session.pose_sources import OPERATOR
 from odohil.session.recording_import import import_recording
 from odohil.session.robots import emulate_help, emulated_backends
 from odohil.session.run_text import RunWatch, Said
@@ -475,3 +481,19 @@ def test_the_demo_says_where_its_fake_is_and_its_truth(tmp_path: Path) -> None:
     for system in systems:
         truth = parameters_line(demo.truth, system)
         assert demo.heading(system) == f"fake robot at {demo.port}; its true parameters: {truth}"
+
+
+def test_the_wizard_guides_a_calibration_unless_told_to_validate(tmp_path: Path) -> None:
+    """odohil/session/operator_dialogue.py ``wizard_spec``: a calibration with
+    the operator's tape and the wizard's default plan; ``--path`` without
+    ``--validate`` (and no validation session) refused; and the Ctrl-C policy
+    that writes to standard error (odohil/session/interrupts.py ``on_stderr``)."""
+    spec, guide = wizard_spec(tmp_path / "s", ROBOT, None, PORT, None, 6.0, False, None, None, None)
+    assert guide is None
+    assert (spec.folder, spec.mode, spec.robot_path) == (tmp_path / "s", "auto", ROBOT)
+    assert (spec.plan, spec.default_plan, spec.measure) == (None, WIZARD_PLAN, OPERATOR)
+    assert (spec.allow_few_trials, spec.note) == (True, {"by": "wizard", "port": PORT})
+    with pytest.raises(ParameterError, match="--validate"):
+        wizard_spec(tmp_path / "t", ROBOT, None, PORT, None, 6.0, False, None, "square:1,cw", 3)
+    interrupts = Interrupts.on_stderr(130, 4, "may still be moving")
+    assert (interrupts.exits, interrupts.unconfirmed) == ((130, 4), "may still be moving")
