@@ -10,7 +10,6 @@ from typing import Annotated
 import typer
 from rich.console import Console
 
-from odohil import units
 from odohil.cli.options import (
     K_OPTION,
     L_OPTION,
@@ -26,15 +25,10 @@ from odohil.cli.options import (
     unit_system,
     usage_errors,
 )
-from odohil.cli.render import table
+from odohil.cli.render import drawn
 from odohil.science.simulator import DEFAULT_SEGMENT_M
-from odohil.session.design_tools import (
-    covariance_document,
-    covariance_rows,
-    named_path,
-    path_moments,
-)
-from odohil.session.outcome_text import parameters_line
+from odohil.session.design_tables import covariance_table
+from odohil.session.design_tools import covariance_document, named_path, path_moments
 
 
 class PathChoice(StrEnum):
@@ -77,10 +71,5 @@ def covariance(
     if as_json:
         typer.echo(json.dumps(covariance_document(path, params, exact, sim), indent=2))
         return
-    title = f"Pose change after {path.name} ({path.distance_m:g} m driven)"
-    caption = parameters_line(params.to_si_dict(), unit_system(units_choice))
-    columns = ["quantity", "closed form"]
-    if sim is not None:
-        columns.append(f"simulated ({units.plural(sim.n_trials, 'trial')}) +- MC se")
-    rows = covariance_rows(exact, sim)
-    Console().print(table(title, columns, ("quantity",), caption, rows=rows))
+    shown = covariance_table(path, params, exact, sim, unit_system(units_choice))
+    Console().print(drawn(shown))

@@ -19,14 +19,13 @@ from odohil.cli.options import (
     UNITS_DEFAULT,
     UnitsOption,
     option,
-    robot_protocol,
     unit_system,
     usage_errors,
 )
 from odohil.cli.session_view import drive, finish
 from odohil.session.demo import demo_session
 from odohil.session.lifecycle import Opened
-from odohil.session.outcome_text import parameters_line
+from odohil.session.robot_file import robot_protocol
 
 _ROBOT_HELP = (
     "Which fake robot: nomad150 or create2, or a robot description file whose "
@@ -55,16 +54,13 @@ def demo(
     would, and the demo says so.
     """
     system = unit_system(units_choice)
-    protocol = robot_protocol(robot_name)
     console = Console(stderr=True)
     with tempfile.TemporaryDirectory(prefix="odohil-demo-") as tmp:
         with usage_errors("--robot"):
-            made = demo_session(protocol, seed, session or Path(tmp) / "session")
-        truth = made.truth
+            made = demo_session(robot_protocol(robot_name), seed, session or Path(tmp) / "session")
 
         def say(opened: Opened) -> None:
-            fake = f"fake robot at {made.port}; its true parameters"
-            console.print(f"{fake}: {parameters_line(truth, system)}", highlight=False)
+            console.print(made.heading(system), highlight=False)
 
         outcome = drive(console, made.spec, system, json_out, say)
-    finish(outcome, json_out, console, extra=made.truth_document(), truth=truth, system=system)
+    finish(outcome, json_out, console, extra=made.truth_document(), truth=made.truth, system=system)

@@ -11,16 +11,15 @@ command loads it.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
 from typing import Annotated
 
 import typer
 
-from odohil.cli.options import Parameters, option, parameters_option, robot_protocol, usage_errors
+from odohil.cli.options import Parameters, option, parameters_option, usage_errors
 from odohil.science.robot_description import DEFAULT_PROTOCOL
-from odohil.science.robot_facts import RobotFacts
 from odohil.session.line import check_socket_path
-from odohil.session.robots import emulated_backends, emulated_line, emulator
+from odohil.session.robot_file import robot_protocol
+from odohil.session.robots import emulate_help, emulated_line, emulator
 
 _FAULT_HELP = (
     "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
@@ -28,37 +27,19 @@ _FAULT_HELP = (
 )
 
 
-def _robot_help() -> str:
-    names = ", ".join(f"{f.name} (the {f.label})" for f in emulated_backends()) or "none installed"
-    return (
-        f"Which fake robot: {names}, or a robot description file whose "
-        "\\[robot] protocol is one of them."
-    )
-
-
-def _default_help(what: str, value: Callable[[RobotFacts], float]) -> str:
-    per_robot = ", ".join(f"{f.name} {value(f):g}" for f in emulated_backends())
-    return f"default: the robot's own {what} ({per_robot})"
-
-
-_TIME_SCALE_HELP = "Simulated seconds per wall second (motion, zr, timestamp); " + _default_help(
-    "time scale", lambda f: f.fake.emulate_time_scale if f.fake else 1.0
-)
-_BAUD_HELP = "Line rate (pacing and the pty speed); " + _default_help(
-    "line rate, its backend's default baud", lambda f: f.default_baud
-)
+_HELP = emulate_help()
 
 
 @parameters_option
 def emulate(
-    robot: str = typer.Option(DEFAULT_PROTOCOL, "--robot", help=_robot_help()),
+    robot: str = typer.Option(DEFAULT_PROTOCOL, "--robot", help=_HELP.robot),
     seed: Annotated[
         int | None, option("--seed", bound="seed", help="Seed of the odometry noise.")
     ] = None,
     time_scale: Annotated[
-        float | None, option("--time-scale", bound="time_scale", help=_TIME_SCALE_HELP + ".")
+        float | None, option("--time-scale", bound="time_scale", help=_HELP.time_scale)
     ] = None,
-    baud: Annotated[int | None, option("--baud", bound="baud", help=_BAUD_HELP + ".")] = None,
+    baud: Annotated[int | None, option("--baud", bound="baud", help=_HELP.baud)] = None,
     pacing: bool = typer.Option(
         True, "--pacing/--no-pacing", help="Carry bytes at the line rate in both directions."
     ),
@@ -81,9 +62,8 @@ def emulate(
         with usage_errors("--truth-socket"):
             check_socket_path(truth_socket)
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
-    protocol = robot_protocol(robot)
     with usage_errors("--robot"):
-        facts, hooks, serve = emulator(protocol)
+        facts, hooks, serve = emulator(robot_protocol(robot))
     with usage_errors("--baud"):
         baud, time_scale = emulated_line(facts, hooks, baud, time_scale)
     paper = params.to_paper_units()

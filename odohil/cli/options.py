@@ -23,7 +23,6 @@ from odohil.errors import OdohilError
 from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.session.robot_file import builtin_names, resolve_robot
-from odohil.session.robot_file import robot_protocol as protocol_of
 
 N = TypeVar("N", int, float, int | None, float | None)
 Command = Callable[..., None]
@@ -230,10 +229,3 @@ def robot_callback(
 def robot_option(help_tail: str = "") -> Any:
     """``--robot`` (:data:`ROBOT_HELP` and ``help_tail``), resolved by :func:`robot_callback`."""
     return typer.Option("--robot", callback=robot_callback, help=ROBOT_HELP + help_tail)
-
-
-def robot_protocol(value: str, option: str = "--robot") -> str:
-    """The ``[robot] protocol`` of the description ``value`` names: which fake
-    robot ``demo`` and ``emulate`` start; a usage error (exit 2) if none."""
-    with usage_errors(option):
-        return protocol_of(value)

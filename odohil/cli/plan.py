@@ -20,9 +20,9 @@ from odohil.cli.options import (
     parameters_option,
     robot_option,
     unit_system,
+    usage_errors,
 )
-from odohil.cli.render import table
-from odohil.errors import OdohilError
+from odohil.cli.render import drawn
 from odohil.science.limits import RANGES
 from odohil.science.planner import (
     DEFAULT_FLOOR_M,
@@ -47,15 +47,10 @@ Metres = Annotated[float | None, option("--budget-m", bound="budget_m", help="Mo
 
 def _print(planned: PlannedExperiment, system: units.UnitSystem) -> None:
     console = Console()
-    designs = ("k", "l (m)", "variant", "trials", "metres", "minutes")
-    console.print(table(planned.title, designs, rows=planned.design_rows()))
-    columns = ("parameter", "prior", "stderr", "target", "unit")
-    title = "Expected standard errors (Cramer-Rao)"
-    rows = planned.error_rows(system)
-    errors = table(title, columns, ("parameter", "unit"), planned.measurement, rows=rows)
+    console.print(drawn(planned.designs_table()))
     for text in planned.time_lines():
         console.print(text, highlight=False)
-    console.print(errors)
+    console.print(drawn(planned.errors_table(system)))
     console.print(planned.verdict(), highlight=False)
     for note in planned.plan.notes:
         console.print(f"[yellow]note:[/yellow] {note}", highlight=False)
@@ -65,10 +60,7 @@ def _print_paths(found: paths.PathsOutcome, as_json: bool, system: units.UnitSys
     if as_json:
         return typer.echo(json.dumps(paths.paths_document(found), indent=2))
     if isinstance(found, paths.ScoredPaths):
-        columns, left = ("parameter", "stderr", "target", "unit"), ("parameter", "unit")
-        Console().print(
-            table(found.title, columns, left, found.measurement, rows=found.rows(system))
-        )
+        Console().print(drawn(found.table(system)))
     for line in paths.paths_lines(found):
         Console().print(line, highlight=False, markup=False)
 
@@ -137,19 +129,12 @@ def plan(
     request = PlanRequest(params, targets, budget_m, budget_min, evaluate,
                           sigma_m, robot, min_trials_per_design, measure_s, speed, max_trials,
                           max_designs, max_leg_m, floor_m, compare, split)  # fmt: skip
-    try:
+    with usage_errors():
         planned = paths.plan_outcome(request)
-    except OdohilError as exc:
-        raise typer.BadParameter(str(exc)) from exc
     if not isinstance(planned, PlannedExperiment):
         return _print_paths(planned, as_json, unit_system(units_choice))
-    if planned.turn_designs:
-        Console(stderr=True).print(
-            "[yellow]warning:[/] turn designs on a robot whose turns carry error "
-            f"({', '.join(planned.turn_designs)}): the estimate will not be trusted; "
-            "use variant=reverse",
-            soft_wrap=True,
-        )
+    if (warning := planned.turn_warning()) is not None:
+        Console(stderr=True).print(f"[yellow]warning:[/] {warning}", soft_wrap=True)
     if as_json:
         typer.echo(json.dumps(plan_document(planned), indent=2))
     else:

@@ -21,11 +21,11 @@ from odohil.cli.options import (
     unit_system,
     usage_errors,
 )
-from odohil.cli.render import table
+from odohil.cli.render import drawn
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.paths import Design
-from odohil.session.design_tools import predict_document, predict_rows
-from odohil.session.outcome_text import parameters_line
+from odohil.session.design_tables import predict_table
+from odohil.session.design_tools import predict_document
 
 
 @parameters_option
@@ -48,9 +48,4 @@ def predict(
     if as_json:
         typer.echo(json.dumps(predict_document(design, params, means), indent=2))
         return
-    system = unit_system(units_choice)
-    title = f"Expected observables, forth and back {design.label()} (rho = {design.distance_m:g} m)"
-    caption = parameters_line(params.to_si_dict(), system) + f" (1+E_T = {1.0 + params.e_t:g})"
-    columns = ("observable", "meaning", "value (SI)", "unit", "in degrees")
-    left, rows = ("observable", "meaning", "unit"), predict_rows(means)
-    Console().print(table(title, columns, left, caption, rows=rows))
+    Console().print(drawn(predict_table(design, params, means, unit_system(units_choice))))

@@ -1,71 +1,74 @@
 """Rich renderings shared by the commands: an error, an estimate's outcome
-(verdict line and table), checks, live estimate, motion progress. The words
+(verdict line and table), checks, the live estimate. The words
 are the session's (odohil/session/outcome_text.py)."""
 
 from __future__ import annotations
 
 import contextlib
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from typing import Literal
 
 import typer
 from rich.console import Console, Group, RenderableType
 from rich.markup import escape
-from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 from rich.table import Table
 from rich.text import Text
 
 from odohil import units
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
-from odohil.driver.odometry import OdometrySample
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
-from odohil.science.paths import Drivable
-from odohil.session.design_observables import observables_by_design
+from odohil.session.design_observables import observables_table
 from odohil.session.lifecycle import PreflightCheck
-from odohil.session.motion_steps import MotionSteps, pose_text
 from odohil.session.outcome import EstimateOutcome
 from odohil.session.outcome_text import (
     export_refusal_lines,
-    inside,
     more_trials_lines,
-    number_text,
     outcome_line,
     outcome_notes,
+    parameters_text,
     refusal_line,
     verdict_line,
 )
 from odohil.session.run_text import Said, error_said
 from odohil.session.state import CompletedTrial
+from odohil.session.table_text import TableText
 
 
-def table(
-    title: str,
-    columns: Sequence[str],
-    left: Sequence[str] = (),
-    caption: str | None = None,
-    justify: Literal["left", "center", "right"] | None = None,
-    rows: Iterable[Sequence[str]] = (),
-) -> Table:
-    """A table of ``columns`` holding ``rows``, right-aligned (numbers) but for
-    those in ``left``; ``justify``: where the title stands (default: centred)."""
-    made = Table(title=title, caption=caption, title_justify=justify or "center")
-    for column in columns:
-        made.add_column(column, justify="left" if column in left else "right")
-    for row in rows:
-        made.add_row(*row)
+def drawn(text: TableText) -> Table:
+    """A table of the session's words (:class:`~odohil.session.table_text.TableText`):
+    numbers right-aligned, words left, a flagged cell (a failed check) in red."""
+    justify: Literal["left", "center"] = "left" if text.title_left else "center"
+    made = Table(title=text.title, caption=text.caption, title_justify=justify)
+    for column in text.columns:
+        made.add_column(column, justify="left" if column in text.words else "right")
+    for row in text.rows:
+        made.add_row(*(f"[red]{cell}[/]" if cell in text.flagged else cell for cell in row))
     return made
 
 
-_TONES = {"plain": "", "note": "yellow", "error": "red", "alarm": "bold red"}
+_TONES = {
+    "plain": "",
+    "note": "yellow",
+    "error": "red",
+    "alarm": "bold red",
+    "title": "bold",
+    "good": "green",
+    "done": "bold green",
+}
 """The colour of each tone of odohil/session/run_text.py's lines."""
 
 
-def print_said(console: Console, *said: Said) -> None:
-    """Lines for the operator, each head in its tone's colour, the text plain."""
+def said_text(line: Said) -> Text:
+    """A line for the operator: its head in its tone's colour, the text plain."""
+    return Text.assemble((line.head, _TONES[line.tone]), line.text)
+
+
+def print_said(console: Console, *said: Said, soft_wrap: bool = True) -> None:
+    """Lines for the operator (:func:`said_text`), not wrapped unless not ``soft_wrap``."""
     for line in said:
-        console.print(Text.assemble((line.head, _TONES[line.tone]), line.text), soft_wrap=True)
+        console.print(said_text(line), soft_wrap=soft_wrap)
 
 
 def bad_input(exc: BaseException | str, console: Console | None = None) -> typer.Exit:
@@ -136,7 +139,7 @@ def print_outcome(
     notes and refusals, the Gaussian fit beside, and the trials left out."""
     print_lines(out, [outcome_line(outcome)])
     if (result := outcome.result) is not None:
-        out.print(parameters_table(result, system, title))
+        out.print(drawn(parameters_text(result, system, title)))
         checks = [f"model check: {result.model_check.verdict}"]
         print_lines(out, [*checks, f"sufficiency: {result.sufficiency.verdict}"])
         print_lines(out, outcome_notes(outcome, system))
@@ -146,58 +149,6 @@ def check_line(check: PreflightCheck) -> Text:
     """``[ok] name: detail`` (or ``[FAIL]``), coloured."""
     mark = Text("[ok]  ", style="green") if check.passed else Text("[FAIL] ", style="bold red")
     return Text.assemble(mark, (check.name, "bold"), ": ", check.message)
-
-
-def observables_table(trials: Sequence[CompletedTrial]) -> Table:
-    """phi1..phi5 of every design with at least two completed trials."""
-    columns = ("design", "n", "phi1 deg", "phi2 deg^2", "phi3 mm", "phi4 mm", "phi5 mm^2")
-    shown = table("Observables per design", columns, ("design",), justify="left")
-    for label, n, phi in observables_by_design(trials):
-        if phi is None:
-            shown.add_row(label, str(n), "needs 2 trials", "", "", "", "")
-            continue
-        shown.add_row(
-            label,
-            str(phi.n_trials),
-            f"{units.radians_to_degrees(phi.phi1):.4g}",
-            f"{units.rad2_to_deg2(phi.phi2):.3g}",
-            f"{1e3 * phi.phi3:.3g}",
-            f"{1e3 * phi.phi4:.3g}",
-            f"{1e6 * phi.phi5:.3g}",
-        )
-    return shown
-
-
-def parameters_table(
-    result: EstimateResult,
-    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
-    title: str | None = None,
-    truth: Mapping[str, float] | None = None,
-) -> Table:
-    """The four parameters with standard errors and 95 % intervals in
-    ``system``'s units; with ``truth`` (SI values by name) a truth column in
-    the same units and whether the interval holds it. The title: ``title
-    (method, N trials)``, else ``Estimate after N trials``."""
-    columns = ["parameter", "estimate", "std. error", "95 % interval", "unit"]
-    if truth is not None:
-        columns += ["truth", "truth inside"]
-    trials = units.plural(result.n_trials, "trial")
-    title = f"{title} ({result.method}, {trials})" if title else f"Estimate after {trials}"
-    shown = table(title, columns, ("parameter", "unit"), justify="left")
-    for p in result.parameters:
-        low, high = p.ci95
-        row = [
-            p.name,
-            number_text(p.name, p.value, system),
-            number_text(p.name, p.stderr, system, digits=2),
-            f"[{number_text(p.name, low, system)}, {number_text(p.name, high, system)}]",
-            units.unit_column(p.name, system),
-        ]
-        if truth is not None:
-            row.append(number_text(p.name, truth[p.name], system))
-            row.append("yes" if inside(p, truth[p.name]) else "[red]NO[/]")
-        shown.add_row(*row)
-    return shown
 
 
 def estimate_panel(
@@ -210,8 +161,8 @@ def estimate_panel(
     needed (green once the target precision is reached), model check, verdict."""
     style = "green" if result.sufficiency.sufficient else "yellow"
     return Group(
-        observables_table(trials),
-        parameters_table(result, system),
+        drawn(observables_table(trials)),
+        drawn(parameters_text(result, system)),
         Text("\n".join(more_trials_lines(result, remaining)), style=style),
         Text(f"Model check: {result.model_check.verdict}"),
         verdict_text(result.verdict),
@@ -221,46 +172,3 @@ def estimate_panel(
 def verdict_text(verdict: Verdict) -> Text:
     """The verdict line, green when trusted, else red."""
     return Text(verdict_line(verdict), style="green" if verdict.trusted else "bold red")
-
-
-class MotionProgress:
-    """A progress bar of one forth-and-back motion with the live encoder pose;
-    progress counts steps (legs and turns), each filled by how far its
-    distance or angle has been covered (odohil/session/motion_steps.py)."""
-
-    def __init__(self, console: Console) -> None:
-        self.console = console
-        self._progress: Progress | None = None
-        self._task: TaskID | None = None
-        self._steps: MotionSteps | None = None
-
-    def start(self, design: Drivable) -> None:
-        """Show a new motion of ``design``."""
-        self.stop()
-        self._steps = MotionSteps(design)
-        self._progress = Progress(
-            TextColumn("driving {task.description}"),
-            BarColumn(),
-            TextColumn("{task.percentage:>3.0f}%"),
-            TimeElapsedColumn(),
-            TextColumn("{task.fields[pose]}"),
-            console=self.console,
-            refresh_per_second=8,
-        )
-        total = len(self._steps.steps)
-        self._task = self._progress.add_task(design.label(), total=total, pose="")
-        self._progress.start()
-
-    def sample(self, sample: OdometrySample) -> None:
-        """An encoder sample of the motion."""
-        if self._steps is None or self._progress is None or self._task is None:
-            return
-        if (done := self._steps.sample(sample)) is not None:
-            self._progress.update(self._task, completed=done, pose=pose_text(sample))
-
-    def stop(self) -> None:
-        """Close the bar (idempotent)."""
-        if self._progress is not None:
-            self._progress.stop()
-        self._progress = None
-        self._task = None

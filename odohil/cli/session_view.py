@@ -24,7 +24,7 @@ from odohil.cli.exit_codes import (
     exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.render import bad_input, parameters_table, print_lines, print_said, print_verdict
+from odohil.cli.render import bad_input, drawn, print_said, print_verdict
 from odohil.errors import (
     JournalError,
     OdohilError,
@@ -33,10 +33,7 @@ from odohil.errors import (
     StopUnconfirmedError,
     TrialFileError,
 )
-from odohil.science.estimators import EstimateResult
 from odohil.session.engine import StartCheck
-from odohil.session.events import Solved, Void
-from odohil.session.journal import Record
 from odohil.session.lifecycle import (
     Opened,
     Preflight,
@@ -54,14 +51,11 @@ from odohil.session.lifecycle import (
     run_session,
 )
 from odohil.session.lifecycle.opening import CheckSeen
-from odohil.session.operator_words import measured_again, remeasured
-from odohil.session.outcome_text import live_e_r
+from odohil.session.outcome_text import parameters_text
 from odohil.session.robots import fake_url_schemes
-from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, run_ended
+from odohil.session.run_text import MAY_STILL_MOVE, RunWatch, Said, error_said, run_ended
 from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
-from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState
-from odohil.session.tape_records import MeasurementsRejected, Remeasured
 
 
 def register_fake_urls(port: str) -> None:
@@ -126,28 +120,43 @@ def drive(
     start_check: StartCheck | None = None,
     verdict: bool = True,
 ) -> RunOutcome:
-    """Pre-flight, open (``say`` tells what was opened), run with the progress
-    bar and say how the run ended (a finished one: its verdict line unless not
-    ``verdict``); what escapes exits by its status (:func:`session_exit_codes`)."""
+    """Pre-flight, open (``say`` tells what was opened), run with a progress
+    bar (what it shows: odohil/session/run_text.py :class:`RunWatch`;
+    afterwards the slip check's summary) and say how the run ended (a finished
+    one: its verdict line unless not ``verdict``); what escapes exits by its
+    status (:func:`session_exit_codes`). The bar shows a live E_R value only,
+    so the cheap incremental fit serves it instead of the recipe's robust fit
+    per trial where it can (``progress_estimator``: not for a plan with
+    general paths); the verdict is the recipe's (odohil/session/lifecycle)."""
     with session_exit_codes(console, json_out):
         prepared = prepared_or_exit(preflight(spec), console)
         with open_session(prepared, say_opened(console)) as opened:
             say(opened)
-            outcome = run_with_progress(console, opened, system, start_check)
+            bar = ProgressBar(console, opened.state)
+            watch = RunWatch(bar, system)
+            bar.progress.start()
+            try:
+                outcome = run_session(
+                    opened,
+                    watch,
+                    estimator=progress_estimator(opened),
+                    start_check=start_check or watch.show_start,
+                )
+            finally:
+                bar.progress.stop()
+                print_said(console, *watch.summary())
             if verdict or outcome.status != "finished":
                 report_run(console, outcome)
     return outcome
 
 
-class ProgressObserver:
-    """A rich progress bar of completed trials, on stderr, with notes."""
+class ProgressBar:
+    """A rich progress bar of completed trials, on stderr, with lines above it:
+    the :class:`~odohil.session.run_text.RunView` of a run's
+    :class:`~odohil.session.run_text.RunWatch`."""
 
-    def __init__(self, console: Console, state: SessionState, system: units.UnitSystem) -> None:
+    def __init__(self, console: Console, state: SessionState) -> None:
         assert state.plan is not None
-        self.console = console
-        self.system = system
-        self.measurer = "the simulated operator"
-        self.remeasured: dict[int, None] = {}  # trial numbers, in order
         self.progress = Progress(
             TextColumn("[bold]trials"),
             BarColumn(),
@@ -161,57 +170,21 @@ class ProgressObserver:
             "", total=state.plan.n_trials, completed=len(state.completed)
         )
 
-    @contextlib.contextmanager
-    def shown(self) -> Iterator[None]:
-        """The bar while within; afterwards the slip check's summary."""
-        self.progress.start()
-        try:
-            yield
-        finally:
-            self.progress.stop()
-            if self.remeasured:
-                print_lines(self.console, [remeasured(list(self.remeasured), self.measurer)])
+    def advance(self, completed: int) -> None:
+        """Fill the bar to ``completed`` trials."""
+        self.progress.update(self.task, completed=completed)
 
-    def show_start(self, start: StartPose) -> None:
-        """The start check: print where the encoders read (with the heading)."""
-        self.console.print(f"robot: {start.describe()}")
+    def describe(self, text: str) -> None:
+        """Show ``text`` beside the bar."""
+        self.progress.update(self.task, description=text)
 
-    def record(self, record: Record, state: SessionState) -> None:
-        """Advance on each solved trial; print voids and rejections."""
-        event = record.event
-        if isinstance(event, Solved):
-            self.progress.update(self.task, completed=len(state.completed))
-        elif isinstance(event, Void):
-            self.progress.console.print(
-                f"trial {event.trial} attempt {event.attempt} void: {event.reason}"
-            )
-        elif isinstance(event, MeasurementsRejected):
-            print_lines(self.progress.console, [measured_again(event.trial, self.measurer)])
-        elif isinstance(event, Remeasured) and not event.kept:
-            self.remeasured.setdefault(event.trial, None)
+    def status(self, text: str) -> None:
+        """A line above the bar."""
+        self.progress.console.print(text)
 
-    def estimated(self, result: EstimateResult, state: SessionState) -> None:
-        """Show the live E_R beside the bar."""
-        if (text := live_e_r(result, self.system)) is not None:
-            self.progress.update(self.task, description=text)
-
-
-def run_with_progress(
-    console: Console,
-    opened: Opened,
-    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
-    start_check: StartCheck | None = None,
-) -> RunOutcome:
-    """Run the session with a progress bar. The bar shows a live E_R value
-    only, so the cheap incremental fit serves it instead of the recipe's
-    robust fit per trial where it can (``progress_estimator``: not for a plan
-    with general paths); the verdict is the recipe's (odohil/session/lifecycle)."""
-    observer = ProgressObserver(console, opened.state, system)
-    estimator = progress_estimator(opened)
-    with observer.shown():
-        return run_session(
-            opened, observer, estimator=estimator, start_check=start_check or observer.show_start
-        )
+    def say(self, *said: Said) -> None:
+        """Lines above the bar."""
+        print_said(self.progress.console, *said)
 
 
 def report_run(
@@ -246,7 +219,7 @@ def finish(
     if json_out:
         typer.echo(json.dumps({**outcome.to_json_dict(code), **(extra or {})}))
     elif result is not None:
-        table = parameters_table(result, system, "estimate", truth)
+        table = drawn(parameters_text(result, system, "estimate", truth))
         Console(width=max(110, Console().width)).print(table)
     if code:
         raise typer.Exit(code)

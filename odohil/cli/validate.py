@@ -16,7 +16,7 @@ from odohil import units
 from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED, exit_for_run
 from odohil.cli.options import JsonOption, option, robot_option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, bad_inputs, print_refusal, print_said, table
+from odohil.cli.render import bad_input, bad_inputs, drawn, print_refusal, print_said
 from odohil.cli.session_view import drive
 from odohil.errors import (
     JournalError,
@@ -25,35 +25,25 @@ from odohil.errors import (
     ParameterError,
     RobotDescriptionError,
 )
+from odohil.science.estimators import EstimateResult
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.lifecycle import Opened, SessionSpec
 from odohil.session.logs import ImportOptions
 from odohil.session.outcome_text import outcome_line
-from odohil.session.robot_file import load_robot_description
 from odohil.session.run_text import error_said
 from odohil.session.validation import (
     PATH_SYNTAX,
     ValidationTrials,
     check_trials,
-    load_calibration,
-    parse_validation_path,
-    sensitivity_text,
     trials_of_session,
 )
 from odohil.session.validation_drive import (
-    check_file_options,
-    journaled_trials,
-    validation_spec,
+    chi_square_table,
+    held_out,
+    validation_setup,
+    verdict_lines,
 )
-from odohil.session.validation_steps import (
-    calibration_robot,
-    check_alpha,
-    drive_folder,
-    drives,
-    first_trials,
-    measured_trials,
-    validation_document,
-)
+from odohil.session.validation_steps import validation_document
 
 _HELP = (
     f"Test the calibrated model of SESSION on a path it was not fitted on. --path is "
@@ -114,56 +104,37 @@ def validate(
     console = Console(stderr=True)
     bad = (ParameterError, RobotDescriptionError, JournalError, MeasurementError, OSError)
     with bad_inputs(console):
-        check_alpha(alpha)
-        vpath = parse_validation_path(path_text)
-        given = None if robot_file is None else load_robot_description(robot_file)
-        calibration = load_calibration(session, exclude, given, recording)
-        robot = calibration_robot(calibration, robot_file)
-    outcome = calibration.outcome
+        setup = validation_setup(session, path_text, robot_file, exclude, recording, alpha)
+    outcome = setup.calibration.outcome
     result = outcome.result
     if result is None or not (result.verdict.trusted or force):
         print_refusal(console, outcome, None if result is None else "test it", "nothing tested")
         raise typer.Exit(EXIT_UNTRUSTED)
     console.print(outcome_line(outcome), highlight=False)  # the calibration's verdict
-    folder: Path | None = None
+
+    def drive(spec: SessionSpec) -> ValidationTrials:
+        line = replace(spec, port=port, baud=baud, truth_socket=truth_socket, seed=seed)
+        return _drive(console, line)
+
     try:
-        check_file_options(vpath, port, measure)
-        if not drives(vpath, port, measure):
-            measured = measured_trials(
-                vpath, calibration, robot.description, recording, port, measure
-            )
-            measured = first_trials(measured, trials)
-        else:
-            folder = drive_folder(vpath, calibration, session, out)
-            reread = journaled_trials(folder, vpath)
-            if reread is not None:
-                console.print(f"re-testing the trials journaled in {folder} (nothing driven)")
-            else:
-                spec = validation_spec(
-                    folder,
-                    vpath,
-                    session,
-                    robot,
-                    trials,
-                    measure,
-                    calibration=outcome.result,
-                )
-                spec = replace(spec, port=port, baud=baud, truth_socket=truth_socket, seed=seed)
-                reread = _drive(console, spec)
-            measured = reread
-            # a driven trial the tape found ambiguous is left out, not redone
-            measured = first_trials(measured, min(trials or len(measured), len(measured)))
-        tested = check_trials(measured, result, alpha)
+        held = held_out(
+            setup, session, recording, drive, trials=trials, measure=measure, port=port, out=out
+        )
+        if held.reread:
+            console.print(f"re-testing the trials journaled in {held.folder} (nothing driven)")
+        tested = check_trials(held.measured, result, alpha)
     except bad as exc:
         raise bad_input(exc, console) from None
     except OdohilError as exc:
         print_said(console, error_said(str(exc)))
         raise typer.Exit(EXIT_ERROR) from None
-    data = validation_document(session, vpath, folder, measured, calibration, tested)
+    data = validation_document(
+        session, setup.vpath, held.folder, held.measured, setup.calibration, tested
+    )
     if as_json:
         typer.echo(json.dumps(data))
     else:
-        _print(data, tested, measured, sensitivity_text(tested, result))
+        _print(data, tested, held.measured, result)
     raise typer.Exit(EXIT_OK if tested.passed else EXIT_UNTRUSTED)
 
 
@@ -181,31 +152,15 @@ def _drive(console: Console, spec: SessionSpec) -> ValidationTrials:
 
 
 def _print(
-    data: dict[str, Any], tested: ValidationResult, measured: ValidationTrials, sensitivity: str
+    data: dict[str, Any],
+    tested: ValidationResult,
+    measured: ValidationTrials,
+    calibration: EstimateResult,
 ) -> None:
     out = Console(width=max(100, Console().width))
-    status = "PASS" if tested.passed else "FAIL"
-    failed = tested.failed()
-    text = f"validation: {status} ({units.plural(tested.n_trials, 'trial')} of {data['path']}"
-    text += f"; rejected by {', '.join(failed)})" if failed else ")"
-    out.print(text, highlight=False)
-    for reason in tested.reasons():
-        out.print(f"  {reason}", highlight=False)
-    out.print(sensitivity, highlight=False)
-    title = "chi-square tests (NEES: the spread; bias: the mean residual), each at level"
-    title += f" {tested.level:g}"
-    columns = ("test", "statistic", "dof", "p-value", "threshold", "result")
-    tests = table(title, columns, ("test", "result"))
-    for t in tested.tests:
-        tests.add_row(
-            t.name,
-            f"{t.statistic:.4g}",
-            str(t.dof),
-            f"{t.p_value:.3g}",
-            f"{t.threshold:.4g}",
-            "pass" if t.passed else "[red]FAIL[/]",
-        )
-    out.print(tests)
+    for line in verdict_lines(tested, data["path"], calibration):
+        out.print(line, highlight=False)
+    out.print(drawn(chi_square_table(tested)))
     out.print(f"parameter uncertainty: {data['verdict']['parameter_uncertainty']}", highlight=False)
     if measured.left_out:
         out.print(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")

@@ -14,15 +14,14 @@ the same ``--session`` continues where the journal stops.
 
 from __future__ import annotations
 
-import os
 import sys
-from dataclasses import dataclass
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Annotated
 
 import typer
 from rich.console import Console
-from rich.markup import escape
+from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 
 from odohil import units
 from odohil.cli.exit_codes import (
@@ -46,215 +45,101 @@ from odohil.cli.options import (
     unit_system,
 )
 from odohil.cli.render import (
-    MotionProgress,
     bad_inputs,
     check_line,
     estimate_panel,
     print_lines,
     print_refusal,
+    print_said,
     print_verdict,
+    said_text,
 )
 from odohil.cli.session_view import prepared_or_exit, refuse, report_run
 from odohil.driver.odometry import OdometrySample
-from odohil.errors import InconsistentMeasurementError, MeasurementError
 from odohil.science.estimators import EstimateResult
+from odohil.science.paths import Drivable
 from odohil.science.planner import DEFAULT_MAX_LEG_M
-from odohil.science.robot_description import RobotDescription
-from odohil.session.engine import StartCheck
-from odohil.session.events import Finished, MotionStart, Solved, Void
 from odohil.session.interrupts import Interrupts, wait_readable
-from odohil.session.journal import Record
 from odohil.session.lifecycle import (
     Opened,
     PreflightCheck,
     PreflightFailed,
     SessionSpec,
-    default_session_folder,
     final_estimate,
     open_session,
     preflight,
-    run_session,
 )
-from odohil.session.operator_words import (
-    END_MARKS,
-    encoders_at_end,
-    entered_so_far,
-    extra_distance_prompt,
-    measure_again,
-    put_back_prompt,
-    remeasure_prompt,
-    solved,
-    start_marks,
-    trial_header,
-)
+from odohil.session.motion_steps import MotionSteps, pose_text
+from odohil.session.operator_dialogue import WIZARD_PLAN, continue_with, guided_run, wizard_spec
 from odohil.session.outcome_text import outcome_line
-from odohil.session.pose_sources import OPERATOR
-from odohil.session.robot import Robot
-from odohil.session.run_text import MAY_STILL_MOVE
+from odohil.session.run_text import MAY_STILL_MOVE, Said
 from odohil.session.signals import signal_of, signals_raise
-from odohil.session.sources import OperatorSource, TapeSource
-from odohil.session.start_pose import StartPose, put_back
-from odohil.session.state import SessionState
-from odohil.session.tape_entry import INSTRUCTIONS, TapeEntries, parse_optional_metres
-from odohil.session.tape_records import TapeContext
+from odohil.session.state import CompletedTrial, SessionState
 from odohil.session.validation import PATH_SYNTAX
 from odohil.session.validation_wizard import (
     GuidedValidation,
-    guided_validation,
-    validation_target,
 )
 
-DEFAULT_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
-_STYLE = {"refused": "[red]refused:[/] ", "check": "[yellow]check:[/] ", "no_back": "[yellow]"}
 
+class WizardScreen:
+    """The wizard's console, the :class:`~odohil.session.operator_dialogue.OperatorScreen`
+    of the operator's dialogue: it renders lines, the motion bar and the live
+    panel, and reads replies; what is said and asked when is
+    odohil/session/operator_dialogue.py's. The motion bar counts a motion's
+    steps (legs and turns), each filled by how far its distance or angle has
+    been covered (odohil/session/motion_steps.py), beside the live encoder pose."""
 
-@dataclass
-class WizardPrompts:
-    """The :class:`~odohil.session.sources.OperatorPrompts` of the wizard: it reads
-    lines and renders; what they mean and say is odohil/session/tape_entry.py's
-    and odohil/session/operator_words.py's."""
+    def __init__(
+        self, console: Console, system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
+    ) -> None:
+        self.console = console
+        self.system = system
+        self._bar: tuple[Progress, TaskID, MotionSteps] | None = None
 
-    console: Console
-    description: RobotDescription
-    interrupts: Interrupts
-    progress: MotionProgress
+    def ask(self, prompt: Said) -> str:
+        """Show ``prompt`` and read the line typed (once input is ready)."""
+        self.console.print(said_text(prompt), end="")
+        wait_readable(sys.stdin)
+        return input()
 
-    def __post_init__(self) -> None:
-        self.entries = TapeEntries(self.description)
+    def say(self, *said: Said, wrap: bool = True) -> None:
+        """Show lines, each head in its tone's colour."""
+        print_said(self.console, *said, soft_wrap=not wrap)
 
-    def _input(self, prompt: str, style: str | None = None) -> str:
-        try:
-            self.console.print(prompt, end="", style=style)
-            wait_readable(sys.stdin)
-            return input()
-        except EOFError:
-            raise MeasurementError("the input ended (no operator at the terminal)") from None
-
-    def _context(self, ctx: TapeContext, resumed: bool = True) -> None:
-        """The trial's header once per attempt; on a resumed one also what was entered."""
-        if not self.entries.first_sight(ctx):
+    def motion(self, design: Drivable | None) -> None:
+        """Show the motion bar of a new motion of ``design``; None closes it."""
+        if self._bar is not None:
+            self._bar[0].stop()
+            self._bar = None
+        if design is None:
             return
-        self.console.print("\n" + trial_header(ctx, resumed), style="bold", markup=False)
-        if resumed and (entered := entered_so_far(ctx)) is not None:
-            self.console.print(entered, markup=False)
+        steps = MotionSteps(design)
+        progress = Progress(
+            TextColumn("driving {task.description}"),
+            BarColumn(),
+            TextColumn("{task.percentage:>3.0f}%"),
+            TimeElapsedColumn(),
+            TextColumn("{task.fields[pose]}"),
+            console=self.console,
+            refresh_per_second=8,
+        )
+        task = progress.add_task(design.label(), total=len(steps.steps), pose="")
+        progress.start()
+        self._bar = (progress, task, steps)
 
-    def confirm_start_marks(self, ctx: TapeContext) -> None:
-        """Ask for the start marks."""
-        self._context(ctx, resumed=False)
-        self._input(start_marks(self.description))
-
-    def confirm_end_marks(self, ctx: TapeContext) -> None:
-        """The motion is over: ask for the end marks."""
-        self.progress.stop()
-        self.interrupts.in_motion = False
-        self.interrupts.check()
-        self._context(ctx)
-        if (pose := ctx.encoder_end_pose) is not None:
-            self.console.print(encoders_at_end(pose))
-        self._input(END_MARKS)
-
-    def ask_distance(self, ctx: TapeContext, index: int) -> float:
-        """Distance ``index``, metres, as the attempt's :class:`TapeEntry` hands it over."""
-        self._context(ctx)
-        entry, new = self.entries.entry(ctx)
-        if new:
-            self.console.print(INSTRUCTIONS)
-        while (value := entry.take(index)) is None:
-            reply = entry.feed(self._input(entry.question().prompt))
-            if reply.message:
-                self.console.print(_STYLE.get(reply.kind, "") + reply.message)
-        if index in entry.kept:
-            self.console.print(f"{ctx.labels[index]}: {value:.4f} m kept")
-        return value
-
-    def _optional(self, ctx: TapeContext, doubt: str, prompt: str, label: str) -> float | None:
-        self._context(ctx)
-        self.console.print(doubt)
-        while True:
-            try:
-                return parse_optional_metres(self._input(prompt), label)
-            except MeasurementError as exc:
-                self.console.print(f"[red]refused:[/] {exc}; type it again")
-
-    def ask_remeasure(self, ctx: TapeContext, index: int, reason: str) -> float | None:
-        """The slip check doubts the trial: ask for the suspect distance again."""
-        doubt = f"[yellow]check the marks:[/] {reason}"
-        return self._optional(ctx, doubt, remeasure_prompt(ctx, index), ctx.labels[index])
-
-    def ask_extra_distance(self, ctx: TapeContext, label: str, reason: str) -> float | None:
-        """The trial is ambiguous: ask for one more cross distance, named by its screws."""
-        doubt = f"[yellow]two poses fit these marks:[/] {reason}"
-        return self._optional(ctx, doubt, extra_distance_prompt(label), label)
-
-    def start_check(self, robot: Robot) -> StartCheck:
-        """Show where the robot stands; off the next trial's start, ask the
-        operator to put it back there (or type 'here'), then zero the encoders there."""
-
-        def check(start: StartPose) -> None:
-            self.console.print(f"Robot: {start.describe()}")
-            if not (start.ok or start.expected is None):
-                reply = self._input(put_back_prompt(start.trial), "bold")
-                self.console.print(put_back(start, reply, robot))
-
-        return check
-
-    def show_rejection(self, ctx: TapeContext, rejection: InconsistentMeasurementError) -> None:
-        """Say why; only the distances the rejection names are asked for again."""
-        again = measure_again(ctx, self.entries.rejected(ctx, rejection))
-        self.console.print(f"[red]These distances fit no rigid motion:[/] {rejection}\n{again}")
-
-
-@dataclass
-class WizardObserver:
-    """Sees the session unfold: motion bar, solved pose, and the live estimate
-    by the one recipe (odohil/session/outcome.py)."""
-
-    console: Console
-    interrupts: Interrupts
-    progress: MotionProgress
-    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
-    validation: GuidedValidation | None = None
-
-    def on_sample(self, sample: OdometrySample) -> None:
-        """An encoder sample of the motion: show it, act on a deferred Ctrl-C."""
-        self.progress.sample(sample)
-        self.interrupts.check()
-
-    def record(self, record: Record, state: SessionState) -> None:
-        """React to one journaled record."""
-        event = record.event
-        if isinstance(event, MotionStart):
-            opened = state.open_trial
-            assert opened is not None
-            assert state.plan is not None
-            self.interrupts.in_motion = True
-            self.progress.start(state.plan.design_of(opened.trial))
-        elif isinstance(event, Solved):
-            self._solved(state)
-        elif isinstance(event, Void):
-            self.progress.stop()
-            self.console.print(f"[yellow]Trial {event.trial} attempt voided:[/] {event.reason}")
-        elif isinstance(event, Finished):
-            self.console.print(
-                f"[bold green]Session complete:[/] {units.plural(event.n_trials or 0, 'trial')}."
-            )
-
-    def _solved(self, state: SessionState) -> None:
-        """The solved pose, then the session's estimate and verdict by the one recipe."""
-        self.console.print(solved(state.completed[-1]), style="green", markup=False)
-        assert state.plan is not None
-        if self.validation is not None:  # the test so far, not an estimate
-            self.console.print(self.validation.live_line(state), markup=False)
+    def motion_sample(self, sample: OdometrySample) -> None:
+        """An encoder sample of the motion shown."""
+        if self._bar is None:
             return
-        outcome = final_estimate(state)
-        if outcome.result is None:
-            self.console.print(f"No estimate yet: {escape(outcome.problem)}", soft_wrap=True)
-            return
-        left = state.plan.n_trials - len(state.completed)
-        self.console.print(estimate_panel(state.completed, outcome.result, left, self.system))
+        progress, task, steps = self._bar
+        if (done := steps.sample(sample)) is not None:
+            progress.update(task, completed=done, pose=pose_text(sample))
 
-    def estimated(self, result: EstimateResult, state: SessionState) -> None:
-        """The engine's incremental estimate: not shown (the recipe's is, at ``solved``)."""
+    def estimate(
+        self, trials: Sequence[CompletedTrial], result: EstimateResult, remaining: int
+    ) -> None:
+        """The live estimate panel after a solved trial."""
+        self.console.print(estimate_panel(trials, result, remaining, self.system))
 
 
 def wizard(
@@ -262,7 +147,7 @@ def wizard(
     robot_file: Annotated[Path | None, robot_option(" For new sessions.")] = None,
     plan_text: Annotated[
         str | None,
-        typer.Option("--plan", help=f'Designs and trial counts (default "{DEFAULT_PLAN}").'),
+        typer.Option("--plan", help=f'Designs and trial counts (default "{WIZARD_PLAN}").'),
     ] = None,
     session: Annotated[
         Path | None,
@@ -289,30 +174,22 @@ def wizard(
     """Guide a calibration session beside the robot, one trial at a time
     (with --validate SESSION --path PATH: a validation of it)."""
     console = Console(highlight=False)
-    interrupts = Interrupts(
-        lambda text: os.write(2, text.encode()),
-        EXIT_INTERRUPTED,
-        EXIT_STOP_UNCONFIRMED,
-        MAY_STILL_MOVE,
-    )
+    interrupts = Interrupts.on_stderr(EXIT_INTERRUPTED, EXIT_STOP_UNCONFIRMED, MAY_STILL_MOVE)
     interrupts.install()
-    folder = session or default_session_folder()
-    note = {"by": "wizard", "port": port}
-    spec = SessionSpec(
-        folder, "auto", robot_file, plan=plan_text, default_plan=DEFAULT_PLAN,
-        measure=OPERATOR, port=port, baud=baud, max_leg_m=max_leg_m, allow_turns=allow_turns,
-        allow_few_trials=True, note=note,
-    )  # fmt: skip
-    guide = None
     with bad_inputs():  # --validate, or a validation session continued by --session alone
-        target = validation_target(validate, path_text, trials, session)
-        if target is not None:
-            guide = guided_validation(
-                *target, trials, folder=session, robot_file=robot_file, port=port, baud=baud,
-                max_leg_m=max_leg_m, note=note,
-            )  # fmt: skip
+        spec, guide = wizard_spec(
+            session,
+            robot_file,
+            plan_text,
+            port,
+            baud,
+            max_leg_m,
+            allow_turns,
+            validate,
+            path_text,
+            trials,
+        )
     if guide is not None:
-        spec = guide.spec
         if not guide.trusted:
             print_refusal(console, guide.calibration.outcome, None, "nothing driven")
             raise typer.Exit(EXIT_UNTRUSTED)
@@ -360,26 +237,15 @@ def _run(
     guide: GuidedValidation | None,
 ) -> int:
     """The session with the operator's prompts and screens, to the final screen."""
-    progress = MotionProgress(console)
-    prompts = WizardPrompts(console, opened.prepared.description, interrupts, progress)
-    observer = WizardObserver(console, interrupts, progress, system, guide)
-    try:
-        outcome = run_session(
-            opened, observer, source=TapeSource(OperatorSource(prompts), prompts.description),
-            on_sample=observer.on_sample,
-            start_check=prompts.start_check(opened.robot),
-        )  # fmt: skip
-    finally:
-        progress.stop()
+    screen = WizardScreen(console, system)
+    outcome = guided_run(opened, screen, interrupts, guide)
     if outcome.status == "finished" and guide is not None:
         passed, lines = guide.final(outcome.state)
         print_lines(console, lines)
         return EXIT_OK if passed else EXIT_UNTRUSTED
     if outcome.status == "finished":
         return final_screen(console, outcome.state)
-    # the command that continues a wizard session (`odohil resume` refuses them)
-    again = f"odohil wizard --session {opened.journal.folder}" if guide is None else guide.again
-    report_run(console, outcome, again, interrupted="Interrupted")
+    report_run(console, outcome, continue_with(opened, guide), interrupted="Interrupted")
     return exit_for_run(outcome)
 
 

@@ -10,9 +10,11 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
+from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.parameters import SI_UNITS, ErrorParameters
 from odohil.session.lifecycle import SessionSpec
+from odohil.session.outcome_text import parameters_line
 from odohil.session.robots import backend_names, robot_facts
 
 DEMO_TRUTH = ErrorParameters.from_paper_units(-1.0, -0.05, 0.3, 9e-4)
@@ -48,6 +50,11 @@ class Demo:
     spec: SessionSpec
     port: str
     truth: Mapping[str, float]
+
+    def heading(self, system: units.UnitSystem) -> str:
+        """``fake robot at URL; its true parameters: E_R = ...`` (in ``system``'s units)."""
+        truth = parameters_line(self.truth, system)
+        return f"fake robot at {self.port}; its true parameters: {truth}"
 
     def truth_document(self) -> dict[str, dict[str, dict[str, float | str]]]:
         """For ``odohil demo --json``: ``{"truth": {name: {"value", "unit"}}}`` (SI)."""

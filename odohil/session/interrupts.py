@@ -51,6 +51,14 @@ class Interrupts:
         self.pending = False
         self.robot: Robot | None = None
 
+    @classmethod
+    def on_stderr(cls, exit_stopped: int, exit_unconfirmed: int, unconfirmed: str) -> Interrupts:
+        """The policy saying what it does on standard error, written straight
+        to its file descriptor (safe in a signal handler)."""
+        return cls(
+            lambda text: os.write(2, text.encode()), exit_stopped, exit_unconfirmed, unconfirmed
+        )
+
     def install(self) -> None:
         """Take over SIGINT."""
         signal.signal(signal.SIGINT, self._handler)

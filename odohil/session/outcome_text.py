@@ -13,6 +13,7 @@ from odohil.science.estimators import EstimateResult, ParameterEstimate
 from odohil.science.estimators.verdict import Verdict
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.session.outcome import EstimateOutcome
+from odohil.session.table_text import TableText
 
 
 def verdict_line(verdict: Verdict) -> str:
@@ -70,6 +71,51 @@ def inside(entry: ParameterEstimate, value: float) -> bool:
     """Whether ``value`` lies in the entry's 95 % interval (a non-finite end: unbounded)."""
     low, high = entry.ci95
     return (not math.isfinite(low) or low <= value) and (not math.isfinite(high) or value <= high)
+
+
+def parameters_text(
+    result: EstimateResult,
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
+    title: str | None = None,
+    truth: Mapping[str, float] | None = None,
+) -> TableText:
+    """The four parameters with standard errors and 95 % intervals in
+    ``system``'s units (:func:`parameter_rows`); with ``truth`` (SI values by
+    name) a truth column in the same units and whether the interval holds it.
+    The title: ``title (method, N trials)``, else ``Estimate after N trials``."""
+    columns = ["parameter", "estimate", "std. error", "95 % interval", "unit"]
+    if truth is not None:
+        columns += ["truth", "truth inside"]
+    trials = units.plural(result.n_trials, "trial")
+    title = f"{title} ({result.method}, {trials})" if title else f"Estimate after {trials}"
+    rows = parameter_rows(result, system, truth)
+    return TableText(title, columns, rows, ("parameter", "unit"), flagged=("NO",), title_left=True)
+
+
+def parameter_rows(
+    result: EstimateResult,
+    system: units.UnitSystem,
+    truth: Mapping[str, float] | None = None,
+) -> list[list[str]]:
+    """Each parameter's row of the parameters table: name, estimate, standard
+    error, 95 % interval and unit in ``system``'s units; with ``truth`` (SI
+    values by name) also the truth in the same units and whether the interval
+    holds it (``yes``, else ``NO``)."""
+    rows = []
+    for p in result.parameters:
+        low, high = p.ci95
+        row = [
+            p.name,
+            number_text(p.name, p.value, system),
+            number_text(p.name, p.stderr, system, digits=2),
+            f"[{number_text(p.name, low, system)}, {number_text(p.name, high, system)}]",
+            units.unit_column(p.name, system),
+        ]
+        if truth is not None:
+            row.append(number_text(p.name, truth[p.name], system))
+            row.append("yes" if inside(p, truth[p.name]) else "NO")
+        rows.append(row)
+    return rows
 
 
 def gaussian_line(

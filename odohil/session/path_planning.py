@@ -51,6 +51,7 @@ from odohil.session.planning import (
 )
 from odohil.session.preflight import default_variant, plan_items
 from odohil.session.robot_file import load_robot_description
+from odohil.session.table_text import TableText
 
 
 @dataclass(frozen=True)
@@ -240,6 +241,11 @@ class ScoredPaths:
                 se = "not estimable"
             out.append((p.name, se, shown, units.unit_column(p.name, system)))
         return out
+
+    def table(self, system: units.UnitSystem) -> TableText:
+        """The table of :meth:`rows`, the measurement below it."""
+        columns, words = ("parameter", "stderr", "target", "unit"), ("parameter", "unit")
+        return TableText(self.title, columns, self.rows(system), words, self.measurement)
 
     def lines(self) -> list[str]:
         """What the plan cannot estimate and why, the notes and the problems."""

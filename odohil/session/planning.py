@@ -28,6 +28,7 @@ from odohil.science.targets import TARGET_FRACTIONS
 from odohil.session.plan import parse_plan
 from odohil.session.preflight import default_variant, turn_designs
 from odohil.session.robot_file import load_robot_description
+from odohil.session.table_text import TableText
 
 DEFAULT_SIGMA_M = 0.001
 """Tape sigma of one floor-mark distance without a robot description, m."""
@@ -104,6 +105,18 @@ class PlannedExperiment:
             rows.append((*row, minutes))
         return rows
 
+    def designs_table(self) -> TableText:
+        """The table of :meth:`design_rows` under the plan's title."""
+        designs = ("k", "l (m)", "variant", "trials", "metres", "minutes")
+        return TableText(self.title, designs, self.design_rows())
+
+    def errors_table(self, system: units.UnitSystem) -> TableText:
+        """The table of :meth:`error_rows`, the measurement below it."""
+        columns = ("parameter", "prior", "stderr", "target", "unit")
+        title = "Expected standard errors (Cramer-Rao)"
+        rows = self.error_rows(system)
+        return TableText(title, columns, rows, ("parameter", "unit"), self.measurement)
+
     def error_rows(self, system: units.UnitSystem) -> list[tuple[str, ...]]:
         """Per parameter in ``system``'s units: name, prior, expected standard
         error, target (" default" when not given; the stderr/target ratio), unit."""
@@ -122,6 +135,15 @@ class PlannedExperiment:
                 )
             )
         return rows
+
+    def turn_warning(self) -> str | None:
+        """Why the plan's turn designs would not be trusted (None: it has none)."""
+        if not self.turn_designs:
+            return None
+        return (
+            f"turn designs on a robot whose turns carry error ({', '.join(self.turn_designs)}): "
+            "the estimate will not be trusted; use variant=reverse"
+        )
 
     def time_lines(self) -> list[str]:
         """The operator time and the free floor the plan needs."""

@@ -26,6 +26,7 @@ import dataclasses
 import functools
 import importlib
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from importlib.metadata import EntryPoint, entry_points
 from typing import Any, Protocol, cast
@@ -236,6 +237,42 @@ def emulated_backends() -> tuple[RobotFacts, ...]:
         if facts.fake is not None and facts.fake.emulator:
             found.append(facts)
     return tuple(found)
+
+
+@dataclass(frozen=True)
+class EmulateHelp:
+    """What ``odohil emulate --help`` says of its robot-dependent options, from
+    the facts of the backends with a fake (:func:`emulated_backends`).
+
+    Attributes:
+        robot: ``--robot``: which fakes there are.
+        time_scale: ``--time-scale``: each fake's default time scale.
+        baud: ``--baud``: each fake's default line rate (its backend's default baud).
+    """
+
+    robot: str
+    time_scale: str
+    baud: str
+
+
+def emulate_help() -> EmulateHelp:
+    """The help of ``odohil emulate``'s ``--robot``, ``--time-scale`` and ``--baud``."""
+    backends = emulated_backends()
+    names = ", ".join(f"{f.name} (the {f.label})" for f in backends) or "none installed"
+
+    def defaults(what: str, value: Callable[[RobotFacts], float]) -> str:
+        per_robot = ", ".join(f"{f.name} {value(f):g}" for f in backends)
+        return f"default: the robot's own {what} ({per_robot})"
+
+    scale = defaults("time scale", lambda f: f.fake.emulate_time_scale if f.fake else 1.0)
+    return EmulateHelp(
+        f"Which fake robot: {names}, or a robot description file whose "
+        "\\[robot] protocol is one of them.",
+        f"Simulated seconds per wall second (motion, zr, timestamp); {scale}.",
+        "Line rate (pacing and the pty speed); "
+        + defaults("line rate, its backend's default baud", lambda f: f.default_baud)
+        + ".",
+    )
 
 
 def emulator(protocol: str) -> tuple[RobotFacts, FakeHooks, Any]:

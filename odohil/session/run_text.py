@@ -1,26 +1,36 @@
-"""What odohil says of a session run: where a resumed one stands, and when
-one did not finish (odohil/session/lifecycle/running.py's :class:`RunOutcome`)
-what ended it, whether the robot reported its stop, whether the journal holds
-the end, and the command that continues. Each line of the latter is a
-:class:`Said`: its head carries the tone the CLI renders (a colour there), its
-text follows plain."""
+"""What odohil says of a session run: where a resumed one stands; what an
+unattended run shows while it runs (:class:`RunWatch` on a :class:`RunView`,
+the CLI's progress bar); and when one did not finish
+(odohil/session/lifecycle/running.py's :class:`RunOutcome`) what ended it,
+whether the robot reported its stop, whether the journal holds the end, and
+the command that continues. Each line of the latter is a :class:`Said`: its
+head carries the tone the CLI renders (a colour there), its text follows plain."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Literal, Protocol
 
 from odohil import units
+from odohil.science.estimators import EstimateResult
+from odohil.session.events import Solved, Void
+from odohil.session.journal import Record
 from odohil.session.lifecycle import RunOutcome
+from odohil.session.operator_words import measured_again, remeasured
+from odohil.session.outcome_text import live_e_r
+from odohil.session.start_pose import StartPose
 from odohil.session.state import SessionState
+from odohil.session.tape_records import MeasurementsRejected, Remeasured
 
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
 
-Tone = Literal["plain", "note", "error", "alarm"]
+Tone = Literal["plain", "note", "error", "alarm", "title", "good", "done"]
 """How loud a line is: plain, a note (an interrupt), an error, an alarm (the
-robot may still be moving, the journal could not be written)."""
+robot may still be moving, the journal could not be written); the wizard's
+also a title (a trial's header, a question that stops the operator), good
+news (a solved trial) and done (the session complete)."""
 
 
 @dataclass(frozen=True)
@@ -38,6 +48,68 @@ def resuming(folder: Path, state: SessionState) -> str:
     done = f"{len(state.completed)} of {units.plural(state.plan.n_trials, 'trial')} done"
     opened = "" if state.open_trial is None else f", trial {state.open_trial.trial} open"
     return f"resuming {folder}: {done}{opened}"
+
+
+class RunView(Protocol):
+    """A run's progress as a user interface shows it (the CLI's progress bar)."""
+
+    def advance(self, completed: int) -> None:
+        """``completed`` trials of the plan are done."""
+        ...
+
+    def describe(self, text: str) -> None:
+        """Show ``text`` beside the progress (the live E_R)."""
+        ...
+
+    def status(self, text: str) -> None:
+        """A line on the run itself: a voided attempt, where the robot stands."""
+        ...
+
+    def say(self, *said: Said) -> None:
+        """Lines on what the measurer did."""
+        ...
+
+
+@dataclass
+class RunWatch:
+    """What ``run``, ``resume``, ``demo`` and ``validate`` show of a session as
+    it runs, on ``view``: the progress at each solved trial, a voided attempt,
+    distances ``measurer`` took again after a rejection, the live E_R in
+    ``system``'s units; at the start check where the robot stands; at the end
+    the slip check's summary (:meth:`summary`)."""
+
+    view: RunView
+    system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
+    measurer: str = "the simulated operator"
+    remeasured: dict[int, None] = field(default_factory=dict)
+    """The trials in which the slip check had a distance taken again, in order."""
+
+    def show_start(self, start: StartPose) -> None:
+        """The start check: where the encoders read (with the heading)."""
+        self.view.status(f"robot: {start.describe()}")
+
+    def record(self, record: Record, state: SessionState) -> None:
+        """Advance on each solved trial; tell voids and rejections."""
+        event = record.event
+        if isinstance(event, Solved):
+            self.view.advance(len(state.completed))
+        elif isinstance(event, Void):
+            self.view.status(f"trial {event.trial} attempt {event.attempt} void: {event.reason}")
+        elif isinstance(event, MeasurementsRejected):
+            self.view.say(Said("plain", measured_again(event.trial, self.measurer)))
+        elif isinstance(event, Remeasured) and not event.kept:
+            self.remeasured.setdefault(event.trial, None)
+
+    def estimated(self, result: EstimateResult, state: SessionState) -> None:
+        """Show the live E_R beside the progress."""
+        if (text := live_e_r(result, self.system)) is not None:
+            self.view.describe(text)
+
+    def summary(self) -> list[Said]:
+        """The slip check's work: in which trials a doubted distance was taken again."""
+        if not self.remeasured:
+            return []
+        return [Said("plain", remeasured(list(self.remeasured), self.measurer))]
 
 
 def error_said(message: str) -> Said:

@@ -2,7 +2,7 @@
 the one recipe's (odohil/session/outcome.py), so the live interval for E_R
 after the last trial is the one ``odohil estimate`` gives on the same trials.
 In process: the session engine on the in-process fake robot, the wizard's
-observer writing to a string."""
+watch (odohil/session/operator_dialogue.py) on its screen writing to a string."""
 
 from __future__ import annotations
 
@@ -11,11 +11,13 @@ from pathlib import Path
 
 from rich.console import Console
 
-from odohil.cli.render import MotionProgress, parameters_table
-from odohil.cli.wizard import WizardObserver
+from odohil.cli.render import drawn
+from odohil.cli.wizard import WizardScreen
 from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
 from odohil.session.interrupts import Interrupts
 from odohil.session.lifecycle import final_estimate
+from odohil.session.operator_dialogue import OperatorWatch
+from odohil.session.outcome_text import parameters_text
 from odohil.session.plan import parse_plan
 from odohil.session.sources import FakeTruthSource, TapeSource
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
@@ -35,7 +37,7 @@ def test_live_estimate_after_the_last_trial_is_the_final_recipes(tmp_path: Path)
             tmp_path / "s", ROBOT_TOML, parse_plan("k=1,l=1,n=3"), measure="fake", settings={}
         )
         interrupts = Interrupts(print, 130, 4, "the robot may still be moving")
-        observer = WizardObserver(console, interrupts, MotionProgress(console))
+        observer = OperatorWatch(WizardScreen(console), interrupts)
         with journal:
             final = SessionEngine(
                 journal,
@@ -49,4 +51,4 @@ def test_live_estimate_after_the_last_trial_is_the_final_recipes(tmp_path: Path)
     assert outcome.result is not None
     shown = out.getvalue()
     last = shown.rsplit("Trial 3 solved", 1)[1]
-    assert _text(parameters_table(outcome.result)) in last
+    assert _text(drawn(parameters_text(outcome.result))) in last
