@@ -480,6 +480,8 @@ class NomadEngine:
             data = GARBAGE + data
         if "merge" in faults:
             data = data + NAK_BYTES
+        if "stray" in faults:  # the answer to another host's st comes first
+            data = encode_state_reply(Code.ST, self.state(), self.mask) + data
         at = now
         if "late" in faults:
             at = max(now, host_wait_until) + LATE_EXTRA_S

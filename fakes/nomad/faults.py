@@ -20,7 +20,9 @@ from dataclasses import dataclass
 from odohil.errors import ParameterError
 from odohil.protocol.nomad.codes import Code
 
-REPLY_FAULTS = ("corrupt", "drop", "late", "split", "merge", "garbage", "nak", "wrong-type")
+REPLY_FAULTS = (
+    "corrupt", "drop", "late", "split", "merge", "garbage", "nak", "wrong-type", "stray",
+)  # fmt: skip
 MOTION_FAULTS = ("stuck", "disconnect", "watchdog")
 LINE_FAULTS = ("noise",)
 """Faults that take the line over: from the request they hit on, no more replies."""

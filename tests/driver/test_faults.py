@@ -30,7 +30,7 @@ REPLY_ERRORS: dict[str, type[OdohilError]] = {
     "nak": NakError,
     "wrong-type": UnexpectedReplyError,
 }
-HARMLESS = ("split", "merge", "garbage")
+HARMLESS = ("split", "merge", "garbage", "stray")
 # Ndirect's budget: 1 s for the first byte, plus our gs resync (1 s more at worst).
 ERROR_BUDGET_S = 2.5
 
@@ -138,3 +138,15 @@ def test_ctrl_c_during_polling_sends_st_first() -> None:
             fake.robot.poll_until_stopped(10.0, interrupt)
         assert [r.command for r in fake.truth().motion_log] == ["pr", "st"]
         assert fake.settles()
+
+
+def test_a_reply_to_another_hosts_stop_at_connect_is_skipped() -> None:
+    """After a SIGKILL the guardian sends st on the line; the robot's answer can
+    reach the next odohil process just after that process's first gs (seen:
+    resume failed its pre-flight, "reply type 9 does not answer GS"). The
+    stray st reply comes before the gs reply: it is skipped, counted, and the
+    connection stands."""
+    with fake_robot("seed=3&time_scale=50&fault=stray:gs@1") as fake:
+        assert fake.truth().faults_fired  # the connect's gs was the one hit
+        assert fake.robot.link.stats.rejected_replies == 1
+        assert not fake.robot.state().moving

@@ -249,8 +249,9 @@ class Link:
                 message = self._no_reply(first_byte_s, n_foreign, bytes(foreign))
                 if self.stats.rejected_replies > rejected:
                     message += (
-                        f"; {self.stats.rejected_replies - rejected} stale repl(ies) discarded "
-                        "(robot timestamp older than the last reply's)"
+                        f"; {self.stats.rejected_replies - rejected} repl(ies) discarded as not "
+                        "this request's (a reply to another request, or a robot timestamp older "
+                        "than the last reply's)"
                     )
                 raise OdohilTimeoutError(message)
             if begun and last_byte is not None and now - last_byte >= self._silence_s:

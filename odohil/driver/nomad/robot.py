@@ -39,7 +39,7 @@ from odohil.errors import (
     ProtocolError,
 )
 from odohil.protocol.nomad import messages as m
-from odohil.protocol.nomad.codes import MOTION_CODES, STATE_REPLY_CODES
+from odohil.protocol.nomad.codes import MOTION_CODES, STATE_REPLY_CODES, Code
 from odohil.protocol.nomad.framing import Packet
 from odohil.protocol.nomad.numbers import S16_MAX, U16_MAX
 from odohil.protocol.nomad.replies import decode_reply
@@ -49,6 +49,8 @@ from odohil.protocol.nomad.wire_units import metres_to_wire, radians_to_wire, wi
 WS_MAX_S = 255
 _U32_WRAP = 1 << 32
 _STATE_TYPES = frozenset(int(code) for code in STATE_REPLY_CODES)
+_REQUEST_TYPES = frozenset(int(code) for code in Code if code != Code.NAK)
+"""Reply TYPEs that answer some request (every request code; NAK answers any)."""
 STOP_CONFIRM_TIMEOUT_S = 2.0
 """How long :meth:`NomadRobot.stop_and_confirm` waits for the robot to report it stands still, s."""
 _STOP_POLL_S = 0.02
@@ -138,13 +140,27 @@ class NomadRobot:
     # -- requests -------------------------------------------------------
 
     def _request(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> RobotState:
-        packet = self._link.exchange(m.encode_request(request), first_byte_s, self._fresh)
+        code = request.code
+        packet = self._link.exchange(
+            m.encode_request(request), first_byte_s, lambda p: self._answers(p, code)
+        )
         reply = decode_reply(packet, request, self._mask)
         if not isinstance(reply, RobotState):  # pragma: no cover - state requests only
             raise TypeError(f"{request} does not answer with a state packet")
         self._last_ms = reply.timestamp_ms
         self._last = EncoderSample.from_state(reply, time.monotonic())
         return reply
+
+    def _answers(self, packet: Packet, code: Code) -> bool:
+        """False for a packet that is not the reply to request ``code``: the
+        reply to another request (a second host on the line sent it: odohil's
+        guardian stops the robot after its process was killed, and the robot's
+        answer can reach the next process after its own request) or a stale
+        state packet. A TYPE no request has stays a reply, which decode_reply
+        refuses (UnexpectedReplyError)."""
+        if packet.type != code and packet.type in _REQUEST_TYPES:
+            return False
+        return self._fresh(packet)
 
     def _fresh(self, packet: Packet) -> bool:
         """False for a state packet older than the last one accepted (a stale reply)."""
