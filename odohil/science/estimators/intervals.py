@@ -145,16 +145,16 @@ def satterthwaite_dofs(
     wanted = list(indices)
     var = np.diag(cov)[wanted]
     rates = list(fit.point.layout.log_rates)
-    h = 0.05
     grad = np.zeros((len(rates), len(wanted)))
     for j, k in enumerate(rates):
+        h, per_log = _rate_step(float(cov[k, k]))
         phi = fit.point.phi.copy()
         phi[k] += h
         moved = evaluate(groups, fit.point.moved(phi, derivatives=True), cox_reid)
         if moved.information is None:
             return none
         try:
-            grad[j] = (np.diag(np.linalg.inv(moved.information))[wanted] - var) / h
+            grad[j] = (np.diag(np.linalg.inv(moved.information))[wanted] - var) / per_log
         except np.linalg.LinAlgError:
             return none
     spread = np.einsum("ji,jk,ki->i", grad, cov[np.ix_(rates, rates)], grad)
@@ -163,6 +163,35 @@ def satterthwaite_dofs(
         ok = v > 0 and math.isfinite(v) and s2 > 0
         out.append(min(2.0 * float(v) ** 2 / float(s2), 1e6) if ok else math.inf)
     return out
+
+
+_LOG_STEP = 0.05
+"""The step in log K of the Satterthwaite derivative for a rate it determines well."""
+_K_STEP_SE = 0.1
+"""...and, for a rate it does not, the step in K in the rate's standard errors."""
+
+
+def _rate_step(log_var: float) -> tuple[float, float]:
+    """The step h in log K of the derivative of SE^2 in one log rate, and the
+    divisor that turns the difference into d SE^2 / d log K at the estimate.
+
+    A rate the data determine (log K's standard error small) is stepped by
+    :data:`_LOG_STEP` in log K. A rate on or near its floor has a log K
+    variance without bound (issue 19's Create 2 calibrations: K_theta at
+    1e-14 rad^2/m, Var(log K) 3.5e17): a step of 0.05 in log K moves K by
+    1e-15, below what the information resolves, and the round-off of that
+    difference times Var(log K) swamped SE^2's spread (E_T's nu fell to 1,
+    its 95 % interval to 12.7 standard errors, its 4-sigma one to +-14). Such
+    a rate is stepped by a tenth of its standard error in K instead, and the
+    secant in K is taken (d SE^2 / d log K = K d SE^2 / d K = dSE^2 / (e^h - 1)),
+    which SE^2's smooth dependence on K makes as good a derivative.
+    """
+    sd_log = math.sqrt(log_var) if math.isfinite(log_var) and log_var > 0 else math.inf
+    wide = math.log1p(_K_STEP_SE * sd_log) if math.isfinite(sd_log) else math.inf
+    if not wide > _LOG_STEP:
+        return _LOG_STEP, _LOG_STEP
+    h = min(wide, 50.0)  # K at most e^50 times itself: far past any rate's range
+    return h, math.expm1(h)
 
 
 def _with_derivatives(point: ModelPoint, keys: Sequence[Hashable]) -> ModelPoint:
