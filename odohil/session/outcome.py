@@ -42,8 +42,7 @@ from odohil.errors import MeasurementError, ParameterError, TrialFileError
 from odohil.science.estimators import EstimateResult, Observation, estimate
 from odohil.science.estimators.estimate import Method
 from odohil.science.estimators.paths import PATH_METHODS, estimate_paths
-from odohil.science.estimators.verdict import Verdict
-from odohil.science.grouping import by_design
+from odohil.science.estimators.verdict import Verdict, few_trial_designs
 from odohil.science.path_trials import PathTrial
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
@@ -297,11 +296,7 @@ def export_refusals(
     minimum for honest intervals), or a correction (distance scale 1 + E_T,
     heading drift E_R) whose 95 % interval is wider than the correction."""
     reasons = []
-    few = [
-        f"{design.label()} ({len(members)})"
-        for design, members in by_design(used, lambda o: o.design.forward).items()
-        if len(members) < min_trials_per_design
-    ]
+    few = few_trial_designs(used, min_trials_per_design)
     if few:
         reasons.append(
             f"fewer than {units.plural(min_trials_per_design, 'trial')} a design, the "

@@ -48,10 +48,13 @@ def test_excluded_trials_are_left_out_but_journaled(
     emulator: EmulatorProcess, tmp_path: Path
 ) -> None:
     done = _run(emulator, tmp_path, "2,7")
-    # the six trials left at these seeds (emulator 5, tape 2): trusted
-    assert (done.exit_code, json.loads(done.stdout)["verdict"]["status"]) == (0, "trusted"), (
-        done.stderr
-    )
+    # the six trials left at these seeds (emulator 5, tape 2): doubtful only for
+    # being below the planner's minimum trials a design (the exclusion is the point)
+    verdict = json.loads(done.stdout)["verdict"]
+    assert (done.exit_code, verdict["status"]) == (3, "doubtful"), done.stderr
+    assert [r.split(":")[0] for r in verdict["reasons"]] == [
+        "fewer than 10 trials a design, the planner's minimum for honest intervals"
+    ]
     result = json.loads(done.stdout)
     assert result["excluded"] == [2, 7]
     state = load_session(tmp_path / "session").state

@@ -55,7 +55,7 @@ def test_one_way_trials_come_back_over_the_same_floor(
     # before: four one-way trials of 1 m ended 4 m from where the first started
     start = emulator.truth()
     done = forked.completed(_run(emulator, tmp_path, "k=0.5,l=1,n=4"), timeout=120)
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 3, done.stderr  # finished; 4 trials: below the minimum, doubtful
     end = emulator.truth()
     away = math.hypot(end.true_x_m - start.true_x_m, end.true_y_m - start.true_y_m)
     assert away < 0.1, away  # only the odometry error of four 1 m runs
@@ -118,7 +118,7 @@ def test_resume_after_ctrl_c_mid_motion_refuses_unless_from_here(
 
     # told to, it goes on from there and completes every trial once
     done = forked.completed([*resume, "--from-here"], timeout=120)
-    assert done.returncode == 0, done.stderr
+    assert done.returncode == 3, done.stderr  # finished; 2 trials: below the minimum, doubtful
     assert "--from-here" in done.stderr
     records = read_journal(tmp_path / "session").records
     assert sorted(r.data["trial"] for r in records if r.kind == ev.SOLVED) == [1, 2]

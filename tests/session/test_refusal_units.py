@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 
 from odohil import units
 from odohil.cli.app import app
-from odohil.cli.exit_codes import EXIT_OK
+from odohil.cli.exit_codes import EXIT_UNTRUSTED
 
 
 def test_a_correction_refusal_names_its_unit(tmp_path: Path) -> None:
@@ -24,7 +24,7 @@ def test_a_correction_refusal_names_its_unit(tmp_path: Path) -> None:
          "--plan", "k=1,l=1,n=3", "--measure", "fake", "--allow-few-trials",
          "--session", str(session), "--json"],
     )  # fmt: skip
-    assert done.exit_code == EXIT_OK, done.output
+    assert done.exit_code == EXIT_UNTRUSTED, done.output  # 3 trials: below the minimum
     said = " ".join(done.stderr.split())
     found = re.search(
         r"E_R's 95 % interval \[(\S+), (\S+)\] deg/m is wider than its value (\S+) deg/m", said
