@@ -17,6 +17,9 @@ from .page import assert_self_contained, parse_page
 from .run import run_report
 from .session_factory import build_session
 
+FEW_TRIALS = "fewer than 10 trials a design, the planner's minimum for honest intervals"
+"""The report session's one doubt: its 6 trials a design."""
+
 
 def test_report_is_self_contained_and_matches_the_estimate(
     session: tuple[Path, SessionState], tmp_path: Path
@@ -48,7 +51,9 @@ def test_report_is_self_contained_and_matches_the_estimate(
     ]
 
     expected = estimate(session_observations(state)).to_json_dict()
-    assert expected["verdict"]["status"] == "trusted"
+    # doubtful for its 6 trials a design alone (below the planner's 10)
+    assert expected["verdict"]["status"] == "doubtful"
+    assert [r.split(":")[0] for r in expected["verdict"]["reasons"]] == [FEW_TRIALS]
     written = json.loads((out / "parameters.json").read_text())
     # as estimate --json prints it: the estimate, then what the session's trials add
     assert written["flagged_trials"] == [
@@ -124,7 +129,7 @@ def test_a_forced_report_states_the_verdict_in_every_export(bumped: Path, tmp_pa
     assert run.returncode == 0, run.stderr
     written = json.loads((out / "parameters.json").read_text())
     assert written["verdict"]["status"] == "doubtful"
-    assert "trial 3" in written["verdict"]["reasons"][0]
+    assert any("trial 3" in r for r in written["verdict"]["reasons"])
     for name in FILE_NAMES.values():
         text = (out / name).read_text()
         if name.endswith(".yaml"):
@@ -149,7 +154,9 @@ def test_report_exclude_leaves_the_trial_out(bumped: Path, tmp_path: Path) -> No
     run = run_report(bumped, out, "--exclude", "3", "--force")  # 6 trials a design
     assert run.returncode == 0, run.stderr
     written = json.loads((out / "parameters.json").read_text())
-    assert written["verdict"]["status"] == "trusted"
+    # the outlier left out: doubtful for the 6 trials a design alone
+    assert written["verdict"]["status"] == "doubtful"
+    assert [r.split(":")[0] for r in written["verdict"]["reasons"]] == [FEW_TRIALS]
     assert written["excluded"] == [3]
     assert written["n_trials"] == 11
     assert json.loads((out / FILE_NAMES["json"]).read_text())["excluded"] == [3]
