@@ -15,6 +15,12 @@ and its exit status is the command's (``sys.exit``'s code, or minus the
 signal that killed it), as :class:`subprocess.Popen` reports it. What differs
 from the console script: no ``exec`` and no imports in the child, stdin is
 ``/dev/null``, and its parent is the fork server rather than the test.
+
+:func:`spawn` forks it the same way onto a pseudo-terminal (the interactive
+wizard): the child starts a session of its own with the pty as its
+controlling terminal and stdin, stdout and stderr, and the test drives it
+with pexpect on the pty's master side, as ``pexpect.spawn`` drives a console
+process.
 """
 
 from __future__ import annotations
