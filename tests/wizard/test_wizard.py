@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import sys
 import time
 from pathlib import Path
 
@@ -62,6 +63,21 @@ def _spawn(args: list[str]) -> forked.PtyForked:
         env=_env(),
         dimensions=(50, 250),
         timeout=TIMEOUT_S,
+        logfile=LOG.open("a") if LOG else None,
+    )
+
+
+def _console(args: list[str]) -> pexpect.spawn:
+    """``python -m odohil wizard ARGS`` as a console process on a pseudo-terminal:
+    the console script's own start (only the wizard's command imported), which
+    :func:`test_the_wizard_connects_with_robot_toml_serial_and_says_so` keeps."""
+    return pexpect.spawn(
+        sys.executable,
+        ["-m", "odohil", "wizard", *args],
+        env=_env(),
+        encoding="utf-8",
+        timeout=TIMEOUT_S,
+        dimensions=(50, 250),
         logfile=LOG.open("a") if LOG else None,
     )
 
@@ -422,7 +438,7 @@ def test_the_wizard_connects_with_robot_toml_serial_and_says_so(tmp_path: Path) 
         robot = tmp_path / "robot.toml"
         serial = f'[serial]\nport = "{emulator.device}"\nbaud = 9600\n'
         robot.write_text(ROBOT_TOML + serial, encoding="utf-8")
-        child = _spawn(
+        child = _console(
             ["--robot", str(robot), "--plan", "k=1,l=1,n=2", "--session", str(tmp_path / "s")]
         )
         child.expect("press Enter to start the motion")
