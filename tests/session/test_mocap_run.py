@@ -51,17 +51,17 @@ PLAN = "k=1,l=2,n=20;k=0.5,l=2,n=20"
 trials, two still windows each."""
 FAST_RATE_HZ = 200.0
 """The driving sessions' senders: twice the others' 100 Hz, so that a window of
-:data:`FAST_WINDOW_S` holds about 30 frames."""
-FAST_WINDOW_S = 0.15
+:data:`FAST_WINDOW_S` holds about 50 frames, as the default 0.5 s at 100 Hz."""
+FAST_WINDOW_S = 0.25
 """The driving sessions' ``[measurement] still_window_s`` (default 0.5 s: the
 40-trial session's waits were 48 of its 53 s; the windows' length is not what
-these tests check)."""
-FAST_POSE_SIGMA = (0.0005, 0.0005, 0.001)
-"""Their pose_sigma: the median of ~30 frames, 1.2533 x FRAME_SIGMA / sqrt(30) =
-(0.46 mm, 0.46 mm, 0.92 mrad), rounded up."""
-FAST = (FAST_WINDOW_S, FAST_POSE_SIGMA)
+these tests check). 0.15 s was tried: on a machine at load 5.6 a window once
+got no frame at all (the sender, in this process, and the emulator it asks
+for the true pose were both descheduled)."""
+FAST = (FAST_WINDOW_S, POSE_SIGMA)
 """The sessions that drive (this one, the sender that dies, the frozen stream):
-the short window, its pose_sigma, senders at :data:`FAST_RATE_HZ`."""
+the short window, as many frames in it as before (so the same pose_sigma),
+senders at :data:`FAST_RATE_HZ`."""
 
 
 FEW_TRIALS = "fewer than 10 trials a design, the planner's minimum for honest intervals"
@@ -179,7 +179,7 @@ def test_motion_capture_run_brackets_the_fake_robots_parameters(
     starts = [r.data["start"] for r in records if r.kind == ev.TRIAL_START]
     assert len(starts) == 40
     # Each still pose is a median of at least the window's minimum of frames (a
-    # loaded machine may deliver fewer than the sender's 200 Hz x 0.15 s); the
+    # loaded machine may deliver fewer than the sender's 200 Hz x 0.25 s); the
     # window is the description's: the typical pose's frames were sent within it
     # (a frame delayed on a loaded machine may stretch one window's span)
     least = StillCriteria().min_poses
