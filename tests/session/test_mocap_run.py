@@ -369,6 +369,7 @@ def test_a_frozen_stream_is_refused_at_the_first_trial_and_resume_goes_on_with_a
     ):
         resumed = _resume(tmp_path, good.url)
     result = json.loads(resumed.stdout)
+    assert "verdict" in result, (resumed.returncode, resumed.stdout, resumed.stderr)
     assert (resumed.returncode, result["verdict"]["status"]) == (3, "doubtful"), resumed.stderr
     assert [r.split(":")[0] for r in result["verdict"]["reasons"]] == [FEW_TRIALS]
     assert result["n_trials"] == 4
