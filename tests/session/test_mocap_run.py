@@ -59,8 +59,8 @@ these tests check). 0.15 s was tried: on a machine at load 5.6 a window once
 got no frame at all (the sender, in this process, and the emulator it asks
 for the true pose were both descheduled)."""
 FAST = (FAST_WINDOW_S, POSE_SIGMA)
-"""The sessions that drive (this one, the sender that dies, the frozen stream):
-the short window, as many frames in it as before (so the same pose_sigma),
+"""The sessions that drive many trials (this one, the sender that dies): the
+short window, as many frames in it as before (so the same pose_sigma),
 senders at :data:`FAST_RATE_HZ`."""
 
 
@@ -353,8 +353,8 @@ def test_a_frozen_stream_is_refused_at_the_first_trial_and_resume_goes_on_with_a
 ) -> None:
     emulator = watched
     plan = FIRST_TRIAL_PLANS[first]
-    with FrameServer(_frozen(3), rate_hz=FAST_RATE_HZ) as frozen:
-        done = _run(emulator, _robot(tmp_path, window=FAST), frozen.url, tmp_path, plan)
+    with FrameServer(_frozen(3)) as frozen:
+        done = _run(emulator, _robot(tmp_path), frozen.url, tmp_path, plan)
     _refused_at_the_first_trial(tmp_path, done)
     assert "frozen stream?" in done.stderr
     assert "RuntimeWarning" not in done.stderr
@@ -363,10 +363,7 @@ def test_a_frozen_stream_is_refused_at_the_first_trial_and_resume_goes_on_with_a
     assert "frozen stream?" in message
     assert frozen.url in message
     # the sender fixed, the session goes on where it stopped and completes
-    with (
-        TruthClient(emulator.truth_socket) as truth,
-        FrameServer(_truth_frames(truth, 4), rate_hz=FAST_RATE_HZ) as good,
-    ):
+    with TruthClient(emulator.truth_socket) as truth, FrameServer(_truth_frames(truth, 4)) as good:
         resumed = _resume(tmp_path, good.url)
     result = json.loads(resumed.stdout)
     assert "verdict" in result, (resumed.returncode, resumed.stdout, resumed.stderr)
