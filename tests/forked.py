@@ -15,20 +15,31 @@ and its exit status is the command's (``sys.exit``'s code, or minus the
 signal that killed it), as :class:`subprocess.Popen` reports it. What differs
 from the console script: no ``exec`` and no imports in the child, stdin is
 ``/dev/null``, and its parent is the fork server rather than the test.
+
+:func:`spawn` forks it the same way onto a pseudo-terminal (the interactive
+wizard): the child starts a session of its own with the pty as its
+controlling terminal and stdin, stdout and stderr, and the test drives it
+with pexpect on the pty's master side, as ``pexpect.spawn`` drives a console
+process.
 """
 
 from __future__ import annotations
 
+import fcntl
 import multiprocessing
 import os
 import signal
+import struct
 import subprocess
 import sys
+import termios
 import threading
 import time
 from multiprocessing import reduction
 from types import TracebackType
-from typing import Self
+from typing import Self, TextIO
+
+from pexpect import fdpexpect
 
 PRELOAD = [
     "odohil.cli.app",
@@ -189,6 +200,110 @@ class Forked:
         tb: TracebackType | None,
     ) -> None:
         self.close()
+
+
+def _pty_child(args: list[str], slave: int, env: dict[str, str] | None) -> None:
+    """In the forked process: a session of its own whose controlling terminal is
+    the pseudo-terminal ``slave``, stdin, stdout and stderr on it (text streams
+    rebuilt as the interpreter builds them on a terminal: line-buffered), then
+    the console script."""
+    os.setsid()
+    fcntl.ioctl(slave, termios.TIOCSCTTY, 0)
+    if env is not None:
+        os.environ.clear()
+        os.environ.update(env)
+    for fd in (0, 1, 2):  # (multiprocessing's /dev/null on 0 is replaced)
+        os.dup2(slave, fd)
+    if slave > 2:
+        os.close(slave)
+    sys.stdin = open(0, encoding="utf-8", closefd=False)  # noqa: SIM115
+    sys.stdout = open(1, "w", encoding="utf-8", closefd=False)  # noqa: SIM115
+    sys.stderr = open(  # noqa: SIM115
+        2, "w", encoding="utf-8", errors="backslashreplace", closefd=False, buffering=1
+    )
+    sys.argv = ["odohil", *args]
+    from odohil.cli.app import main
+
+    main()
+
+
+class PtyForked(fdpexpect.fdspawn):
+    """``odohil ARGS`` forked from the server (as :class:`Forked`) on a
+    pseudo-terminal: its controlling terminal, stdin, stdout and stderr, as
+    ``pexpect.spawn`` gives a console process; Ctrl-C typed on it
+    (:meth:`sendintr`) is the terminal's SIGINT to the process. The subset of
+    ``pexpect.spawn`` the tests use: expect, sendline, sendintr, kill, wait,
+    close, exitstatus (None when a signal ended it: then signalstatus).
+
+    Args:
+        args: the command line after ``odohil``.
+        env: its environment.
+        dimensions: the terminal's (rows, columns).
+        timeout: expect's timeout, s.
+        logfile: where what is read and sent is also written (None: nowhere).
+    """
+
+    def __init__(
+        self,
+        args: list[str],
+        env: dict[str, str] | None,
+        dimensions: tuple[int, int],
+        timeout: float,
+        logfile: TextIO | None = None,
+    ) -> None:
+        master, slave = os.openpty()
+        try:
+            fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", *dimensions, 0, 0))
+            self._process = _CONTEXT.Process(
+                target=_pty_child, args=(list(args), _PassFd(slave), env)
+            )
+            self._process.start()
+        finally:
+            os.close(slave)
+        super().__init__(master, timeout=timeout, encoding="utf-8", logfile=logfile)
+        pid = self._process.pid
+        assert pid is not None
+        self.pid: int = pid
+        self.exitstatus: int | None = None
+        self.signalstatus: int | None = None
+
+    def sendintr(self) -> None:
+        """Type Ctrl-C (the terminal's interrupt character)."""
+        self.send("\x03")
+
+    def kill(self, sig: int) -> None:
+        """Send ``sig`` to the process (nothing once it has ended)."""
+        if self._process.exitcode is None:
+            os.kill(self.pid, sig)
+
+    def wait(self, timeout: float | None = 30.0) -> int | None:
+        """Wait for the end (TimeoutError after ``timeout`` s); its exit status."""
+        self._process.join(timeout)
+        code = self._process.exitcode
+        if code is None:
+            raise TimeoutError(f"odohil (pid {self.pid}) still runs after {timeout} s")
+        self.exitstatus, self.signalstatus = (code, None) if code >= 0 else (None, -code)
+        return self.exitstatus
+
+    def close(self, force: bool = True) -> None:
+        """Close the terminal (a process still on it gets its hang-up), wait for
+        the end, and kill it if it has not ended within 5 s."""
+        super().close()
+        self._process.join(5.0)
+        if self._process.exitcode is None and force:
+            os.kill(self.pid, signal.SIGKILL)
+        self.wait()
+
+
+def spawn(
+    args: list[str],
+    env: dict[str, str] | None = None,
+    dimensions: tuple[int, int] = (24, 80),
+    timeout: float = 30.0,
+    logfile: TextIO | None = None,
+) -> PtyForked:
+    """``odohil ARGS`` forked from the server on a pseudo-terminal (:class:`PtyForked`)."""
+    return PtyForked(args, env, dimensions, timeout, logfile)
 
 
 def start(args: list[str], env: dict[str, str] | None = None) -> Forked:

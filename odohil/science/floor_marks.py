@@ -38,9 +38,9 @@ from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
-from scipy import stats
 
 from odohil.errors import InconsistentMeasurementError, MeasurementError
+from odohil.science import distributions
 from odohil.science.frames import inverse_pose, rotate_points, rotation
 from odohil.science.robot_description import RobotDescription
 from odohil.units import angle_near, wrap_angle, wrap_angles
@@ -277,7 +277,7 @@ def solve_marks(
     seeds = _seeds(geometry, measured, odometry, prior_mean)
     minima, chi2 = _local_minima(seeds, geometry, measured, weights)
     dof = measured.size - 3
-    limit = float(stats.chi2.isf(CONSISTENCY_LEVEL, max(dof, 1)))
+    limit = float(distributions.chi2_isf(CONSISTENCY_LEVEL, max(dof, 1)))
     if chi2.min() > limit:
         raise _inconsistency(geometry, measured, seeds, minima, float(chi2.min()), limit)
 

@@ -83,6 +83,7 @@ RANGES: dict[str, Range] = {
     "sigma_m": Range(1e-6, 1.0, "m"),
     "pose_sigma_m": Range(1e-6, 1.0, "m"),
     "pose_sigma_rad": Range(1e-6, 1.0, "rad"),
+    "still_window_s": Range(0.02, 60.0, "s"),
     "screw_m": Range(-10.0, 10.0, "m"),
     "timeout_s": Range(1e-3, 600.0, "s"),
     "target_E_R": Range(1e-9, 100.0, "deg/m"),

@@ -50,9 +50,9 @@ from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
-from scipy import stats
 
 from odohil.errors import RobotDescriptionError
+from odohil.science import distributions
 from odohil.science.estimators.result import EstimateResult
 from odohil.science.fisher import moment_derivatives
 from odohil.science.floor_marks import (
@@ -448,7 +448,7 @@ def slip_check(
     statistic, weighted, s_inv = _innovation_test(innovation, s)
     explained = weighted**2 / np.diag(s_inv)
     suspect = int(np.argmax(explained))
-    limit = float(stats.chi2.isf(SLIP_LEVEL, m))
+    limit = distributions.chi2_isf(SLIP_LEVEL, m)
     return SlipCheck(
         statistic=statistic,
         dof=m,
@@ -575,7 +575,7 @@ def pose_check(
         )
         for what, measured, encoders in pairs
     )
-    return PoseCheck(statistic, float(stats.chi2.isf(SLIP_LEVEL, 3)), scales)
+    return PoseCheck(statistic, distributions.chi2_isf(SLIP_LEVEL, 3), scales)
 
 
 def required_cross_distances(design: Design) -> int:

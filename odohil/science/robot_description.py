@@ -12,6 +12,8 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_fil
     cross = [["A", "B"], ["B", "C"]]  # start mark of A to end mark of B, B to C
     pose_sigma = [0.0005, 0.0005, 0.001]  # optional, motion capture: one still pose's
                              # standard deviations (x m, y m, theta rad), world axes
+    still_window_s = 0.5     # optional, motion capture: how long a still pose's
+                             # frames are collected, s (default 0.5)
     [robot]                  # optional: which driver backend speaks to it
     protocol = "nomad150"    # an odohil.robots entry point (default nomad150)
     # differential drives (the create2 backend, logs with wheel counts; defaults:
@@ -107,7 +109,7 @@ DEFAULT_PRIOR_SD_PAPER: tuple[float, float, float, float] = (0.5, 0.05, 0.05, 2e
 """Default prior spreads (deg/m, 1, deg^2/m, m): 2.5 times |E_R|, 5 % on the
 distance scale, 4 times K_theta and 5 times K_rho of the Nomad 150, so that a
 robot several times worse than the paper's still lies within two of them."""
-_MEASUREMENT_KEYS = ("sigma_m", "cross", "pose_sigma")
+_MEASUREMENT_KEYS = ("sigma_m", "cross", "pose_sigma", "still_window_s")
 _SERIAL_KEYS = ("port", "baud", "timeout_s")
 
 
@@ -218,6 +220,11 @@ class RobotDescription:
             system's world axes, theta rad; None when not given (motion
             capture then refuses to start).
         robot: which robot this is (``[robot]``).
+        still_window_s: how long motion capture collects the frames of one
+            still pose, s (``[measurement] still_window_s``); None: the still
+            window's default (odohil/session/mocap/still.py, 0.5 s). A still
+            pose is the median of the window's frames, so pose_sigma is the
+            spread of still poses taken over this window.
     """
 
     screws: tuple[Screw, ...]
@@ -228,6 +235,7 @@ class RobotDescription:
     floor_length_m: float | None = None
     pose_sigma: tuple[float, float, float] | None = None
     robot: RobotSettings = field(default_factory=RobotSettings)
+    still_window_s: float | None = None
 
     def __post_init__(self) -> None:
         _check_screws(self.screws)
@@ -240,6 +248,8 @@ class RobotDescription:
         _check_serial(self.serial)
         if self.pose_sigma is not None:
             _check_pose_sigma(self.pose_sigma)
+        if self.still_window_s is not None:
+            _in_range("still_window_s", "measurement.still_window_s", self.still_window_s)
         floor = self.floor_length_m
         if floor is not None and (not math.isfinite(floor) or not 0 < floor <= MAX_FLOOR_M):
             raise RobotDescriptionError(
@@ -301,6 +311,8 @@ def _from_mapping(data: dict[str, Any], lookup: FactsLookup | None) -> RobotDesc
     sigma_m = _number(measurement["sigma_m"], "measurement.sigma_m")
     cross_pairs = _cross_pairs(measurement.get("cross", []))
     pose_sigma = _pose_sigma(measurement["pose_sigma"]) if "pose_sigma" in measurement else None
+    window = measurement.get("still_window_s")
+    still_window_s = None if window is None else _number(window, "measurement.still_window_s")
     serial_table = _table(data, "serial", required=False)
     _reject_unknown(serial_table, _SERIAL_KEYS, "serial.")
     serial = _serial(serial_table, facts)
@@ -317,6 +329,7 @@ def _from_mapping(data: dict[str, Any], lookup: FactsLookup | None) -> RobotDesc
         floor_length_m=floor_m,
         pose_sigma=pose_sigma,
         robot=robot,
+        still_window_s=still_window_s,
     )
 
 

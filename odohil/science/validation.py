@@ -65,9 +65,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import special, stats
 
 from odohil.errors import ParameterError
+from odohil.science import distributions
 from odohil.science.moments import pose_moments, turn_errors_from
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import EncoderPath, FloatArray
@@ -372,12 +372,12 @@ def _test(
     mean: tuple[float, ...] = (),
     stderr: tuple[float, ...] = (),
 ) -> ChiSquareTest:
-    threshold = float(stats.chi2.isf(level, dof))
+    threshold = distributions.chi2_isf(level, dof)
     return ChiSquareTest(
         name=name,
         statistic=statistic,
         dof=dof,
-        p_value=float(stats.chi2.sf(statistic, dof)),
+        p_value=distributions.chi2_sf(statistic, dof),
         level=level,
         threshold=threshold,
         passed=statistic <= threshold,
@@ -429,8 +429,10 @@ def detectable_errors(
     if not (level < power < 1.0):
         raise ParameterError(f"power must be in ({level:g}, 1), got {power!r}")
     w_inv = np.linalg.inv(bias_cov)
-    needed_overall = float(special.chndtrinc(float(stats.chi2.isf(level, 3)), 3, 1.0 - power))
-    needed_axis = float(special.chndtrinc(float(stats.chi2.isf(level, 1)), 1, 1.0 - power))
+    needed_overall = distributions.ncx2_noncentrality(
+        distributions.chi2_isf(level, 3), 3, 1.0 - power
+    )
+    needed_axis = distributions.ncx2_noncentrality(distributions.chi2_isf(level, 1), 1, 1.0 - power)
     out = []
     for j in range(mean_jacobian.shape[1]):
         a = mean_jacobian[:, j]
@@ -568,7 +570,7 @@ def ellipse_data(
         j = prediction.jacobian[:2]
         cov = cov + j @ np.asarray(parameter_cov, dtype=np.float64) @ j.T
     values, vectors = np.linalg.eigh(0.5 * (cov + cov.T))
-    scale = float(stats.chi2.ppf(level, 2))
+    scale = distributions.chi2_ppf(level, 2)
     major, minor = (math.sqrt(max(float(v), 0.0) * scale) for v in values[::-1])
     angle = math.atan2(float(vectors[1, -1]), float(vectors[0, -1]))
     return EllipseData(

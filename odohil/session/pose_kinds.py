@@ -14,7 +14,13 @@ from pathlib import Path
 from typing import Any
 
 from odohil.errors import InitError, MeasurementError, ParameterError
-from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_sigma_of, require_pose
+from odohil.session.mocap import (
+    MotionCaptureSource,
+    PoseStream,
+    pose_sigma_of,
+    require_pose,
+    still_criteria_of,
+)
 from odohil.session.mocap.stream import parse_tcp_url
 from odohil.session.pose_source import PoseSource
 from odohil.session.pose_sources import (
@@ -222,6 +228,7 @@ class MotionCaptureKind:
         """
         url = settings.url
         sigma = pose_sigma_of(ctx.description, url)
+        criteria = still_criteria_of(ctx.description)
         stream = PoseStream(url)
         try:
             stream.open()
@@ -231,7 +238,7 @@ class MotionCaptureKind:
             raise InitError(f"{exc}; nothing moved") from None
         try:
             yield OpenedSource(
-                lambda connection: MotionCaptureSource(stream, sigma),
+                lambda connection: MotionCaptureSource(stream, sigma, criteria),
                 note=f"motion capture {url}: poses arriving",
             )
         finally:

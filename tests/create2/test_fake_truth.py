@@ -17,14 +17,16 @@ from fakes.create2.process import Create2Process
 from odohil.cli.app import app
 from odohil.session.robots import fake_hooks
 
-FAKE = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15"
+FAKE = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15&skip_waits=1"
 """The in-process fake Create 2. Its clock is the wall clock unless ``max_gap_ms``
 bounds the step between two host calls (fakes/create2/clock.py): without it, a
 test worker descheduled for a few milliseconds on a busy machine (``-n 4`` on 2
 cores) let a validation leg drive on, 37 counts past its target against a
 tolerance of 22, and validate exit 1 ("leg -0.5 m ended +37 ... counts from its
 target"). With it, the fake's time advances in bounded steps between the
-driver's calls, however late they come, as a real robot's host would see it."""
+driver's calls, however late they come, as a real robot's host would see it.
+``skip_waits=1``: a read waiting for the next stream frame moves the fake's
+clock to it instead of sleeping (the same frames at the same simulated times)."""
 
 
 def invoke(*args: str | Path) -> Result:

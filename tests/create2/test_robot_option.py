@@ -26,7 +26,7 @@ from odohil.session.state import load_session
 
 fakes.register_url_handlers()
 
-FAKE = "fakecreate2://?seed=1&time_scale=10&max_gap_ms=15"
+FAKE = "fakecreate2://?seed=1&time_scale=10&max_gap_ms=15&skip_waits=1"
 
 
 @dataclass(frozen=True)

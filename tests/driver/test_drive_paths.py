@@ -48,8 +48,10 @@ URLS = {
     # the Nomad runs its own pr profile: fast-forwarded freely
     "nomad150": "fakerobot://?seed=1&time_scale=200",
     # the Create 2's host ends each step on 15 ms readings: time scale 10 with
-    # the lag-absorbing clock, as the demo drives it (odohil/driver/create2/facts.py)
-    "create2": "fakecreate2://?seed=1&time_scale=10&max_gap_ms=15",
+    # the lag-absorbing clock, as the demo drives it (odohil/driver/create2/facts.py),
+    # and its waits for the next reading skipped (the same readings at the same
+    # simulated times, without sleeping; the wall clock is the pty test's below)
+    "create2": "fakecreate2://?seed=1&time_scale=10&max_gap_ms=15&skip_waits=1",
 }
 PATHS = (
     "square:0.5,ccw",
@@ -254,7 +256,7 @@ CREATE2_TURN_FAULTS: dict[str, type[OdohilError]] = {
 def test_a_create2_fault_during_a_turn_stops_the_robot_and_resends_nothing(
     fault: str, error: type[OdohilError]
 ) -> None:
-    url = f"fakecreate2://?seed=2&time_scale=4&max_gap_ms=15&fault={fault}"
+    url = f"fakecreate2://?seed=2&time_scale=4&max_gap_ms=15&skip_waits=1&fault={fault}"
     with armed("create2", url) as robot:
         with pytest.raises(error):
             robot.drive(parse_path_design("square:0.3,cw"), SETTINGS)

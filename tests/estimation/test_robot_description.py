@@ -194,3 +194,21 @@ def test_pose_sigma_for_motion_capture_is_optional_and_parsed() -> None:
 def test_bad_pose_sigma_names_the_key_and_the_range(value: str, message: str) -> None:
     with pytest.raises(RobotDescriptionError, match=message):
         parse_robot_description(MINIMAL + f"pose_sigma = {value}\n")
+
+
+def test_the_still_window_for_motion_capture_is_optional_parsed_and_bounded() -> None:
+    from odohil.session.mocap import StillCriteria, still_criteria_of
+
+    plain = parse_robot_description(MINIMAL)
+    assert plain.still_window_s is None
+    assert still_criteria_of(plain) == StillCriteria()  # the default window, 0.5 s
+    short = parse_robot_description(MINIMAL + "still_window_s = 0.15\n")
+    assert short.still_window_s == 0.15
+    assert still_criteria_of(short) == StillCriteria(window_s=0.15)
+    for value, message in (
+        ("0", r"measurement\.still_window_s must be at least 0\.02 and at most 60 s"),
+        ("61", r"measurement\.still_window_s must be at least 0\.02 and at most 60 s"),
+        ("'1 s'", r"measurement\.still_window_s must be a number"),
+    ):
+        with pytest.raises(RobotDescriptionError, match=message):
+            parse_robot_description(MINIMAL + f"still_window_s = {value}\n")

@@ -38,8 +38,14 @@ from odohil.session.state import SessionState, load_session
 ROBOTS = Path(robots_init).parent
 BACKENDS = {
     "nomad150": ("fakerobot://?seed=6&time_scale=100", "k=1,l=1,n=3"),
-    "create2": ("fakecreate2://?seed=3&time_scale=10&max_gap_ms=15", "k=0.5,l=0.5,n=3"),
+    "create2": (
+        "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15&skip_waits=1",
+        "k=0.5,l=0.5,n=3",
+    ),
 }
+"""Each backend's in-process fake and a plan; the Create 2's waits for its next
+stream frame skipped (``skip_waits=1``: the same frames at the same simulated
+times, without sleeping): no test here times the robot against the wall clock."""
 ORDER = [
     "session folder",
     "robot description",

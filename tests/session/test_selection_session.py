@@ -8,8 +8,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import subprocess
-import sys
 from collections.abc import Mapping
 from dataclasses import replace
 from pathlib import Path
@@ -52,6 +50,7 @@ from odohil.session.tape_records import (
     Remeasured,
     TapeContext,
 )
+from tests import forked
 from tests.report.session_factory import PortTruth
 from tests.session.helpers import ROBOT_TOML, readings_of
 
@@ -126,13 +125,7 @@ def test_ambiguous_trials_are_journaled_left_out_and_listed(tmp_path: Path) -> N
     estimates = _records(folder, ev.ESTIMATE)
     assert all(e["n_trials"] <= len(state.completed) for e in estimates)
 
-    done = subprocess.run(
-        [sys.executable, "-m", "odohil", "estimate", str(folder), "--json"],
-        capture_output=True,
-        text=True,
-        env=dict(os.environ),
-        check=False,
-    )
+    done = forked.completed(["odohil", "estimate", str(folder), "--json"], env=dict(os.environ))
     assert done.returncode == 3, "ambiguous trials left out make the verdict doubtful"
     result = json.loads(done.stdout)
     assert result["ambiguous_trials"] == [t.trial for t in left_out]

@@ -38,6 +38,7 @@ from odohil.session.journal import journal_path, read_journal
 from odohil.session.sources import relative_true_pose
 from odohil.session.state import replay
 from odohil.session.tape_records import Measurement, Remeasured
+from tests import forked
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 
 DESCRIPTION = parse_robot_description(ROBOT_TOML)
@@ -53,7 +54,23 @@ def _env() -> dict[str, str]:
     return env
 
 
-def _spawn(args: list[str]) -> pexpect.spawn:
+def _spawn(args: list[str]) -> forked.PtyForked:
+    """``odohil wizard ARGS`` on a pseudo-terminal of its own: a real process
+    forked from a server that imported odohil once (tests/forked.py), without
+    the interpreter's start and the imports of a console process."""
+    return forked.spawn(
+        ["wizard", *args],
+        env=_env(),
+        dimensions=(50, 250),
+        timeout=TIMEOUT_S,
+        logfile=LOG.open("a") if LOG else None,
+    )
+
+
+def _console(args: list[str]) -> pexpect.spawn:
+    """``python -m odohil wizard ARGS`` as a console process on a pseudo-terminal:
+    the console script's own start (only the wizard's command imported), which
+    :func:`test_the_wizard_connects_with_robot_toml_serial_and_says_so` keeps."""
     return pexpect.spawn(
         sys.executable,
         ["-m", "odohil", "wizard", *args],
@@ -74,14 +91,14 @@ def _prompt(index: int) -> str:
     return re.escape(f"{LABELS[index]}, metres (")
 
 
-def _answer(child: pexpect.spawn, text: str, then: str) -> None:
+def _answer(child: forked.PtyForked, text: str, then: str) -> None:
     """Type ``text``; confirm it if the wizard asks; wait for ``then``."""
     child.sendline(text)
     while child.expect([then, "type the same value again"]) == 1:
         child.sendline(text)
 
 
-def _marks(child: pexpect.spawn, truth: TruthClient, asked: bool = False) -> list[float]:
+def _marks(child: forked.PtyForked, truth: TruthClient, asked: bool = False) -> list[float]:
     """Start marks, motion, end marks; the exact distances of the true pose change
     (``asked``: the start-marks prompt was already seen)."""
     if not asked:
@@ -95,14 +112,14 @@ def _marks(child: pexpect.spawn, truth: TruthClient, asked: bool = False) -> lis
     return [float(v) for v in marks_from_pose(DESCRIPTION, change).as_array()]
 
 
-def _type_all(child: pexpect.spawn, values: list[float], done: str, digits: str = "") -> None:
+def _type_all(child: forked.PtyForked, values: list[float], done: str, digits: str = "") -> None:
     """Type every distance (``repr``, then ``digits`` more than a float holds)."""
     for i, value in enumerate(values):
         then = _prompt(i + 1) if i + 1 < len(values) else done
         _answer(child, repr(value) + digits, then)
 
 
-def _refused(child: pexpect.spawn, text: str, reason: str) -> None:
+def _refused(child: forked.PtyForked, text: str, reason: str) -> None:
     child.sendline(text)
     child.expect(reason)
     child.expect(_prompt(0))
@@ -203,7 +220,7 @@ def test_three_trial_session_with_bad_inputs_interrupt_and_resume(tmp_path: Path
     assert state.voided == 1
 
 
-def _retype_asked(child: pexpect.spawn, values: list[float], done: str) -> list[int]:
+def _retype_asked(child: forked.PtyForked, values: list[float], done: str) -> list[int]:
     """Answer whichever distances are asked for (the true ones) until ``done``;
     the indices asked, in order."""
     asked: list[int] = []
@@ -214,7 +231,7 @@ def _retype_asked(child: pexpect.spawn, values: list[float], done: str) -> list[
     return asked
 
 
-def _type_all_from(child: pexpect.spawn, values: list[float], first: int, done: str) -> None:
+def _type_all_from(child: forked.PtyForked, values: list[float], first: int, done: str) -> None:
     for i in range(first, len(values)):
         then = _prompt(i + 1) if i + 1 < len(values) else done
         _answer(child, repr(values[i]), then)
@@ -423,7 +440,7 @@ def test_the_wizard_connects_with_robot_toml_serial_and_says_so(tmp_path: Path) 
         robot = tmp_path / "robot.toml"
         serial = f'[serial]\nport = "{emulator.device}"\nbaud = 9600\n'
         robot.write_text(ROBOT_TOML + serial, encoding="utf-8")
-        child = _spawn(
+        child = _console(
             ["--robot", str(robot), "--plan", "k=1,l=1,n=2", "--session", str(tmp_path / "s")]
         )
         child.expect("press Enter to start the motion")

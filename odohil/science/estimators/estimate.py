@@ -8,10 +8,10 @@ from dataclasses import replace
 from typing import Literal
 
 import numpy as np
-from scipy import special
 
 from odohil import units
 from odohil.errors import MeasurementError
+from odohil.science import distributions
 from odohil.science.estimators.checks import Criteria, design_misfit, model_check, sufficiency
 from odohil.science.estimators.intervals import profile_interval, satterthwaite_dofs, t_interval
 from odohil.science.estimators.joint import JointFit, joint_estimate, start_phi
@@ -84,7 +84,7 @@ def _estimates(
     estimates = []
     for name, value, se in zip(PARAMETER_NAMES, params.as_tuple(), stderr, strict=True):
         dof = _dof(name, value, float(se), base)
-        q = float(special.stdtrit(dof, 0.975))  # the t quantile (50x faster than stats)
+        q = distributions.t_ppf(0.975, dof)  # the t quantile
         estimates.append(ParameterEstimate.build(name, value, float(se), q, dof))
     return tuple(estimates), stderr
 

@@ -50,8 +50,8 @@ from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
+from odohil.science import distributions
 from odohil.science.estimators.joint import JointFit, designs_of
 from odohil.science.estimators.likelihood import (
     GroupStats,
@@ -64,7 +64,7 @@ from odohil.science.paths import FloatArray
 FOUR_SIGMA = 4.0
 """The 'confidently wrong' distance, as a normal quantile."""
 LEVEL_95 = 0.95
-LEVEL_4SIGMA = 1.0 - 2.0 * float(stats.norm.sf(FOUR_SIGMA))
+LEVEL_4SIGMA = 1.0 - 2.0 * distributions.norm_sf(FOUR_SIGMA)
 """0.999937: the two-sided level of +- 4 sigma."""
 _LOG_K_RANGE = (math.log(1e-14), math.log(1e2))
 _INNER_STEPS = 15
@@ -109,8 +109,8 @@ def t_interval(value: float, stderr: float, dof: float, rule: str) -> Interval:
     if not math.isfinite(stderr):
         return Interval((-math.inf, math.inf), (-math.inf, math.inf), rule, dof)
     nu = max(dof, 1.0)
-    q95 = float(stats.t.ppf(0.5 + LEVEL_95 / 2, nu))
-    q4 = float(stats.t.ppf(0.5 + LEVEL_4SIGMA / 2, nu))
+    q95 = distributions.t_ppf(0.5 + LEVEL_95 / 2, nu)
+    q4 = distributions.t_ppf(0.5 + LEVEL_4SIGMA / 2, nu)
     return Interval(
         (value - q95 * stderr, value + q95 * stderr),
         (value - q4 * stderr, value + q4 * stderr),
@@ -501,7 +501,7 @@ def profile_interval(
     if not math.isfinite(se_psi) or se_psi == 0:
         se_psi = 1.0
     ends: list[tuple[float, float]] = []
-    for level_q in (float(stats.norm.isf((1 - LEVEL_95) / 2)), FOUR_SIGMA):
+    for level_q in (distributions.norm_isf((1 - LEVEL_95) / 2), FOUR_SIGMA):
         q = level_q * math.sqrt(widen)
         low = profile.bound(q, -1.0, se_psi)
         high = profile.bound(q, 1.0, se_psi)

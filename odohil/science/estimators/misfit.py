@@ -52,10 +52,10 @@ from dataclasses import dataclass
 from typing import Any, Literal, Protocol
 
 import numpy as np
-from scipy import special
 
 from odohil import units
 from odohil.errors import ParameterError
+from odohil.science import distributions
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray, Turn
 from odohil.units import wrap_angle
@@ -325,7 +325,7 @@ def _z_test(
         return None
     se = math.sqrt(var)
     z = value / se
-    p = float(2.0 * special.ndtr(-abs(z)))
+    p = 2.0 * distributions.norm_cdf(-abs(z))
     return BiasTest(kind, group, AXES[axis], n, value, se, z, p, turns=turns)
 
 
@@ -381,7 +381,7 @@ def _spread_test(
     if within <= 0:
         return None
     f = (between / (g - 1)) / (within / (n - g))
-    p = float(special.fdtrc(g - 1, n - g, f))
+    p = distributions.f_sf(f, g - 1, n - g)
     _, cell, mean, count, se, turns = best
     axis_name = "heading" if AXES[axis] == "theta" else AXES[axis]
     size = _signed_text(AXES[axis], mean)

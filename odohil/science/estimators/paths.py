@@ -52,10 +52,10 @@ from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
-from scipy import special
 
 from odohil import units
 from odohil.errors import MeasurementError
+from odohil.science import distributions
 from odohil.science.estimators.checks import Criteria, distance_check, sufficiency
 from odohil.science.estimators.estimate import honest_estimates
 from odohil.science.estimators.joint import JointFit, joint_estimate
@@ -509,7 +509,7 @@ def estimate_paths(
             split_model, split_ml = _fit(kept, split_turns)
             statistic = 2.0 * (_plain_nll(kept, ml) - _plain_nll(kept, split_ml))
             extra = split_turns.layout.size - turns.layout.size
-            p_value = float(special.chdtrc(extra, max(statistic, 0.0)))
+            p_value = distributions.chi2_sf(statistic, extra)
             if p_value < SPLIT_LEVEL:
                 turns, model, ml = split_turns, split_model, split_ml
                 notes.append(

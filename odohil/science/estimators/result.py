@@ -6,8 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from scipy import special
-
+from odohil.science import distributions
 from odohil.science.estimators.misfit import MisfitCheck
 from odohil.science.estimators.verdict import TRUSTED, Verdict
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters, si_unit
@@ -15,7 +14,7 @@ from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters, si_unit
 VARIANCE_RATES = ("K_theta", "K_rho", "K_spin")
 """The parameters that are variance rates (positive, intervals in log K)."""
 Z95 = 1.959963984540054
-_FOUR_SIGMA_UPPER = float(special.ndtr(4.0))
+_FOUR_SIGMA_UPPER = distributions.norm_cdf(4.0)
 """The 97.5 % quantile of the standard normal."""
 
 
@@ -96,7 +95,7 @@ class ParameterEstimate:
 
 def four_sigma_quantile(dof: float) -> float:
     """The t(dof) quantile of the 4-sigma-equivalent two-sided level."""
-    return float(special.stdtrit(max(dof, 1.0), _FOUR_SIGMA_UPPER))
+    return distributions.t_ppf(_FOUR_SIGMA_UPPER, max(dof, 1.0))
 
 
 def _wald(name: str, value: float, stderr: float, q: float) -> tuple[float, float]:

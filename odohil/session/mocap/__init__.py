@@ -3,7 +3,7 @@
 the pose change with its covariance. See docs/motion-capture.md."""
 
 from odohil.session.mocap.change import pose_change_with_covariance
-from odohil.session.mocap.source import MotionCaptureSource, pose_sigma_of
+from odohil.session.mocap.source import MotionCaptureSource, pose_sigma_of, still_criteria_of
 from odohil.session.mocap.still import StillCriteria, StillPose, require_pose, take_still_pose
 from odohil.session.mocap.stream import PoseStream, StreamedPose, parse_tcp_url
 
@@ -17,5 +17,6 @@ __all__ = [
     "pose_change_with_covariance",
     "pose_sigma_of",
     "require_pose",
+    "still_criteria_of",
     "take_still_pose",
 ]

@@ -29,6 +29,14 @@ MIN_PATH_FRAMES = 5
 the farthest point the stream saw to be reported."""
 
 
+def still_criteria_of(description: RobotDescription) -> StillCriteria:
+    """The still window's criteria: the description's ``[measurement]
+    still_window_s`` as the window's length when it gives one, else the defaults."""
+    if description.still_window_s is None:
+        return StillCriteria()
+    return StillCriteria(window_s=description.still_window_s)
+
+
 def pose_sigma_of(description: RobotDescription, url: str) -> tuple[float, float, float]:
     """The description's pose_sigma, or RobotDescriptionError saying it is
     needed for ``url``."""

@@ -24,9 +24,9 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.patches import Ellipse
 from matplotlib.ticker import MaxNLocator
-from scipy import stats
 
 from odohil import units
+from odohil.science import distributions
 from odohil.science.estimators import ParameterEstimate
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.paths import FloatArray
@@ -34,7 +34,7 @@ from odohil.session.report.data import DOWN_WEIGHT_BELOW, DesignReport, SessionR
 from odohil.session.validation import ValidationPlot
 from odohil.units import parameter_to_paper as _to_paper
 
-CHI2_95_2D = float(stats.chi2.ppf(0.95, 2))
+CHI2_95_2D = distributions.chi2_ppf(0.95, 2)
 """Squared Mahalanobis radius of a 95 % ellipse in two dimensions."""
 
 BLUE, RED, GREY, ORANGE, PURPLE, DARK = (
@@ -352,7 +352,7 @@ def model_check_figure(report: SessionReport) -> Figure:
     trials = report.trials
     in_fit = [t for t in trials if t.mahalanobis2 is not None]
     n = len(in_fit)
-    limit = float(stats.chi2.isf(0.01 / max(n, 1), 3))
+    limit = distributions.chi2_isf(0.01 / max(n, 1), 3)
     fig = _figure(7.4, 3.8)
     with mpl.rc_context(_RC):
         ax = fig.add_subplot()

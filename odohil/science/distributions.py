@@ -1,0 +1,95 @@
+"""The few distribution functions the package needs, over ``scipy.special``.
+
+Each is the function ``scipy.stats`` would give (``chi2.sf``, ``chi2.isf``,
+``chi2.ppf``, ``norm.cdf``, ``norm.sf``, ``norm.isf``, ``t.ppf``, ``f.sf``),
+computed by the same ``scipy.special`` routine ``scipy.stats`` calls, so the
+numbers are the same (tests/science/test_distributions.py compares them on a
+grid); one more, the noncentral chi^2's noncentrality for a given probability
+(``scipy.special.chndtrinc``), has no scipy.stats twin. ``scipy.stats``
+itself is not imported: it costs about 1 s of CPU at every process's start
+(it pulls in scipy.optimize, scipy.spatial, ...) and each of its calls is
+some 50 times slower than the routine underneath.
+
+As in ``scipy.stats``: a non-positive number of degrees of freedom gives NaN;
+a point below the support (x < 0 for chi^2 and F) has survival 1.
+Probabilities are plain fractions; the statistics are dimensionless.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import numpy.typing as npt
+from scipy import special
+
+FloatArray = npt.NDArray[np.float64]
+
+
+def chi2_sf(x: float, dof: float) -> float:
+    """P(X > x) for X ~ chi^2(dof)."""
+    if not dof > 0:
+        return math.nan
+    return float(special.chdtrc(dof, max(x, 0.0)))
+
+
+def chi2_sf_each(x: FloatArray, dof: float) -> FloatArray:
+    """:func:`chi2_sf` of each element of ``x`` (same shape)."""
+    values = np.asarray(x, dtype=np.float64)
+    if not dof > 0:
+        return np.full(values.shape, math.nan)
+    out: FloatArray = np.asarray(special.chdtrc(dof, np.maximum(values, 0.0)), dtype=np.float64)
+    return out
+
+
+def chi2_isf(q: float, dof: float) -> float:
+    """The x with P(X > x) = q for X ~ chi^2(dof)."""
+    if not dof > 0:
+        return math.nan
+    return float(special.chdtri(dof, q))
+
+
+def chi2_ppf(p: float, dof: float) -> float:
+    """The x with P(X <= x) = p for X ~ chi^2(dof)."""
+    if not dof > 0:
+        return math.nan
+    return float(2.0 * special.gammaincinv(dof / 2.0, p))
+
+
+def norm_cdf(z: float) -> float:
+    """P(Z <= z) for Z standard normal."""
+    return float(special.ndtr(z))
+
+
+def norm_sf(z: float) -> float:
+    """P(Z > z) for Z standard normal."""
+    return float(special.ndtr(-z))
+
+
+def norm_isf(q: float) -> float:
+    """The z with P(Z > z) = q for Z standard normal."""
+    return float(-special.ndtri(q))
+
+
+def t_ppf(p: float, dof: float) -> float:
+    """The x with P(T <= x) = p for T ~ Student's t(dof); dof may be infinite."""
+    if not dof > 0:
+        return math.nan
+    if p == 0.0:  # stdtrit gives +inf there
+        return -math.inf
+    return float(special.stdtrit(dof, p))
+
+
+def ncx2_noncentrality(x: float, dof: float, cdf: float) -> float:
+    """The noncentrality nc with P(X <= x) = cdf for X ~ noncentral chi^2(dof, nc)
+    (``scipy.special.chndtrinc``; scipy.stats has no such inverse)."""
+    if not dof > 0:
+        return math.nan
+    return float(special.chndtrinc(x, dof, cdf))
+
+
+def f_sf(x: float, dof_num: float, dof_den: float) -> float:
+    """P(X > x) for X ~ F(dof_num, dof_den)."""
+    if not (dof_num > 0 and dof_den > 0):
+        return math.nan
+    return float(special.fdtrc(dof_num, dof_den, max(x, 0.0)))

@@ -1,0 +1,72 @@
+"""odohil/science/distributions.py gives the numbers scipy.stats gives.
+
+The package uses the few distribution functions of that module instead of
+scipy.stats (whose import costs about 1 s of CPU in every process); each must
+equal scipy.stats' function over a grid of points and degrees of freedom,
+including the edges of the support and invalid degrees of freedom.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from odohil.science import distributions
+
+PROBABILITIES = (0.0, 1e-300, 1e-12, 1e-6, 0.001, 0.00625, 0.01, 0.05, 0.5, 0.9, 0.95, 0.975)
+PROBABILITIES += (*(1.0 - p for p in (1e-12, 6.3e-5, 1e-6)), 1.0)
+POINTS = (-3.0, -1e-9, 0.0, 1e-9, 0.01, 0.5, 1.0, 2.7, 3.0, 7.81, 30.0, 150.0, 1e4, math.inf)
+DOFS = (-1.0, 0.0, 0.5, 1.0, 2.0, 3.0, 4.5, 9.0, 27.0, 300.0, 1e6, math.inf)
+
+
+def _same(ours: float, theirs: object) -> None:
+    expected = float(np.asarray(theirs))
+    if math.isnan(expected):
+        assert math.isnan(ours)
+    else:
+        assert ours == pytest.approx(expected, rel=1e-12, abs=1e-300)
+
+
+@pytest.mark.parametrize("dof", [d for d in DOFS if math.isfinite(d)])
+def test_chi2_functions_equal_scipy_stats(dof: float) -> None:
+    for x in POINTS:
+        _same(distributions.chi2_sf(x, dof), stats.chi2.sf(x, dof))
+    each = distributions.chi2_sf_each(np.array(POINTS), dof)
+    for x, value in zip(POINTS, each, strict=True):
+        _same(float(value), stats.chi2.sf(x, dof))
+    for p in PROBABILITIES:
+        _same(distributions.chi2_isf(p, dof), stats.chi2.isf(p, dof))
+        _same(distributions.chi2_ppf(p, dof), stats.chi2.ppf(p, dof))
+
+
+@pytest.mark.parametrize("dof", DOFS)
+def test_t_quantile_equals_scipy_stats(dof: float) -> None:
+    for p in PROBABILITIES:
+        _same(distributions.t_ppf(p, dof), stats.t.ppf(p, dof))
+
+
+def test_normal_functions_equal_scipy_stats() -> None:
+    for z in (-math.inf, -40.0, -8.0, -4.0, -1.96, 0.0, 1e-9, 1.0, 4.0, 8.0, 40.0, math.inf):
+        _same(distributions.norm_cdf(z), stats.norm.cdf(z))
+        _same(distributions.norm_sf(z), stats.norm.sf(z))
+    for p in PROBABILITIES:
+        _same(distributions.norm_isf(p), stats.norm.isf(p))
+
+
+@pytest.mark.parametrize("dof_num", [-1.0, 0.0, 1.0, 2.0, 5.0, 40.0])
+def test_f_survival_equals_scipy_stats(dof_num: float) -> None:
+    for dof_den in (0.0, 1.0, 3.0, 10.0, 200.0):
+        for x in POINTS:
+            _same(distributions.f_sf(x, dof_num, dof_den), stats.f.sf(x, dof_num, dof_den))
+
+
+@pytest.mark.parametrize("dof", [1.0, 3.0, 8.0])
+def test_the_noncentrality_for_a_probability_is_scipy_stats_ncx2s(dof: float) -> None:
+    for x in (10.83, 16.27, 40.0):  # central cdf above each cdf: an nc >= 0 reaches it
+        for cdf in (0.05, 0.2, 0.5):
+            nc = distributions.ncx2_noncentrality(x, dof, cdf)
+            assert float(stats.ncx2.cdf(x, dof, nc)) == pytest.approx(cdf, rel=1e-9)
+    assert math.isnan(distributions.ncx2_noncentrality(3.0, 0.0, 0.2))
