@@ -186,9 +186,10 @@ def _rate_step(log_var: float) -> tuple[float, float]:
     secant in K is taken (d SE^2 / d log K = K d SE^2 / d K = dSE^2 / (e^h - 1)),
     which SE^2's smooth dependence on K makes as good a derivative.
     """
-    sd_log = math.sqrt(log_var) if math.isfinite(log_var) and log_var > 0 else math.inf
-    wide = math.log1p(_K_STEP_SE * sd_log) if math.isfinite(sd_log) else math.inf
-    if not wide > _LOG_STEP:
+    if not (math.isfinite(log_var) and log_var > 0):
+        return _LOG_STEP, _LOG_STEP
+    wide = math.log1p(_K_STEP_SE * math.sqrt(log_var))
+    if wide <= _LOG_STEP:
         return _LOG_STEP, _LOG_STEP
     h = min(wide, 50.0)  # K at most e^50 times itself: far past any rate's range
     return h, math.expm1(h)
