@@ -4,12 +4,14 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import fakes  # noqa: F401  (registers the fakerobot:// URL handler)
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.driver.nomad.link import open_port
+from odohil.science.floor_marks import MarkDistances
 from odohil.science.robot_description import RobotDescription, parse_robot_description
 
 ROBOT_TOML = """\
@@ -70,3 +72,18 @@ def readings_of(trial: Any) -> tuple[float, ...]:
     """The readings an open or completed trial's pose was solved from (the
     tape: its distances, metres); () for a source that journals none."""
     return () if trial.readings is None else tuple(trial.readings.values)
+
+
+@dataclass(frozen=True)
+class Heard:
+    """A toy pose source's readings (not the tape's): how many times it heard
+    something this attempt. What the engine and the journal must carry opaquely."""
+
+    heard: int = 0
+
+    @property
+    def values(self) -> tuple[float, ...]:
+        return (float(self.heard),)
+
+    def marks(self, description: RobotDescription) -> MarkDistances | None:
+        return None

@@ -10,8 +10,6 @@ from typing import ClassVar
 import pytest
 
 from odohil.errors import JournalError
-from odohil.science.floor_marks import MarkDistances
-from odohil.science.robot_description import RobotDescription
 from odohil.session import state as st
 from odohil.session.events import (
     Estimate,
@@ -48,6 +46,7 @@ from odohil.session.tape_records import (
     TapeContext,
     TapeReadings,
 )
+from tests.session.helpers import Heard
 
 PLAN = parse_plan("k=1,l=1,n=2")
 COV = ((1e-6, 0.0, 0.0), (0.0, 1e-6, 0.0), (0.0, 0.0, 1e-5))
@@ -134,20 +133,6 @@ def test_the_tape_readings_fold_into_the_open_attempts_own_record() -> None:
 
 
 @dataclass(frozen=True)
-class Beep:
-    """A toy source's readings: how many beeps it heard."""
-
-    heard: int = 0
-
-    @property
-    def values(self) -> tuple[float, ...]:
-        return (float(self.heard),)
-
-    def marks(self, description: RobotDescription) -> MarkDistances | None:
-        return None
-
-
-@dataclass(frozen=True)
 class Beeped(SourceEvent):
     """A toy source's reading: one beep."""
 
@@ -155,9 +140,9 @@ class Beeped(SourceEvent):
     trial: int
     attempt: int
 
-    def fold(self, readings: SourceReadings | None) -> Beep:
-        heard = readings.heard if isinstance(readings, Beep) else 0
-        return Beep(heard + 1)
+    def fold(self, readings: SourceReadings | None) -> Heard:
+        heard = readings.heard if isinstance(readings, Heard) else 0
+        return Heard(heard + 1)
 
 
 def test_another_sources_readings_pass_the_state_unopened(tmp_path: object) -> None:
@@ -172,7 +157,7 @@ def test_another_sources_readings_pass_the_state_unopened(tmp_path: object) -> N
         Beeped(1, 1),
         Solved(1, 1, (0.0, 0.0, 0.0), COV, clear_cut=True),
     )
-    assert state.completed[0].readings == Beep(2)
+    assert state.completed[0].readings == Heard(2)
     assert state.completed[0].readings.values == (2.0,)
 
 

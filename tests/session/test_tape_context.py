@@ -24,14 +24,12 @@ from typing import Any, ClassVar
 import odohil.session.engine
 import odohil.session.pose_source
 import odohil.session.state
-from odohil.science.floor_marks import MarkDistances
-from odohil.science.robot_description import RobotDescription
 from odohil.session.engine import SessionEngine, start_session
 from odohil.session.events import SourceEvent, SourceReadings
 from odohil.session.plan import parse_plan
 from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
 from odohil.session.sources import TruthPoseSource
-from tests.session.helpers import FAST, ROBOT_TOML, fake_robot
+from tests.session.helpers import FAST, ROBOT_TOML, Heard, fake_robot
 
 TAPE_WORDS = frozenset(
     {
@@ -129,20 +127,6 @@ def test_the_trial_context_has_no_tape_field() -> None:
 
 
 @dataclasses.dataclass(frozen=True)
-class Clicks:
-    """A toy source's readings: how many clicks it heard this attempt."""
-
-    heard: int = 0
-
-    @property
-    def values(self) -> tuple[float, ...]:
-        return (float(self.heard),)
-
-    def marks(self, description: RobotDescription) -> MarkDistances | None:
-        return None
-
-
-@dataclasses.dataclass(frozen=True)
 class Clicked(SourceEvent):
     """A toy source's reading: one click."""
 
@@ -150,8 +134,8 @@ class Clicked(SourceEvent):
     trial: int
     attempt: int
 
-    def fold(self, readings: SourceReadings | None) -> Clicks:
-        return Clicks((readings.heard if isinstance(readings, Clicks) else 0) + 1)
+    def fold(self, readings: SourceReadings | None) -> Heard:
+        return Heard((readings.heard if isinstance(readings, Heard) else 0) + 1)
 
 
 class ClickingTruth:
@@ -188,9 +172,9 @@ def test_a_source_that_is_not_the_tape_gets_its_own_readings_and_no_tape_field(
         with journal:
             final = SessionEngine(journal, state, robot, source).run()
     assert len(final.completed) == 2
-    assert [t.readings for t in final.completed] == [Clicks(1), Clicks(1)]
+    assert [t.readings for t in final.completed] == [Heard(1), Heard(1)]
     # at_start, at_end, pose_change: no readings yet; after its own log: its own
-    assert [ctx.readings for ctx in source.seen] == [None, None, None, Clicks(1)] * 2
+    assert [ctx.readings for ctx in source.seen] == [None, None, None, Heard(1)] * 2
     for ctx in source.seen:
         fields = {f.name for f in dataclasses.fields(ctx)}
         assert {n for n in fields if _words(n) & TAPE_WORDS} == set()
