@@ -386,12 +386,10 @@ def _test(
     )
 
 
-def _bias_tests(
-    residuals: FloatArray, blocks: FloatArray, loadings: FloatArray, level: float
-) -> list[ChiSquareTest]:
-    """The mean residual's tests (module docstring): overall, then per axis."""
+def _bias_tests(residuals: FloatArray, cov: FloatArray, level: float) -> list[ChiSquareTest]:
+    """The mean residual's tests (module docstring): overall, then per axis;
+    ``cov`` is W, the mean residual's predicted covariance."""
     mean = residuals.mean(axis=0)
-    cov = _bias_covariance(blocks, loadings)
     se = np.sqrt(np.diag(cov))
     try:
         overall = float(mean @ np.linalg.solve(cov, mean))
@@ -514,10 +512,9 @@ def validation_test(
             residuals[:, a : a + 1], blocks[:, a : a + 1, a : a + 1], loadings[:, a : a + 1, :]
         )
         tests.append(_test(name, axis_nees, n, level))
-    bias = _bias_tests(residuals, blocks, loadings, level)
-    detectable = detectable_errors(
-        jacobians.mean(axis=0), _bias_covariance(blocks, loadings), level
-    )
+    bias_cov = _bias_covariance(blocks, loadings)
+    bias = _bias_tests(residuals, bias_cov, level)
+    detectable = detectable_errors(jacobians.mean(axis=0), bias_cov, level)
     return ValidationResult(
         passed=all(t.passed for t in (*tests, *bias)),
         alpha=alpha,
