@@ -19,17 +19,30 @@ again on every ``invoke`` (every command's signature and help read anew:
 :func:`_cached_get_command` builds it once per app and set of registered
 commands; each invocation still gets a fresh click context, as the console
 script does once per process.
+
+``-n auto`` starts :data:`WORKERS_PER_CPU` workers a CPU: about 40 % of the
+suite's wall time is spent waiting on the wall clock (robots driven at time
+scale 1, motion-capture still windows, replies over real pseudo-terminals,
+processes starting), which one worker a CPU leaves idle (docs/ci-time.md,
+"Fifth round"). ``PYTEST_XDIST_AUTO_NUM_WORKERS`` still overrides it. The
+tests listed in tests/slow_first.txt are handed out first, longest first.
 """
 
 from __future__ import annotations
 
 import os
 import signal
+from pathlib import Path
 from typing import Any
 
 import pytest
 import typer.main
 import typer.testing
+
+WORKERS_PER_CPU = 2
+"""xdist workers a CPU under ``-n auto`` (module docstring)."""
+SLOW_FIRST = Path(__file__).with_name("slow_first.txt")
+"""Node ids (without parameters) of the longest tests, longest first."""
 
 RAM_ROOT = "/dev/shm"
 """Where test folders go when it is usable (Linux's tmpfs)."""
@@ -61,6 +74,8 @@ def pytest_configure(config: pytest.Config) -> None:
         if signal.getsignal(signum) == signal.SIG_IGN:
             default = signal.default_int_handler if signum == signal.SIGINT else signal.SIG_DFL
             signal.signal(signum, default)
+    if getattr(config.option, "maxschedchunk", 0) is None:
+        config.option.maxschedchunk = 1  # see pytest_collection_modifyitems
     if config.option.basetemp or os.environ.get("PYTEST_DEBUG_TEMPROOT"):
         return
     if _usable(RAM_ROOT):
@@ -87,3 +102,29 @@ def _cached_get_command(typer_instance: typer.Typer) -> Any:
 
 if hasattr(typer.testing, "_get_command"):  # the runner's only use of it
     typer.testing._get_command = _cached_get_command
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
+    """:data:`WORKERS_PER_CPU` workers per usable CPU, unless the environment
+    names the number (xdist's own ``PYTEST_XDIST_AUTO_NUM_WORKERS``)."""
+    if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
+        return None  # xdist's own implementation reads it
+    affinity = getattr(os, "sched_getaffinity", None)  # Linux; elsewhere every CPU
+    cpus = len(affinity(0)) if affinity is not None else (os.cpu_count() or 1)
+    return WORKERS_PER_CPU * max(1, cpus)
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The tests of :data:`SLOW_FIRST` first, in its order; the rest as collected.
+
+    xdist's load scheduling would hand each worker a consecutive quarter of
+    its share at the start (one worker all the long tests); pytest_configure
+    sets ``--maxschedchunk=1`` unless given, so each free worker takes the next
+    test."""
+    names = [
+        line.strip()
+        for line in SLOW_FIRST.read_text(encoding="utf-8").splitlines()
+        if line.strip() and not line.startswith("#")
+    ]
+    rank = {name: i for i, name in enumerate(names)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("[", 1)[0], len(rank)))

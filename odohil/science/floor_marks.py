@@ -60,6 +60,14 @@ lower its chi^2 by less than this (a likelihood change under 0.5 %). Small
 motions have long, curved chi^2 valleys (the direction of a 1 cm translation
 is poorly determined), where Levenberg-Marquardt creeps: a stricter threshold
 threw away the true minimum and left only a spurious one."""
+_SETTLED_GAIN = 1e-13
+"""A seed's Levenberg-Marquardt stops when its step (at damping <= 1) promises
+less than this fraction of its chi^2 (plus 1e-13): rounding, not progress."""
+_STALLED_STEPS = 6
+"""... or when this many steps in a row gained no more than that (at a minimum
+the steps are rejected or gain only rounding) ..."""
+_STUCK_DAMPING = 1e10
+"""... or when its damping passes this (about 20 rejected steps in a row)."""
 _POLISH_ROUNDS = 4
 """Further Levenberg-Marquardt rounds for seeds that have not converged yet."""
 _SAME_CANDIDATE = 0.05
@@ -405,26 +413,44 @@ def _levenberg_marquardt(
     seeds: FloatArray, geometry: _Geometry, measured: FloatArray, weights: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Refine every seed at once; returns poses, chi^2 and the Gauss-Newton
-    decrement (how much one more step could still gain)."""
+    decrement (how much one more step could still gain).
+
+    A seed stops early (before _LM_ITERATIONS) once its own step could gain
+    less than _SETTLED_GAIN of its chi^2 at small damping, or _STALLED_STEPS
+    steps in a row gained no more than that, or its damping has grown past
+    _STUCK_DAMPING: more iterations would not move it."""
     poses = seeds.copy()
     damping = np.full(len(poses), 1e-3)
     eye = np.eye(3)
     r, jac = _residuals(poses, geometry, measured, weights)
     cost = (r**2).sum(axis=1)
+    active = np.arange(len(poses))
+    stalled = np.zeros(len(poses), dtype=np.int64)  # iterations in a row without gain
     for _ in range(_LM_ITERATIONS):
-        normal = np.einsum("bmi,bmj->bij", jac, jac)
-        gradient = np.einsum("bmi,bm->bi", jac, r)
+        if active.size == 0:
+            break
+        j_a, r_a, d_a = jac[active], r[active], damping[active]
+        normal = np.einsum("bmi,bmj->bij", j_a, j_a)
+        gradient = np.einsum("bmi,bm->bi", j_a, r_a)
         diag = np.einsum("bii->bi", normal)[:, :, None] * eye + 1e-12 * eye
-        step = np.linalg.solve(normal + damping[:, None, None] * diag, -gradient[:, :, None])
-        trial = poses + step[:, :, 0]
+        step = np.linalg.solve(normal + d_a[:, None, None] * diag, -gradient[:, :, None])[..., 0]
+        trial = poses[active] + step
         r_new, jac_new = _residuals(trial, geometry, measured, weights)
         cost_new = (r_new**2).sum(axis=1)
-        better = cost_new < cost
-        poses = np.where(better[:, None], trial, poses)
-        r = np.where(better[:, None], r_new, r)
-        jac = np.where(better[:, None, None], jac_new, jac)
-        cost = np.where(better, cost_new, cost)
-        damping = np.clip(np.where(better, damping / 3.0, damping * 3.0), 1e-12, 1e12)
+        better = cost_new < cost[active]
+        tiny = _SETTLED_GAIN * (1.0 + cost[active])
+        gain = -np.einsum("bi,bi->b", gradient, step)  # what the step promised, chi^2
+        still = np.where(better, cost[active] - cost_new <= tiny, gain <= tiny)
+        stalled[active] = np.where(still, stalled[active] + 1, 0)
+        accepted = active[better]
+        poses[accepted] = trial[better]
+        r[accepted] = r_new[better]
+        jac[accepted] = jac_new[better]
+        cost[accepted] = cost_new[better]
+        damping[active] = np.clip(np.where(better, d_a / 3.0, d_a * 3.0), 1e-12, 1e12)
+        settled = (d_a <= 1.0) & (gain <= tiny)
+        done = settled | (stalled[active] >= _STALLED_STEPS) | (damping[active] >= _STUCK_DAMPING)
+        active = active[~done]
     normal = np.einsum("bmi,bmj->bij", jac, jac)
     gradient = np.einsum("bmi,bm->bi", jac, r)
     newton = np.einsum("bij,bj->bi", np.linalg.pinv(normal), gradient)

@@ -129,6 +129,8 @@ def test_the_issues_run_on_a_wrapping_create2_ends_with_a_clear_error(tmp_path: 
     assert time.monotonic() - started < 60.0
     err = " ".join(result.stderr.split())
     assert result.exit_code == 1, err
-    assert "leg 1 m (step 1 of 1): the encoders changed by" in err
+    # the whole message on failure: once under 4 workers on 2 cores it named
+    # something else (not reproduced in 24 runs under load 6)
+    assert "leg 1 m (step 1 of 1): the encoders changed by" in err, result.stderr
     assert "wrap-around of the 16-bit counters cannot be ruled out" in err
     assert "robot stopped (it reports" in err
