@@ -104,6 +104,7 @@ if hasattr(typer.testing, "_get_command"):  # the runner's only use of it
     typer.testing._get_command = _cached_get_command
 
 
+@pytest.hookimpl(optionalhook=True)  # an unknown hook without xdist (-p no:xdist)
 def pytest_xdist_auto_num_workers(config: pytest.Config) -> int | None:
     """:data:`WORKERS_PER_CPU` workers per usable CPU, unless the environment
     names the number (xdist's own ``PYTEST_XDIST_AUTO_NUM_WORKERS``)."""

@@ -34,7 +34,7 @@ import numpy as np
 
 from odohil.errors import ParameterError
 from odohil.science.floor_marks import mark_jacobian
-from odohil.science.moments import pose_moments
+from odohil.science.moments import BATCH_COLUMNS, PathSet, batch_moments, pose_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, EncoderPath, FloatArray
 from odohil.science.robot_description import RobotDescription, Screw
@@ -81,29 +81,46 @@ def moment_derivatives(path: EncoderPath, params: ErrorParameters) -> MomentDeri
     one step, one-sided second-order differences (the model is not defined
     for negative variance rates).
     """
-    base = pose_moments(path, params)
+    return many_moment_derivatives(PathSet.of((path,)), params)[0]
+
+
+def many_moment_derivatives(
+    paths: PathSet, params: ErrorParameters
+) -> tuple[MomentDerivatives, ...]:
+    """:func:`moment_derivatives` of every path of ``paths``: every path at
+    every finite-difference point in one :func:`batch_moments` call (exact
+    turns)."""
     values = np.array(params.as_tuple())
-    d_mean = np.empty((4, 3))
-    d_cov = np.empty((4, 3, 3))
+    rows = [values]
+    plan: list[tuple[int, float, tuple[tuple[int, float], ...]]] = []  # (a, step, (row, weight))
     for a in range(4):
         step = _RELATIVE_STEP * max(abs(values[a]), PARAMETER_SCALES[a])
         one_sided = a >= 2 and values[a] - step < 0.0
-        stencil = _FORWARD if one_sided else _CENTRAL
-        mean_acc = np.zeros(3)
-        cov_acc = np.zeros((3, 3))
-        for offset, weight in stencil:
+        terms: list[tuple[int, float]] = []
+        for offset, weight in _FORWARD if one_sided else _CENTRAL:
             if offset == 0.0:
-                mean_acc += weight * base.mean
-                cov_acc += weight * base.cov
+                terms.append((0, weight))
                 continue
             shifted = values.copy()
             shifted[a] += offset * step
-            moments = pose_moments(path, ErrorParameters(*shifted))
-            mean_acc += weight * moments.mean
-            cov_acc += weight * moments.cov
-        d_mean[a] = mean_acc / step
-        d_cov[a] = cov_acc / step
-    return MomentDerivatives(mean=base.mean, cov=base.cov, d_mean=d_mean, d_cov=d_cov)
+            terms.append((len(rows), weight))
+            rows.append(shifted)
+        plan.append((a, step, tuple(terms)))
+    table = np.zeros((len(rows), len(BATCH_COLUMNS)))
+    table[:, :4] = rows
+    means, covs = batch_moments(paths, table)  # (Q, T, 3), (Q, T, 3, 3)
+    d_mean = np.zeros((len(paths.paths), 4, 3))
+    d_cov = np.zeros((len(paths.paths), 4, 3, 3))
+    for a, step, stencil in plan:
+        for row, weight in stencil:
+            d_mean[:, a] += weight * means[row]
+            d_cov[:, a] += weight * covs[row]
+        d_mean[:, a] /= step
+        d_cov[:, a] /= step
+    return tuple(
+        MomentDerivatives(mean=means[0, i], cov=covs[0, i], d_mean=d_mean[i], d_cov=d_cov[i])
+        for i in range(len(paths.paths))
+    )
 
 
 def trial_information(derivatives: MomentDerivatives, measurement_cov: FloatArray) -> FloatArray:

@@ -52,8 +52,8 @@ from typing import Protocol
 import numpy as np
 
 from odohil.science.estimators.observations import align_heading
-from odohil.science.fisher import moment_derivatives
-from odohil.science.moments import pose_moments
+from odohil.science.fisher import many_moment_derivatives
+from odohil.science.moments import BATCH_COLUMNS, PathSet, batch_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, EncoderPath, FloatArray
 
@@ -245,23 +245,34 @@ def design_path(design: Design) -> EncoderPath:
     return design.path()
 
 
+@lru_cache(maxsize=64)
+def design_paths(designs: tuple[Design, ...]) -> PathSet:
+    """The designs' encoder paths as one padded set (immutable, so cached)."""
+    return PathSet.of(tuple(design_path(design) for design in designs))
+
+
 def model_point(phi: FloatArray, designs: Iterable[Design], derivatives: bool) -> ModelPoint:
-    """Evaluate the moments (and, if asked, their phi-derivatives) of each design."""
+    """Evaluate the moments (and, if asked, their phi-derivatives) of each design,
+    every design (and finite-difference point) in one batch."""
     params = from_phi(phi)
-    scale = np.array([1.0, 1.0, params.k_theta, params.k_rho])
+    chosen = tuple(designs)
     means: dict[Hashable, FloatArray] = {}
     covs: dict[Hashable, FloatArray] = {}
     d_means: dict[Hashable, FloatArray] = {}
     d_covs: dict[Hashable, FloatArray] = {}
-    for design in designs:
-        if derivatives:
-            d = moment_derivatives(design_path(design), params)
+    if chosen and derivatives:
+        scale = np.array([1.0, 1.0, params.k_theta, params.k_rho])
+        derivatives_of = many_moment_derivatives(design_paths(chosen), params)
+        for design, d in zip(chosen, derivatives_of, strict=True):
             means[design], covs[design] = d.mean, d.cov
             d_means[design] = d.d_mean * scale[:, None]
             d_covs[design] = d.d_cov * scale[:, None, None]
-        else:
-            m = pose_moments(design_path(design), params)
-            means[design], covs[design] = m.mean, m.cov
+    elif chosen:
+        row = np.zeros((1, len(BATCH_COLUMNS)))
+        row[0, :4] = params.as_tuple()
+        batch_means, batch_covs = batch_moments(design_paths(chosen), row)
+        for i, design in enumerate(chosen):
+            means[design], covs[design] = batch_means[0, i], batch_covs[0, i]
     here = np.array(phi, dtype=np.float64)
     return ModelPoint(
         here,
