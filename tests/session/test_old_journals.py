@@ -8,6 +8,7 @@ measured as poses (no tape)."""
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -101,9 +102,35 @@ EXPECTED: dict[str, Any] = (
 )
 
 
+def _differences(got: Any, want: Any, where: str = "estimate") -> list[str]:
+    """Where two JSON values differ: numbers beyond a relative 1e-3, anything
+    else at all. The estimate is recomputed: its optimiser stops within a
+    tolerance, so a change of the moments' rounding (1e-10 relative, batched
+    instead of design by design) moved E_T by 4e-7 (2e-4 of itself, a fraction
+    of a percent of its standard error); a replay that differs moves it by far
+    more."""
+    if isinstance(want, bool) or not isinstance(want, int | float):
+        if isinstance(want, dict) and isinstance(got, dict) and got.keys() == want.keys():
+            return [d for k in want for d in _differences(got[k], want[k], f"{where}.{k}")]
+        if isinstance(want, list) and isinstance(got, list) and len(got) == len(want):
+            return [
+                d for i, (g, w) in enumerate(zip(got, want, strict=True))
+                for d in _differences(g, w, f"{where}[{i}]")
+            ]  # fmt: skip
+        return [] if got == want else [f"{where}: {got!r} != {want!r}"]
+    close = isinstance(got, int | float) and not isinstance(got, bool)
+    close = close and math.isclose(got, want, rel_tol=1e-3, abs_tol=1e-15)
+    return [] if close else [f"{where}: {got!r} != {want!r}"]
+
+
 @pytest.mark.parametrize("name", ["finished", "interrupted", "wizard", "extra", "truth_poses"])
 def test_an_old_journal_replays_to_the_same_state_and_estimate(name: str) -> None:
-    assert snapshot(JOURNALS / name) == EXPECTED[name]
+    """The state exactly; the estimate to a relative 1e-3 (:func:`_differences`)."""
+    got, want = snapshot(JOURNALS / name), EXPECTED[name]
+    assert {k: v for k, v in got.items() if k != "estimate"} == {
+        k: v for k, v in want.items() if k != "estimate"
+    }
+    assert _differences(got["estimate"], want["estimate"]) == []
 
 
 def test_the_old_journals_hold_every_kind_of_event() -> None:
