@@ -38,8 +38,7 @@ def drive_segment(
     delta = abs(signed_segment_m)
     heading_sd = math.sqrt(params.k_theta * delta)
     rho_sd = math.sqrt(params.k_rho * delta)
-    u = float(rng.random(1, dtype=np.float32)[0])
-    v = float(rng.random(1, dtype=np.float32)[0])
+    u, v = rng.random(2, dtype=np.float32).tolist()  # the same two draws as two calls
     normal = math.sqrt(-2.0 * math.log(1.0 - u)) * math.cos(2.0 * math.pi * v)
     heading = start + heading_sd * normal + params.e_r * signed_segment_m
     cos_h, sin_h = math.cos(heading), math.sin(heading)
