@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections import OrderedDict
+from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import replace
 from typing import Literal
 
@@ -271,6 +272,35 @@ def _numbered(observations: Sequence[Observation]) -> list[Observation]:
     ]
 
 
+_MEMO_SIZE = 16
+"""Estimates kept by :func:`estimate` for repeated calls on the same trials."""
+_memo: OrderedDict[Hashable, EstimateResult] = OrderedDict()
+
+
+def _memo_key(
+    observations: Sequence[Observation],
+    method: str,
+    criteria: Criteria | None,
+    exclude: tuple[int, ...],
+    ambiguous: tuple[int, ...],
+    turns_exact: bool,
+) -> Hashable:
+    """Everything :func:`estimate` reads, as a hashable value (arrays by their bytes)."""
+    trials = tuple(
+        (
+            o.design,
+            o.pose_change.shape,
+            o.pose_change.tobytes(),
+            o.measurement_cov.shape,
+            o.measurement_cov.tobytes(),
+            o.line,
+            o.trial,
+        )
+        for o in observations
+    )
+    return (trials, method, criteria, exclude, ambiguous, turns_exact)
+
+
 def estimate(
     observations: Sequence[Observation],
     method: Method = "robust",
@@ -278,6 +308,34 @@ def estimate(
     exclude: Iterable[int] = (),
     ambiguous: Sequence[int] = (),
     turns_exact: bool = True,
+) -> EstimateResult:
+    """Estimate the four parameters from trials.
+
+    The same trials with the same arguments give the same (immutable) result;
+    the last :data:`_MEMO_SIZE` are kept, so a process that estimates one
+    session again (a report and its export, a resumed session's checks)
+    computes it once. Arguments are as :func:`_estimate`'s.
+    """
+    excluded, left_out = tuple(exclude), tuple(ambiguous)
+    key = _memo_key(observations, method, criteria, excluded, left_out, turns_exact)
+    kept = _memo.get(key)
+    if kept is not None:
+        _memo.move_to_end(key)
+        return kept
+    result = _estimate(observations, method, criteria, excluded, left_out, turns_exact)
+    _memo[key] = result
+    while len(_memo) > _MEMO_SIZE:
+        _memo.popitem(last=False)
+    return result
+
+
+def _estimate(
+    observations: Sequence[Observation],
+    method: Method,
+    criteria: Criteria | None,
+    exclude: Iterable[int],
+    ambiguous: Sequence[int],
+    turns_exact: bool,
 ) -> EstimateResult:
     """Estimate the four parameters from trials.
 
