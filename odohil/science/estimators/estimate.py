@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import threading
 from collections import OrderedDict
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import replace
@@ -275,6 +276,7 @@ def _numbered(observations: Sequence[Observation]) -> list[Observation]:
 _MEMO_SIZE = 16
 """Estimates kept by :func:`estimate` for repeated calls on the same trials."""
 _memo: OrderedDict[Hashable, EstimateResult] = OrderedDict()
+_memo_lock = threading.Lock()  # a live estimate may run beside the operator's dialogue
 
 
 def _memo_key(
@@ -318,14 +320,16 @@ def estimate(
     """
     excluded, left_out = tuple(exclude), tuple(ambiguous)
     key = _memo_key(observations, method, criteria, excluded, left_out, turns_exact)
-    kept = _memo.get(key)
-    if kept is not None:
-        _memo.move_to_end(key)
-        return kept
+    with _memo_lock:
+        kept = _memo.get(key)
+        if kept is not None:
+            _memo.move_to_end(key)
+            return kept
     result = _estimate(observations, method, criteria, excluded, left_out, turns_exact)
-    _memo[key] = result
-    while len(_memo) > _MEMO_SIZE:
-        _memo.popitem(last=False)
+    with _memo_lock:
+        _memo[key] = result
+        while len(_memo) > _MEMO_SIZE:
+            _memo.popitem(last=False)
     return result
 
 
