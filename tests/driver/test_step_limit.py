@@ -13,6 +13,7 @@ start when the 120 s ran out.
 from __future__ import annotations
 
 import math
+import re
 import time
 from pathlib import Path
 
@@ -115,8 +116,9 @@ def test_the_issues_run_on_a_wrapping_create2_ends_with_a_clear_error(tmp_path: 
     issue's ``k=1`` reverse plan is now refused before anything moves, see
     tests/session/test_preflight_estimable.py): exit 1 within seconds, the
     reason named, the stop confirmed, the session journaled for a resume.
-    The fake's clock follows the reads (``skip_waits``), so the wrap comes at
-    the same frame whatever the host's load (it failed once at load 4.6)."""
+    The fake's clock follows the reads (``skip_waits``) but also the host's
+    wall time, which at time scale 2000 turns the wheels 2 s a millisecond: which
+    of two clear errors ends the leg depends on the host's load (below)."""
     started = time.monotonic()
     result = CliRunner().invoke(
         app,
@@ -129,8 +131,17 @@ def test_the_issues_run_on_a_wrapping_create2_ends_with_a_clear_error(tmp_path: 
     assert time.monotonic() - started < 60.0
     err = " ".join(result.stderr.split())
     assert result.exit_code == 1, err
-    # the whole message on failure: once under 4 workers on 2 cores it named
-    # something else (not reproduced in 24 runs under load 6)
-    assert "leg 1 m (step 1 of 1): the encoders changed by" in err, result.stderr
-    assert "wrap-around of the 16-bit counters cannot be ruled out" in err
+    # At time scale 2000 a millisecond of the host's wall time turns the wheels
+    # 2 s: usually far enough between two frames that the step sees a change
+    # it cannot tell from a wrap-around; when the host waits longer for a core
+    # (twice in this stop's runs under 4 workers on 2 cores) the counters can
+    # wrap to a plausible change, and the leg's end check names the miss instead. Both
+    # are the clear error the issue asks for; nothing else is.
+    wrap = (
+        "leg 1 m (step 1 of 1): the encoders changed by" in err
+        and "wrap-around of the 16-bit counters cannot be ruled out" in err
+    )
+    missed = re.search(r"leg 1 m \(step 1 of 1\) ended [-+]?\d+ \(left\), [-+]?\d+ \(right\) "
+                       r"counts from its target", err) is not None  # fmt: skip
+    assert wrap or missed, result.stderr
     assert "robot stopped (it reports" in err
