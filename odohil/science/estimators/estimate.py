@@ -313,35 +313,10 @@ def estimate(
 ) -> EstimateResult:
     """Estimate the four parameters from trials.
 
-    The same trials with the same arguments give the same (immutable) result;
-    the last :data:`_MEMO_SIZE` are kept, so a process that estimates one
-    session again (a report and its export, a resumed session's checks)
-    computes it once. Arguments are as :func:`_estimate`'s.
-    """
-    excluded, left_out = tuple(exclude), tuple(ambiguous)
-    key = _memo_key(observations, method, criteria, excluded, left_out, turns_exact)
-    with _memo_lock:
-        kept = _memo.get(key)
-        if kept is not None:
-            _memo.move_to_end(key)
-            return kept
-    result = _estimate(observations, method, criteria, excluded, left_out, turns_exact)
-    with _memo_lock:
-        _memo[key] = result
-        while len(_memo) > _MEMO_SIZE:
-            _memo.popitem(last=False)
-    return result
-
-
-def _estimate(
-    observations: Sequence[Observation],
-    method: Method,
-    criteria: Criteria | None,
-    exclude: Iterable[int],
-    ambiguous: Sequence[int],
-    turns_exact: bool,
-) -> EstimateResult:
-    """Estimate the four parameters from trials.
+    The same trials with the same arguments give the same (immutable) result:
+    the last :data:`_MEMO_SIZE` results are kept, so a process that estimates
+    one session again (the test suite's commands in one process, a library
+    caller's report and export) computes it once.
 
     Args:
         observations: the trials (any mix of designs).
@@ -360,6 +335,30 @@ def _estimate(
         MeasurementError: too few trials, no design that identifies E_R, or
             an excluded number that is no trial's.
     """
+    excluded, ambiguous_numbers = tuple(exclude), tuple(ambiguous)
+    key = _memo_key(observations, method, criteria, excluded, ambiguous_numbers, turns_exact)
+    with _memo_lock:
+        kept = _memo.get(key)
+        if kept is not None:
+            _memo.move_to_end(key)
+            return kept
+    result = _estimate(observations, method, criteria, excluded, ambiguous_numbers, turns_exact)
+    with _memo_lock:
+        _memo[key] = result
+        while len(_memo) > _MEMO_SIZE:
+            _memo.popitem(last=False)
+    return result
+
+
+def _estimate(
+    observations: Sequence[Observation],
+    method: Method,
+    criteria: Criteria | None,
+    exclude: Iterable[int],
+    ambiguous: Sequence[int],
+    turns_exact: bool,
+) -> EstimateResult:
+    """:func:`estimate` without the memo."""
     if method not in METHODS:
         raise MeasurementError(f"method must be one of {METHODS}, got {method!r}")
     observations, excluded = leave_out(_numbered(observations), exclude)
