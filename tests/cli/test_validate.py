@@ -18,7 +18,10 @@ alpha = 1 %.
 
 from __future__ import annotations
 
+import fcntl
 import json
+import os
+import shutil
 from pathlib import Path
 from typing import Any
 
@@ -76,6 +79,30 @@ def calibrate(folder: Path, seed: int) -> Path:
     return session
 
 
+def calibrated(factory: pytest.TempPathFactory, seed: int, folder: Path) -> Path:
+    """:func:`calibrate` of ``seed`` copied into ``folder``, calibrated once a test run.
+
+    The module's quick tests and the seed-1 cell both want seed 1's calibration,
+    and each xdist worker would otherwise run it again (the same seeded run: the
+    same journal). The first caller runs it, asserting its exit status, in a
+    folder all workers share (under a lock); every caller gets its own copy.
+    """
+    root = factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        root = root.parent  # the controller's folder, above every worker's
+    shared = root / f"validate-calibration-{seed}"
+    with open(root / f"validate-calibration-{seed}.lock", "w", encoding="utf-8") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        done = shared / "done"
+        if not done.exists():
+            shutil.rmtree(shared, ignore_errors=True)
+            shared.mkdir()
+            calibrate(shared, seed)
+            done.touch()
+    shutil.copytree(shared, folder, dirs_exist_ok=True, ignore=shutil.ignore_patterns("done"))
+    return folder / "calibration"
+
+
 def validate(session: Path, port_query: str, seed: int, out: Path) -> tuple[int, dict[str, Any]]:
     default = out.name == "forth-back-k2-l1.5-turn"
     done = odohil(
@@ -89,8 +116,10 @@ def validate(session: Path, port_query: str, seed: int, out: Path) -> tuple[int,
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", SEEDS)
-def test_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(tmp_path: Path, seed: int) -> None:
-    session = calibrate(tmp_path, seed)
+def test_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(
+    tmp_path_factory: pytest.TempPathFactory, tmp_path: Path, seed: int
+) -> None:
+    session = calibrated(tmp_path_factory, seed, tmp_path)
     other = seed + 100  # the validation drives other draws than the calibration
     good_folder = session / "validation" / "forth-back-k2-l1.5-turn"  # the default
     bad_folder = session / "validation" / "wrong-robot"
@@ -143,7 +172,7 @@ def test_passes_on_the_calibrated_fake_and_fails_on_a_wrong_one(tmp_path: Path, 
 @pytest.fixture(scope="module")
 def session(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """One calibrated session shared by the quick tests."""
-    return calibrate(tmp_path_factory.mktemp("validate"), 1)
+    return calibrated(tmp_path_factory, 1, tmp_path_factory.mktemp("validate"))
 
 
 @pytest.mark.parametrize(
