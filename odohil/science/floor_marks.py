@@ -68,6 +68,9 @@ _STALLED_STEPS = 6
 the steps are rejected or gain only rounding) ..."""
 _STUCK_DAMPING = 1e10
 """... or when its damping passes this (about 20 rejected steps in a row)."""
+_EYE = np.eye(3)
+_TINY_EYE = 1e-12 * np.eye(3)
+"""Added to the damped diagonal: keeps a zero column solvable."""
 _POLISH_ROUNDS = 4
 """Further Levenberg-Marquardt rounds for seeds that have not converged yet."""
 _SAME_CANDIDATE = 0.05
@@ -196,6 +199,10 @@ class _Geometry:
     n_same: int
     sigma: float
     scale: float
+    source_x: FloatArray
+    source_y: FloatArray
+    target_x: FloatArray
+    target_y: FloatArray
 
 
 def distance_labels(description: RobotDescription) -> tuple[str, ...]:
@@ -375,6 +382,10 @@ def _geometry(description: RobotDescription) -> _Geometry:
         n_same=len(points),
         sigma=description.sigma_m,
         scale=float(np.sqrt((centred**2).sum(axis=1).mean())),
+        source_x=np.ascontiguousarray(source[:, 0]),
+        source_y=np.ascontiguousarray(source[:, 1]),
+        target_x=np.ascontiguousarray(target[:, 0]),
+        target_y=np.ascontiguousarray(target[:, 1]),
     )
 
 
@@ -394,18 +405,37 @@ def _model(poses: FloatArray, geometry: _Geometry) -> FloatArray:
 def _residuals(
     poses: FloatArray, geometry: _Geometry, measured: FloatArray, weights: FloatArray
 ) -> tuple[FloatArray, FloatArray]:
-    """Weighted residuals (B, m) and their Jacobian (B, m, 3), in sigma units."""
-    rx, ry = _end_points(poses, geometry)
-    vx = rx + poses[:, 0:1] - geometry.target[:, 0]
-    vy = ry + poses[:, 1:2] - geometry.target[:, 1]
+    """Weighted residuals (B, m) and their Jacobian (B, m, 3), in sigma units;
+    ``weights`` is (m,), or (B, m) for a weight per pose."""
+    return _scaled_residuals(poses, geometry, measured, weights / geometry.sigma)
+
+
+def _scaled_residuals(
+    poses: FloatArray, geometry: _Geometry, measured: FloatArray, w: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`_residuals` with the weights already divided by sigma (the
+    arithmetic of :func:`_end_points` and :func:`_model`, inlined)."""
+    c = np.cos(poses[:, 2:3])
+    s = np.sin(poses[:, 2:3])
+    px, py = geometry.source_x, geometry.source_y
+    rx = c * px - s * py
+    ry = s * px + c * py
+    vx = rx + poses[:, 0:1] - geometry.target_x
+    vy = ry + poses[:, 1:2] - geometry.target_y
     dist = np.hypot(vx, vy)
-    # Where an end mark lands on its start mark the distance has no gradient;
-    # a zero row there is what Gauss-Newton needs.
-    safe = np.where(dist > 0, dist, 1.0)
-    ux, uy = vx / safe * (dist > 0), vy / safe * (dist > 0)
-    w = weights / geometry.sigma
+    positive = dist > 0
+    if positive.all():
+        ux, uy = vx / dist, vy / dist
+    else:
+        # Where an end mark lands on its start mark the distance has no
+        # gradient; a zero row there is what Gauss-Newton needs.
+        safe = np.where(positive, dist, 1.0)
+        ux, uy = vx / safe * positive, vy / safe * positive
     residuals = (dist - measured) * w
-    jacobian = np.stack([ux, uy, ux * -ry + uy * rx], axis=-1) * w[:, None]
+    jacobian = np.empty((*dist.shape, 3))
+    np.multiply(ux, w, out=jacobian[..., 0])
+    np.multiply(uy, w, out=jacobian[..., 1])
+    np.multiply(ux * -ry + uy * rx, w, out=jacobian[..., 2])
     return residuals, jacobian
 
 
@@ -413,44 +443,56 @@ def _levenberg_marquardt(
     seeds: FloatArray, geometry: _Geometry, measured: FloatArray, weights: FloatArray
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Refine every seed at once; returns poses, chi^2 and the Gauss-Newton
-    decrement (how much one more step could still gain).
+    decrement (how much one more step could still gain). ``weights`` is (m,),
+    or (B, m) for a weight per seed.
 
     A seed stops early (before _LM_ITERATIONS) once its own step could gain
     less than _SETTLED_GAIN of its chi^2 at small damping, or _STALLED_STEPS
     steps in a row gained no more than that, or its damping has grown past
-    _STUCK_DAMPING: more iterations would not move it."""
+    _STUCK_DAMPING: more iterations would not move it. The seeds still moving
+    are kept in arrays of their own (``at`` holds their rows), so each
+    iteration works on them alone; every seed's arithmetic is its own."""
+    w = weights / geometry.sigma
     poses = seeds.copy()
-    damping = np.full(len(poses), 1e-3)
-    eye = np.eye(3)
-    r, jac = _residuals(poses, geometry, measured, weights)
+    r, jac = _scaled_residuals(poses, geometry, measured, w)
     cost = (r**2).sum(axis=1)
-    active = np.arange(len(poses))
+    # The seeds still moving, in arrays of their own: ``at`` holds their rows.
+    at = np.arange(len(poses))
+    p_a, r_a, j_a, c_a, w_a = poses, r, jac, cost, w
+    d_a = np.full(len(poses), 1e-3)
     stalled = np.zeros(len(poses), dtype=np.int64)  # iterations in a row without gain
     for _ in range(_LM_ITERATIONS):
-        if active.size == 0:
+        if at.size == 0:
             break
-        j_a, r_a, d_a = jac[active], r[active], damping[active]
         normal = np.einsum("bmi,bmj->bij", j_a, j_a)
         gradient = np.einsum("bmi,bm->bi", j_a, r_a)
-        diag = np.einsum("bii->bi", normal)[:, :, None] * eye + 1e-12 * eye
+        diag = np.einsum("bii->bi", normal)[:, :, None] * _EYE + _TINY_EYE
         step = np.linalg.solve(normal + d_a[:, None, None] * diag, -gradient[:, :, None])[..., 0]
-        trial = poses[active] + step
-        r_new, jac_new = _residuals(trial, geometry, measured, weights)
+        trial = p_a + step
+        r_new, jac_new = _scaled_residuals(trial, geometry, measured, w_a)
         cost_new = (r_new**2).sum(axis=1)
-        better = cost_new < cost[active]
-        tiny = _SETTLED_GAIN * (1.0 + cost[active])
+        better = cost_new < c_a
+        tiny = _SETTLED_GAIN * (1.0 + c_a)
         gain = -np.einsum("bi,bi->b", gradient, step)  # what the step promised, chi^2
-        still = np.where(better, cost[active] - cost_new <= tiny, gain <= tiny)
-        stalled[active] = np.where(still, stalled[active] + 1, 0)
-        accepted = active[better]
-        poses[accepted] = trial[better]
-        r[accepted] = r_new[better]
-        jac[accepted] = jac_new[better]
-        cost[accepted] = cost_new[better]
-        damping[active] = np.clip(np.where(better, d_a / 3.0, d_a * 3.0), 1e-12, 1e12)
+        still = np.where(better, c_a - cost_new <= tiny, gain <= tiny)
+        stalled = np.where(still, stalled + 1, 0)
+        column = better[:, None]
+        p_a = np.where(column, trial, p_a)
+        r_a = np.where(column, r_new, r_a)
+        j_a = np.where(column[:, :, None], jac_new, j_a)
+        c_a = np.where(better, cost_new, c_a)
         settled = (d_a <= 1.0) & (gain <= tiny)
-        done = settled | (stalled[active] >= _STALLED_STEPS) | (damping[active] >= _STUCK_DAMPING)
-        active = active[~done]
+        d_a = np.minimum(np.maximum(np.where(better, d_a / 3.0, d_a * 3.0), 1e-12), 1e12)
+        done = settled | (stalled >= _STALLED_STEPS) | (d_a >= _STUCK_DAMPING)
+        if done.any():
+            rows = at[done]
+            poses[rows], r[rows], jac[rows], cost[rows] = p_a[done], r_a[done], j_a[done], c_a[done]
+            keep = ~done
+            at, p_a, r_a, j_a, c_a = at[keep], p_a[keep], r_a[keep], j_a[keep], c_a[keep]
+            d_a, stalled = d_a[keep], stalled[keep]
+            if w_a.ndim == 2:
+                w_a = w_a[keep]
+    poses[at], r[at], jac[at], cost[at] = p_a, r_a, j_a, c_a
     normal = np.einsum("bmi,bmj->bij", jac, jac)
     gradient = np.einsum("bmi,bm->bi", jac, r)
     newton = np.einsum("bij,bj->bi", np.linalg.pinv(normal), gradient)
@@ -517,18 +559,28 @@ def _seeds(
     return np.array(seeds, dtype=np.float64)
 
 
-def _local_minima(
+def _refine(
     seeds: FloatArray, geometry: _Geometry, measured: FloatArray, weights: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Distinct converged minima from the seeds, with their chi^2, best first."""
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Levenberg-Marquardt on every seed, then up to _POLISH_ROUNDS more for
+    those not converged yet: poses, chi^2 and decrements. ``weights`` is (m,),
+    or (B, m) for a weight per seed."""
     poses, chi2, decrement = _levenberg_marquardt(seeds, geometry, measured, weights)
     for _ in range(_POLISH_ROUNDS):
         slow = decrement >= _CONVERGED_DECREMENT
         if not slow.any():
             break
         poses[slow], chi2[slow], decrement[slow] = _levenberg_marquardt(
-            poses[slow], geometry, measured, weights
+            poses[slow], geometry, measured, weights if weights.ndim == 1 else weights[slow]
         )
+    return poses, chi2, decrement
+
+
+def _local_minima(
+    seeds: FloatArray, geometry: _Geometry, measured: FloatArray, weights: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """Distinct converged minima from the seeds, with their chi^2, best first."""
+    poses, chi2, decrement = _refine(seeds, geometry, measured, weights)
     poses[:, 2] = wrap_angles(poses[:, 2])
     converged = decrement < _CONVERGED_DECREMENT
     if not converged.any():
@@ -686,12 +738,19 @@ def _inconsistency(
     """The rejection, naming the suspect distance and those whose removal
     would do about as well (in its message and its ``labels``)."""
     starts = np.vstack([seeds, minima])
+    # One refinement of every start without each distance in turn (a batch
+    # of m groups, each seed with its own weights): the best chi^2 of a group
+    # is that of its best converged minimum (of all its seeds if none has
+    # converged), as _local_minima finds it.
+    m, n_starts = measured.size, len(starts)
+    weights = np.repeat(1.0 - np.eye(m), n_starts, axis=0)
+    _, chi2_all, decrement_all = _refine(np.tile(starts, (m, 1)), geometry, measured, weights)
     remaining: list[float] = []
-    for k in range(measured.size):
-        weights = np.ones(measured.size)
-        weights[k] = 0.0
-        _, chi2_without = _local_minima(starts, geometry, measured, weights)
-        remaining.append(float(chi2_without.min()))
+    for chi2_k, decrement_k in zip(
+        chi2_all.reshape(m, n_starts), decrement_all.reshape(m, n_starts), strict=True
+    ):
+        converged = decrement_k < _CONVERGED_DECREMENT
+        remaining.append(float(chi2_k[converged].min() if converged.any() else chi2_k.min()))
     order = np.argsort(remaining, kind="stable")
     suspect = int(order[0])
     others = [
