@@ -31,6 +31,7 @@ the moments against the literal float64 path (``trajectory=True``).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable
@@ -146,6 +147,9 @@ def _drive_blocks(
     drift = params.e_r * signed_segment_m
     step = (1.0 + params.e_t) * signed_segment_m
     n = x.shape[0]
+    if n == 1:
+        _drive_one(x, y, theta, n_segments, heading_sd, rho_sd, drift, step, rng)
+        return
     for lo in range(0, n, _TRIAL_BLOCK):
         hi = min(n, lo + _TRIAL_BLOCK)
         sums = _heading_sums(theta[lo:hi], n_segments, heading_sd, drift, rng, rho_sd > 0.0)
@@ -169,6 +173,23 @@ class _HeadingSums:
     sin2: FloatArray
 
 
+@dataclass(frozen=True)
+class _BlockSums:
+    """Per-trial sums over the segments of one block, relative to the block's
+    start heading (psi: the heading change since then), float64, shape (m,).
+
+    ``walk_end``: the block's sum of standard normal heading increments;
+    ``q``: sum sin^2(psi/2); ``h``: sum sin(psi)/2; ``hq``, ``h2``: sum h q
+    and sum h^2 (None unless asked for).
+    """
+
+    walk_end: FloatArray
+    q: FloatArray
+    h: FloatArray
+    hq: FloatArray | None
+    h2: FloatArray | None
+
+
 class _Workspace:
     """Preallocated float32 work arrays: ``rows`` segments by ``m`` trials."""
 
@@ -176,8 +197,7 @@ class _Workspace:
         half = (rows + 1) // 2
         self.z = np.empty((2 * half, m), dtype=np.float32)
         self.a = np.empty((rows, m), dtype=np.float32)
-        self.u = np.empty((half, m), dtype=np.float32)
-        self.v = np.empty((half, m), dtype=np.float32)
+        self.uv = np.empty((2 * half, m), dtype=np.float32)
 
     def normals(self, rng: np.random.Generator, rows: int) -> npt.NDArray[np.float32]:
         """``rows`` x m standard normals (float32), by the Box-Muller transform.
@@ -187,11 +207,13 @@ class _Workspace:
         The uniforms are multiples of 2^-24, so |z| <= sqrt(48 ln 2) = 5.77:
         the tails beyond are missing (probability 2e-9 per draw, variance
         low by a relative 3e-7, far below any Monte Carlo error here).
+        The uniforms u (the first half rows) and v (the second) come from one
+        call: the same numbers, in the same order, as two calls would draw.
         """
         half = (rows + 1) // 2
-        u, v, z = self.u[:half], self.v[:half], self.z[: 2 * half]
-        rng.random(dtype=np.float32, out=u)
-        rng.random(dtype=np.float32, out=v)
+        uv, z = self.uv[: 2 * half], self.z[: 2 * half]
+        rng.random(dtype=np.float32, out=uv)
+        u, v = uv[:half], uv[half:]
         np.subtract(np.float32(1.0), u, out=u)  # in (0, 1]: log is finite
         np.log(u, out=u)
         np.multiply(u, np.float32(-2.0), out=u)
@@ -199,8 +221,8 @@ class _Workspace:
         np.multiply(v, np.float32(2.0 * math.pi), out=v)
         np.cos(v, out=z[:half])
         np.sin(v, out=z[half:])
-        z[:half] *= u
-        z[half:] *= u
+        pairs = z.reshape(2, half, z.shape[1])
+        np.multiply(pairs, u, out=pairs)
         return z[:rows]
 
 
@@ -210,12 +232,58 @@ def _cumsum_rows(z: npt.NDArray[np.float32]) -> None:
     A loop of whole-row SIMD adds; numpy's own cumsum is a scalar loop
     (about 3 ns per element along a row, 10 ns down a column).
     """
+    if z.shape[0] == 1:
+        return
     if z.shape[1] < _ROW_LOOP_MIN_WIDTH:
-        np.cumsum(z, axis=0, out=z)
+        np.add.accumulate(z, axis=0, out=z)  # np.cumsum's own loop, without its wrapper
         return
     rows = list(z)
     for previous, row in itertools.pairwise(rows):
         np.add(previous, row, out=row)
+
+
+@functools.lru_cache(maxsize=256)
+def _half_drift(drift: float, rows: int) -> npt.NDArray[np.float32]:
+    """Half the systematic heading change after each of a block's segments,
+    float32 (rad), shape (rows, 1); read-only (shared between calls)."""
+    values = (0.5 * drift * np.arange(1, rows + 1, dtype=np.float64)).astype(np.float32)
+    values.flags.writeable = False
+    return values[:, None]
+
+
+def _block_sums(
+    work: _Workspace,
+    rng: np.random.Generator,
+    count: int,
+    half_sd: np.float32,
+    half_drift: npt.NDArray[np.float32],
+    second: bool,
+) -> _BlockSums:
+    """Draw the heading increments of one block of ``count`` segments and sum
+    what the heading sums need (see :func:`_heading_sums`), in float32 work
+    arrays with float64 sums."""
+    z = work.normals(rng, count)
+    _cumsum_rows(z)
+    walk_end = z[-1].astype(np.float64)
+    # z becomes psi/2, then h = sin(psi)/2 = sin(psi/2) cos(psi/2);
+    # a becomes q = sin^2(psi/2), so cos psi = 1 - 2q and sin psi = 2h
+    np.multiply(z, half_sd, out=z)
+    np.add(z, half_drift[:count], out=z)
+    a = work.a[:count]
+    np.sin(z, out=a)
+    np.cos(z, out=z)
+    np.multiply(z, a, out=z)
+    np.multiply(a, a, out=a)
+    sum_q = np.add.reduce(a, axis=0, dtype=np.float64)
+    sum_h = np.add.reduce(z, axis=0, dtype=np.float64)
+    if not second:
+        return _BlockSums(walk_end, sum_q, sum_h, None, None)
+    # sin^2 psi = 4h^2, sin psi cos psi = 2h - 4hq
+    np.multiply(a, z, out=a)
+    np.multiply(z, z, out=z)
+    sum_hq = np.add.reduce(a, axis=0, dtype=np.float64)
+    sum_h2 = np.add.reduce(z, axis=0, dtype=np.float64)
+    return _BlockSums(walk_end, sum_q, sum_h, sum_hq, sum_h2)
 
 
 def _heading_sums(
@@ -241,45 +309,27 @@ def _heading_sums(
     n_blocks = -(-n_segments // _SEGMENT_BLOCK)
     rows = -(-n_segments // n_blocks)
     work = _Workspace(rows, m)
-    half_drift = (0.5 * drift * np.arange(1, rows + 1, dtype=np.float64)).astype(np.float32)
+    half_drift = _half_drift(drift, rows)
     half_sd = np.float32(0.5 * heading_sd)
     sums = _HeadingSums(np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m))
     done = 0
     while done < n_segments:
         count = min(rows, n_segments - done)
-        z = work.normals(rng, count)
-        _cumsum_rows(z)
-        walk_end = z[-1].astype(np.float64)
-        # z becomes psi/2, then h = sin(psi)/2 = sin(psi/2) cos(psi/2);
-        # a becomes q = sin^2(psi/2), so cos psi = 1 - 2q and sin psi = 2h
-        np.multiply(z, half_sd, out=z)
-        np.add(z, half_drift[:count, None], out=z)
-        a = work.a[:count]
-        np.sin(z, out=a)
-        np.cos(z, out=z)
-        np.multiply(z, a, out=z)
-        np.multiply(a, a, out=a)
-        sum_q = a.sum(axis=0, dtype=np.float64)
-        sum_h = z.sum(axis=0, dtype=np.float64)
-        local_cos = count - 2.0 * sum_q
-        local_sin = 2.0 * sum_h
+        block = _block_sums(work, rng, count, half_sd, half_drift, second)
+        local_cos = count - 2.0 * block.q
+        local_sin = 2.0 * block.h
         cos_a = np.cos(theta)
         sin_a = np.sin(theta)
         sums.cos[:] += cos_a * local_cos - sin_a * local_sin
         sums.sin[:] += sin_a * local_cos + cos_a * local_sin
-        if second:
-            # sin^2 psi = 4h^2, sin psi cos psi = 2h - 4hq
-            np.multiply(a, z, out=a)
-            np.multiply(z, z, out=z)
-            sum_hq = a.sum(axis=0, dtype=np.float64)
-            sum_h2 = z.sum(axis=0, dtype=np.float64)
-            local_cos2 = count - 8.0 * sum_h2
-            local_sin2 = 4.0 * sum_h - 8.0 * sum_hq
+        if block.hq is not None and block.h2 is not None:
+            local_cos2 = count - 8.0 * block.h2
+            local_sin2 = 4.0 * block.h - 8.0 * block.hq
             cos_2a = cos_a * cos_a - sin_a * sin_a
             sin_2a = 2.0 * sin_a * cos_a
             sums.cos2[:] += cos_2a * local_cos2 - sin_2a * local_sin2
             sums.sin2[:] += sin_2a * local_cos2 + cos_2a * local_sin2
-        theta += heading_sd * walk_end + count * drift
+        theta += heading_sd * block.walk_end + count * drift
         done += count
     return sums
 
@@ -302,6 +352,67 @@ def _add_translation_noise(
     z = rng.standard_normal((2, x.shape[0]))
     x += rho_sd * (l11 * z[0])
     y += rho_sd * (l21 * z[0] + l22 * z[1])
+
+
+def _drive_one(
+    x: FloatArray,
+    y: FloatArray,
+    theta: FloatArray,
+    n_segments: int,
+    heading_sd: float,
+    rho_sd: float,
+    drift: float,
+    step: float,
+    rng: np.random.Generator,
+) -> None:
+    """:func:`_heading_sums` and :func:`_add_translation_noise` for a single
+    trial (the fake robots' calls): the same draws in the same order and the
+    same float64 operations one by one, on Python floats instead of arrays of
+    one element (IEEE arithmetic rounds each the same way; the cosines still
+    come from numpy), so the result is bit for bit the array path's."""
+    second = rho_sd > 0.0
+    n_blocks = -(-n_segments // _SEGMENT_BLOCK)
+    rows = -(-n_segments // n_blocks)
+    work = _Workspace(rows, 1)
+    half_drift = _half_drift(drift, rows)
+    half_sd = np.float32(0.5 * heading_sd)
+    heading = float(theta[0])
+    sum_cos = sum_sin = sum_cos2 = sum_sin2 = 0.0
+    done = 0
+    while done < n_segments:
+        count = min(rows, n_segments - done)
+        block = _block_sums(work, rng, count, half_sd, half_drift, second)
+        local_cos = count - 2.0 * float(block.q[0])
+        sum_h = float(block.h[0])
+        local_sin = 2.0 * sum_h
+        cos_a = float(np.cos(heading))
+        sin_a = float(np.sin(heading))
+        sum_cos += cos_a * local_cos - sin_a * local_sin
+        sum_sin += sin_a * local_cos + cos_a * local_sin
+        if block.hq is not None and block.h2 is not None:
+            local_cos2 = count - 8.0 * float(block.h2[0])
+            local_sin2 = 4.0 * sum_h - 8.0 * float(block.hq[0])
+            cos_2a = cos_a * cos_a - sin_a * sin_a
+            sin_2a = 2.0 * sin_a * cos_a
+            sum_cos2 += cos_2a * local_cos2 - sin_2a * local_sin2
+            sum_sin2 += sin_2a * local_cos2 + cos_2a * local_sin2
+        heading += heading_sd * float(block.walk_end[0]) + count * drift
+        done += count
+    theta[0] = heading
+    end_x = float(x[0]) + step * sum_cos
+    end_y = float(y[0]) + step * sum_sin
+    if second:
+        c2 = 0.5 * (n_segments + sum_cos2)
+        cs = 0.5 * sum_sin2
+        s2 = n_segments - c2
+        l11 = math.sqrt(max(c2, 0.0))
+        l21 = cs / l11 if l11 > 0 else 0.0
+        l22 = math.sqrt(max(s2 - l21 * l21, 0.0))
+        z0, z1 = (float(v) for v in rng.standard_normal(2))
+        end_x += rho_sd * (l11 * z0)
+        end_y += rho_sd * (l21 * z0 + l22 * z1)
+    x[0] = end_x
+    y[0] = end_y
 
 
 def _drive_literal(
