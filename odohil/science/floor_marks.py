@@ -466,7 +466,7 @@ def _levenberg_marquardt(
             break
         normal = np.einsum("bmi,bmj->bij", j_a, j_a)
         gradient = np.einsum("bmi,bm->bi", j_a, r_a)
-        diag = np.einsum("bii->bi", normal)[:, :, None] * _EYE + _TINY_EYE
+        diag = normal.diagonal(axis1=1, axis2=2)[:, :, None] * _EYE + _TINY_EYE
         step = np.linalg.solve(normal + d_a[:, None, None] * diag, -gradient[:, :, None])[..., 0]
         trial = p_a + step
         r_new, jac_new = _scaled_residuals(trial, geometry, measured, w_a)
