@@ -19,6 +19,8 @@ from odohil.errors import ParameterError
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import EncoderPath, Leg, Turn, forth_and_back, square
 from odohil.science.simulator import (
+    _add_translation_noise,
+    _heading_sums,
     discrete_means,
     drive_straight,
     make_rng,
@@ -304,6 +306,47 @@ def test_seeds_reproduce_exactly() -> None:
     assert not np.any(first == other)
     via_generator = simulate(path, LOUD, 3000, seed=np.random.default_rng(5), segment_m=0.01)
     np.testing.assert_array_equal(first, via_generator.pose_change)
+
+
+@pytest.mark.parametrize(
+    "params",
+    [LOUD, ErrorParameters(0.01, 0.002, 1e-3, 1e-5), ErrorParameters(0.02, 0.01, 2e-4, 0.0)],
+    ids=["loud", "nomad-like", "no-translation-noise"],
+)
+def test_a_single_trial_is_the_array_paths_arithmetic_bit_for_bit(
+    params: ErrorParameters,
+) -> None:
+    """drive_straight keeps a single trial's float64 sums in Python floats (the
+    fakes' calls); the arrays' path, run by hand on a one-element array with
+    the same seed, must give the same bits and leave the generator in the same
+    state."""
+    for count in (1, 2, 3, 6, 128, 129, 300):
+        for signed_segment_m in (0.001, -0.004):
+            one = make_rng(count)
+            x, y, theta = np.array([0.1]), np.array([-0.2]), np.array([0.3])
+            drive_straight(x, y, theta, signed_segment_m, count, params, one)
+            arrays = make_rng(count)
+            ax, ay, at = np.array([0.1]), np.array([-0.2]), np.array([0.3])
+            delta = abs(signed_segment_m)
+            rho_sd = math.sqrt(params.k_rho * delta)
+            sums = _heading_sums(
+                at,
+                count,
+                math.sqrt(params.k_theta * delta),
+                params.e_r * signed_segment_m,
+                arrays,
+                rho_sd > 0.0,
+            )
+            ax += (1.0 + params.e_t) * signed_segment_m * sums.cos
+            ay += (1.0 + params.e_t) * signed_segment_m * sums.sin
+            if rho_sd > 0.0:
+                _add_translation_noise(ax, ay, sums, count, rho_sd, arrays)
+            assert (x.tobytes(), y.tobytes(), theta.tobytes()) == (
+                ax.tobytes(),
+                ay.tobytes(),
+                at.tobytes(),
+            ), (count, signed_segment_m)
+            assert one.bit_generator.state == arrays.bit_generator.state
 
 
 def test_progress_reports_every_trial_once_in_order() -> None:
