@@ -48,8 +48,10 @@ from __future__ import annotations
 import math
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+import numpy.typing as npt
 
 from odohil.science import distributions
 from odohil.science.estimators.joint import JointFit, designs_of
@@ -57,7 +59,10 @@ from odohil.science.estimators.likelihood import (
     GroupStats,
     LikelihoodValue,
     ModelPoint,
+    StackedGroups,
     evaluate,
+    evaluate_arrays,
+    nll_many,
 )
 from odohil.science.paths import FloatArray
 
@@ -76,6 +81,8 @@ _MAX_LOG_STEP = 2.0
 """Largest change of a nuisance log K in one re-fit step (a factor e^2)."""
 _SMALLEST_STEP = 0.05
 """A re-fit step is halved until the NLL does not rise, down to this fraction."""
+_HALVINGS = tuple(0.5**j for j in range(8) if 0.5**j > _SMALLEST_STEP)
+"""The fractions of a re-fit step tried: 1, 1/2, ..., 1/16."""
 _SEARCH_STEPS = 40
 _BRACKET_TOLERANCE = 1e-3
 """The search stops when its bracket in log K is this narrow."""
@@ -246,6 +253,14 @@ class _Profile:
         self.cox_reid = cox_reid
         self.model = fit.point.model
         self.anchor = _with_derivatives(fit.point, self.designs)
+        # what every evaluation reads and no evaluation changes: the groups'
+        # arrays and the derivatives at the estimate, stacked per group
+        self.stack = StackedGroups.of(self.groups)
+        anchor = self.anchor
+        assert anchor.d_means is not None
+        assert anchor.d_covs is not None
+        self.d_mu = np.array([anchor.d_means[k] for k in self.stack.keys])  # (G, p, 3)
+        self.d_cov = np.array([anchor.d_covs[k] for k in self.stack.keys])  # (G, p, 3, 3)
         self.psi_hat = float(fit.point.phi[index])
         self.evaluations = 0
         self.reference = 0.0
@@ -253,18 +268,48 @@ class _Profile:
         self.reference = nll
         self.solved = [_Solved(self.psi_hat, 0.0, phi, value)]
 
-    def _value(self, phi: FloatArray, nll_only: bool = False) -> LikelihoodValue:
+    def _model_arrays(self, phis: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Per point (rows of ``phis``) and group, the model mean and the model
+        plus measurement covariance: (Q, G, 3), (Q, G, 3, 3)."""
+        means, covs = self.model.moments(phis, self.stack.distinct)
+        return self.stack.model_arrays(means, covs)
+
+    def _scaled(self, phis: FloatArray) -> FloatArray:
+        """Per row of ``phis`` (Q, p), the factor of each parameter's
+        derivatives: K / K_hat for a log rate (d/d log K = K d/dK), else 1."""
+        scale = np.ones(phis.shape)
+        rates = self.rates
+        scale[:, rates] = np.exp(phis[:, rates] - self.anchor.phi[rates])
+        return scale
+
+    def _value(self, phi: FloatArray) -> LikelihoodValue:
+        """The NLL with its score and information at ``phi`` (the model's
+        moments there, its derivatives those at the estimate rescaled to the
+        point, see :meth:`_scaled`)."""
         self.evaluations += 1
-        moved = self.model.point(phi, self.designs, derivatives=False)
-        anchor = self.anchor
-        assert anchor.d_means is not None
-        assert anchor.d_covs is not None
-        scale = np.ones(self.layout.size)
-        scale[self.rates] = np.exp(phi[self.rates] - anchor.phi[self.rates])
-        d_means = {k: v * scale[:, None] for k, v in anchor.d_means.items()}
-        d_covs = {k: v * scale[:, None, None] for k, v in anchor.d_covs.items()}
-        point = ModelPoint(phi, moved.means, moved.covs, d_means, d_covs, anchor.phi, self.model)
-        return evaluate(self.groups, point, self.cox_reid, nll_only=nll_only)
+        mu, cov = self._model_arrays(phi[None])
+        scale = self._scaled(phi[None])[0]
+        stack = self.stack
+        return evaluate_arrays(
+            stack.n,
+            stack.s,
+            stack.t,
+            stack.counts,
+            mu[0],
+            cov[0],
+            self.d_mu * scale[:, None],
+            self.d_cov * scale[:, None, None],
+            self.layout,
+            self.cox_reid,
+        )
+
+    def _nlls(self, phis: FloatArray) -> FloatArray:
+        """The NLL alone at every row of ``phis``, in one batch (the same
+        numbers as :meth:`_value`'s)."""
+        self.evaluations += len(phis)
+        mu, cov = self._model_arrays(phis)
+        d_mu = self.d_mu[None] * self._scaled(phis)[:, None, :, None]
+        return nll_many(self.stack, mu, cov, d_mu, self.layout, self.cox_reid)
 
     def _nuisance(self, phi: FloatArray, gradient: FloatArray) -> list[int]:
         """The free parameters not held on the floor (a rate there whose
@@ -278,15 +323,20 @@ class _Profile:
         """The NLL's own gradient in the free parameters, by forward
         differences of 1e-4 standard errors (at most 1e-3 in log K)."""
         assert value.information is not None
-        out = np.zeros(self.layout.size)
+        steps = []
         for i in self.free:
             curvature = float(value.information[i, i])
             h = 1e-4 / math.sqrt(curvature) if curvature > 0 else 1e-6
             if i in self.rates:
                 h = min(h, 1e-3)
-            moved = phi.copy()
-            moved[i] += h
-            out[i] = (self._value(moved, nll_only=True).nll - value.nll) / h
+            steps.append(h)
+        moved = np.repeat(phi[None], len(self.free), axis=0)
+        for row, (i, h) in enumerate(zip(self.free, steps, strict=True)):
+            moved[row, i] += h
+        nlls = self._nlls(moved)
+        out = np.zeros(self.layout.size)
+        for row, (i, h) in enumerate(zip(self.free, steps, strict=True)):
+            out[i] = (float(nlls[row]) - value.nll) / h
         return out
 
     def refit(
@@ -297,7 +347,9 @@ class _Profile:
 
         Newton steps on the model's score; once a step cannot lower the NLL
         (that score, with the derivatives held at the estimate, can be off
-        far from it), on the NLL's own gradient (:meth:`_numeric_gradient`)."""
+        far from it), on the NLL's own gradient (:meth:`_numeric_gradient`).
+        A step is tried whole, then (if the NLL rose) at every halving down
+        to _SMALLEST_STEP at once, the first that does not raise it kept."""
         phi = start.copy()
         phi[self.index] = psi
         phi = self.layout.bounded(phi, *_LOG_K_RANGE)
@@ -320,22 +372,30 @@ class _Profile:
             largest = float(np.max(np.abs(step[rates]))) if rates else 0.0
             if largest > _MAX_LOG_STEP:
                 step *= _MAX_LOG_STEP / largest
-            t = 1.0
-            while t > _SMALLEST_STEP:
-                new = phi.copy()
-                new[free] += t * step
-                new = self.layout.bounded(new, *_LOG_K_RANGE)
+            new = self._stepped(phi, free, step, 1.0)
+            trial = self._value(new)
+            if not trial.nll <= value.nll + 1e-9:
+                shorter = _HALVINGS[1:]
+                tried = np.array([self._stepped(phi, free, step, t) for t in shorter])
+                nlls = self._nlls(tried)
+                kept = [j for j, nll in enumerate(nlls) if nll <= value.nll + 1e-9]
+                if not kept:
+                    if numeric:
+                        break
+                    numeric = True
+                    continue
+                new = tried[kept[0]]
                 trial = self._value(new)
-                if trial.nll <= value.nll + 1e-9:
-                    break
-                t /= 2.0
-            else:
-                if numeric:
-                    break
-                numeric = True
-                continue
             phi, value = new, trial
         return value.nll, phi, value, False
+
+    def _stepped(
+        self, phi: FloatArray, free: list[int], step: npt.NDArray[np.floating[Any]], t: float
+    ) -> FloatArray:
+        """phi moved by t x step in the free parameters, within the bounds."""
+        new = phi.copy()
+        new[free] += t * step
+        return self.layout.bounded(new, *_LOG_K_RANGE)
 
     def _tangent(self, solved: _Solved) -> FloatArray:
         """d phi / d psi along the profile at a solved point (0 where singular)."""

@@ -56,6 +56,7 @@ from odohil.science.fisher import many_moment_derivatives
 from odohil.science.moments import BATCH_COLUMNS, PathSet, batch_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, EncoderPath, FloatArray
+from odohil.units import wrap_angles
 
 _LOG_2PI = math.log(2.0 * math.pi)
 
@@ -164,6 +165,12 @@ class MomentModel(Protocol):
         """The model at ``phi`` for ``keys``, with derivatives if asked."""
         ...
 
+    def moments(self, phis: FloatArray, keys: Sequence[Hashable]) -> tuple[FloatArray, FloatArray]:
+        """The moments of ``keys`` at every row of ``phis`` (Q, p) in one batch:
+        means (Q, K, 3) and covariances (Q, K, 3, 3), each row the same numbers
+        as :meth:`point` gives at that phi (SI)."""
+        ...
+
 
 class _DesignModel:
     """The four-parameter model of forth-and-back designs (keys: :class:`Design`)."""
@@ -175,6 +182,13 @@ class _DesignModel:
     def point(self, phi: FloatArray, keys: Iterable[Hashable], derivatives: bool) -> ModelPoint:
         designs = [k for k in keys if isinstance(k, Design)]
         return model_point(phi, designs, derivatives)
+
+    def moments(self, phis: FloatArray, keys: Sequence[Hashable]) -> tuple[FloatArray, FloatArray]:
+        designs = tuple(k for k in keys if isinstance(k, Design))
+        rows = np.zeros((len(phis), len(BATCH_COLUMNS)))
+        for row, phi in zip(rows, phis, strict=True):
+            row[:4] = from_phi(phi).as_tuple()
+        return batch_moments(design_paths(designs), rows)
 
 
 DESIGN_MODEL: MomentModel = _DesignModel()
@@ -323,6 +337,32 @@ def evaluate(
     groups = [g for g in groups if g.n > 0]
     n, s, t, mu, cov = _stack(groups, point)
     counts = np.array([g.n for g in groups], dtype=np.float64)
+    d_mu = d_cov = None
+    if point.d_means is not None and point.d_covs is not None:
+        d_mu = np.array([point.d_means[g.key] for g in groups])  # (G, p, 3)
+        if not nll_only:
+            d_cov = np.array([point.d_covs[g.key] for g in groups])  # (G, p, 3, 3)
+    return evaluate_arrays(n, s, t, counts, mu, cov, d_mu, d_cov, point.layout, cox_reid)
+
+
+def evaluate_arrays(
+    n: FloatArray,
+    s: FloatArray,
+    t: FloatArray,
+    counts: FloatArray,
+    mu: FloatArray,
+    cov: FloatArray,
+    d_mu: FloatArray | None,
+    d_cov: FloatArray | None,
+    layout: Layout,
+    cox_reid: bool,
+) -> LikelihoodValue:
+    """:func:`evaluate` on its stacked arrays (G groups): weights ``n``, sums
+    ``s`` (G, 3) and ``t`` (G, 3, 3), counts, model means ``mu`` (G, 3)
+    (Delta near the group's reference) and covariances ``cov`` (G, 3, 3)
+    with the measurement's, and the derivatives ``d_mu`` (G, p, 3) and
+    ``d_cov`` (G, p, 3, 3): the NLL alone when ``d_mu`` is None, with the
+    Cox-Reid term but no score when ``d_cov`` is None."""
     cov = 0.5 * (cov + np.swapaxes(cov, 1, 2))
     sign, logdet = np.linalg.slogdet(cov)
     if np.any(sign <= 0) or not np.all(np.isfinite(logdet)):
@@ -338,18 +378,16 @@ def evaluate(
     nll = 0.5 * float(
         (counts * logdet).sum() + np.einsum("gii->", inv_r) + 3.0 * counts.sum() * _LOG_2PI
     )
-    if point.d_means is None or point.d_covs is None:
+    if d_mu is None:
         return LikelihoodValue(nll, None, None)
-    d_mu = np.array([point.d_means[g.key] for g in groups])  # (G, p, 3)
-    if nll_only:
+    if d_cov is None:
         if cox_reid:
-            mean_index = list(point.layout.mean_index)
+            mean_index = list(layout.mean_index)
             mean_info = np.einsum("g,gai,gij,gbj->ab", n, d_mu, inv, d_mu)
             half_logdet = _half_logdet(mean_info[np.ix_(mean_index, mean_index)])
             if half_logdet is not None:
                 nll += half_logdet
         return LikelihoodValue(nll, None, None)
-    d_cov = np.array([point.d_covs[g.key] for g in groups])  # (G, p, 3, 3)
     resid = s - n[:, None] * mu
     w = np.einsum("gij,gajk->gaik", inv, d_cov)  # S^-1 dS_a
     grad = (
@@ -360,7 +398,6 @@ def evaluate(
     mean_info = np.einsum("g,gai,gij,gbj->ab", n, d_mu, inv, d_mu)
     info = mean_info + 0.5 * np.einsum("g,gaij,gbji->ab", n, w, w)
     if cox_reid:
-        layout = point.layout
         mean_index = list(layout.mean_index)
         adjustment = _cox_reid(
             mean_info[np.ix_(mean_index, mean_index)],
@@ -374,6 +411,104 @@ def evaluate(
             nll += adjustment[0]
             grad = grad + adjustment[1]
     return LikelihoodValue(nll, grad, 0.5 * (info + info.T))
+
+
+@dataclass(frozen=True)
+class StackedGroups:
+    """Groups (those with trials) as the arrays :func:`evaluate_arrays` reads,
+    for a caller that evaluates one set of groups at many points.
+
+    Attributes:
+        keys: per group, the key of its moments.
+        slot: per group, the index of its key in ``distinct``.
+        distinct: the distinct keys, in order.
+        n: (G,) weights; s: (G, 3) and t: (G, 3, 3) weighted sums of v and v v^T;
+        counts: (G,) numbers of trials; measurement: (G, 3, 3) covariances;
+        reference: (G,) headings Delta is unwrapped near, rad.
+    """
+
+    keys: tuple[Hashable, ...]
+    slot: tuple[int, ...]
+    distinct: tuple[Hashable, ...]
+    n: FloatArray
+    s: FloatArray
+    t: FloatArray
+    counts: FloatArray
+    measurement: FloatArray
+    reference: FloatArray
+
+    @classmethod
+    def of(cls, groups: Sequence[GroupStats]) -> StackedGroups:
+        """The arrays of ``groups`` (those with n > 0)."""
+        kept = [g for g in groups if g.n > 0]
+        keys = tuple(g.key for g in kept)
+        distinct = tuple(dict.fromkeys(keys))
+        where = {k: i for i, k in enumerate(distinct)}
+        return cls(
+            keys,
+            tuple(where[k] for k in keys),
+            distinct,
+            np.array([g.weight for g in kept], dtype=np.float64),
+            np.array([g.total for g in kept]),
+            np.array([g.outer for g in kept]),
+            np.array([g.n for g in kept], dtype=np.float64),
+            np.array([g.measurement_cov for g in kept]),
+            np.array([g.reference for g in kept], dtype=np.float64),
+        )
+
+    def model_arrays(self, means: FloatArray, covs: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Per group, the model mean (Delta near its reference) and the model
+        plus measurement covariance, from the moments of :attr:`distinct`
+        (means (..., K, 3), covs (..., K, 3, 3)): (..., G, 3) and (..., G, 3, 3),
+        the numbers :func:`evaluate` stacks."""
+        slot = list(self.slot)
+        mu = means[..., slot, :].copy()
+        mu[..., 2] = self.reference + wrap_angles(mu[..., 2] - self.reference)
+        return mu, covs[..., slot, :, :] + self.measurement
+
+
+def nll_many(
+    stack: StackedGroups,
+    mu: FloatArray,
+    cov: FloatArray,
+    d_mu: FloatArray | None,
+    layout: Layout,
+    cox_reid: bool,
+) -> FloatArray:
+    """The NLL of :func:`evaluate` at Q points at once, the same operations
+    (so the same numbers) on a leading axis: ``mu`` (Q, G, 3) and ``cov``
+    (Q, G, 3, 3) as :meth:`StackedGroups.model_arrays` gives them, ``d_mu``
+    (Q, G, p, 3) the derivatives of the means (for the Cox-Reid term, with
+    ``cox_reid``; None: no term). inf where a covariance is singular."""
+    n, s, t, counts = stack.n, stack.s, stack.t, stack.counts
+    cov = 0.5 * (cov + np.swapaxes(cov, -1, -2))
+    sign, logdet = np.linalg.slogdet(cov)
+    bad = np.any(sign <= 0, axis=-1) | ~np.all(np.isfinite(logdet), axis=-1)
+    if np.any(bad):
+        cov = cov.copy()
+        cov[bad] = np.eye(3)
+    inv = np.linalg.inv(cov)
+    r = (
+        t
+        - np.einsum("gi,qgj->qgij", s, mu)
+        - np.einsum("qgi,gj->qgij", mu, s)
+        + n[:, None, None] * np.einsum("qgi,qgj->qgij", mu, mu)
+    )
+    inv_r = np.einsum("qgij,qgjk->qgik", inv, r)
+    weighted = counts * logdet
+    constant = 3.0 * counts.sum() * _LOG_2PI
+    mean_index = list(layout.mean_index)
+    nll = np.full(len(mu), math.inf)
+    for q in np.flatnonzero(~bad):
+        # the sums over the groups one point at a time, as evaluate does them
+        # (a sum over a (Q, G) array's rows can round differently)
+        nll[q] = 0.5 * float(weighted[q].sum() + np.einsum("gii->", inv_r[q]) + constant)
+        if cox_reid and d_mu is not None:
+            mean_info = np.einsum("g,gai,gij,gbj->ab", n, d_mu[q], inv[q], d_mu[q])
+            half_logdet = _half_logdet(mean_info[np.ix_(mean_index, mean_index)])
+            if half_logdet is not None:
+                nll[q] += half_logdet
+    return nll
 
 
 def _cox_reid(

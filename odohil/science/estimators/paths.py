@@ -209,6 +209,12 @@ class PathModel:
             out.append([8])
         return out
 
+    def moments(self, phis: FloatArray, keys: Sequence[Hashable]) -> tuple[FloatArray, FloatArray]:
+        """The moments of ``keys`` (trial indices) at every row of ``phis``, one batch."""
+        indices = [int(k) for k in keys if isinstance(k, int)]
+        means, covs = batch_moments(self.paths, self.rows(np.asarray(phis, dtype=np.float64)))
+        return means[:, indices], covs[:, indices]
+
     def point(self, phi: FloatArray, keys: Iterable[Hashable], derivatives: bool) -> ModelPoint:
         """The moments of ``keys`` (trial indices) at phi. Derivatives by
         finite differences in SI (as odohil/science/fisher.py: central,
