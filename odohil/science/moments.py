@@ -397,9 +397,9 @@ def _gauss_legendre_n(nodes: int) -> tuple[FloatArray, FloatArray]:
 
 def _panel_integrals(
     length: FloatArray, omega: FloatArray, k: FloatArray, nodes: int
-) -> tuple[ComplexArray, ...]:
+) -> ComplexArray:
     """The seven one-leg integrals of :func:`pose_moments` by one
-    Gauss-Legendre panel of ``nodes`` nodes, legs as flat arrays."""
+    Gauss-Legendre panel of ``nodes`` nodes, legs as flat arrays: (7, legs)."""
     x, w = _gauss_legendre_n(nodes)
     leg = length[:, None]
     t = leg * x
@@ -411,52 +411,58 @@ def _panel_integrals(
     c3t = (1j * om - 1.5 * k[:, None]) * t
     with np.errstate(invalid="ignore", divide="ignore"):
         ratio = np.where(c3t == 0, 1.0, np.expm1(c3t) / c3t)
-
-    def total(values: ComplexArray) -> ComplexArray:
-        sums: ComplexArray = (wt * values).sum(axis=-1)
-        return sums
-
-    return (
-        total(e1),
-        total(e1 / shrink) * np.exp(-0.5 * k * length),
-        total((leg - t) * e1),
-        total(t * e1),
-        total(e1 * shrink),
-        total(e1 * t * ratio),
-        total(e1 * e1 * shrink),
-    )
+    out: ComplexArray = np.empty((7, length.size), dtype=np.complex128)
+    for row, values in enumerate(
+        (e1, e1 / shrink, (leg - t) * e1, t * e1, e1 * shrink, e1 * t * ratio, e1 * e1 * shrink)
+    ):
+        np.add.reduce(wt * values, axis=-1, out=out[row])
+    out[1] *= np.exp(-0.5 * k * length)
+    return out
 
 
-def _all_leg_integrals(paths: PathSet, q: FloatArray) -> list[ComplexArray]:
-    """The seven one-leg integrals of every leg at every row of ``q``, (Q, T, M)
-    each. They depend on a row only through E_R and K_theta, so each distinct
+def _distinct_pairs(pairs: FloatArray) -> tuple[FloatArray, list[int] | None]:
+    """The distinct rows of ``pairs`` (Q, 2), in order of first appearance, and
+    the index of each row's among them (None when every row is distinct)."""
+    first: dict[tuple[float, float], int] = {}
+    inverse = [first.setdefault((a, b), len(first)) for a, b in pairs.tolist()]
+    if len(first) == len(inverse):
+        return pairs, None
+    return np.array(list(first), dtype=np.float64).reshape(-1, 2), inverse
+
+
+def _all_leg_integrals(paths: PathSet, q: FloatArray) -> ComplexArray:
+    """The seven one-leg integrals of every leg at every row of ``q``, (7, Q, T, M).
+    They depend on a row only through E_R and K_theta, so each distinct
     pair is done once (finite-difference rows mostly move other parameters)."""
-    pairs, inverse = np.unique(q[:, [0, 2]], axis=0, return_inverse=True)
+    pairs, inverse = _distinct_pairs(q[:, [0, 2]])
     e_r = pairs[:, 0, None, None]
     k = pairs[:, 1, None, None]
     length = paths.length_m[None]
     omega = e_r * paths.sign[None]
     shape = omega.shape
-    kk = np.broadcast_to(k, shape)
-    ll = np.broadcast_to(length, shape)
-    integrals = [np.zeros(shape, dtype=np.complex128) for _ in range(7)]
+    kk = np.empty(shape)
+    kk[...] = k
+    ll = np.empty(shape)
+    ll[...] = length
+    integrals = np.zeros((7, *shape), dtype=np.complex128)
     load = (2.0 * np.abs(e_r) + 2.0 * k) * length
-    valid = np.broadcast_to(length > 0, shape)
+    valid = ll > 0
     low = 0.0
     for high, nodes in _PANEL_NODES:
         chosen = valid & (load > low) & (load <= high) if low else valid & (load <= high)
         low = high
         if not np.any(chosen):
             continue
-        values = _panel_integrals(ll[chosen], omega[chosen], kk[chosen], nodes)
-        for target, value in zip(integrals, values, strict=True):
-            target[chosen] = value
+        integrals[:, chosen] = _panel_integrals(ll[chosen], omega[chosen], kk[chosen], nodes)
     long_leg = valid & (load > _PANEL_RATE_LENGTH)
     if np.any(long_leg):
         exact = _long_leg_integrals(ll[long_leg], omega[long_leg], kk[long_leg])
         for target, value in zip(integrals, exact, strict=True):
             target[long_leg] = value
-    return [values[inverse.reshape(-1)] for values in integrals]
+    if inverse is None:
+        return integrals
+    gathered: ComplexArray = integrals[:, inverse]
+    return gathered
 
 
 def _exclusive_cumsum(values: ComplexArray) -> ComplexArray:
@@ -492,25 +498,25 @@ def batch_moments(paths: PathSet, values: FloatArray) -> tuple[FloatArray, Float
     alpha = gain * sign * np.exp(1j * phase)
     v_start = k * start + jump
     v_end = v_start + k * length
-    kk = np.broadcast_to(k, v_start.shape)
-    integrals = _all_leg_integrals(paths, q)
-    i_mean, i_tail, i_same_abs, i_stein, i_f, i_same_sq, i_noise = integrals
+    i_mean, i_tail, i_same_abs, i_stein, i_f, i_same_sq, i_noise = _all_leg_integrals(paths, q)
 
-    mean_legs = alpha * np.exp(-0.5 * v_start) * i_mean
+    half = np.exp(-0.5 * v_start)
+    mean_legs = alpha * half * i_mean
     mean_z = mean_legs.sum(axis=-1)
     same_abs = 2.0 * (np.abs(alpha) ** 2 * i_same_abs.real).sum(axis=-1)
     # pairs i < j: conj C_j e^{-V(a_j)/2} sum_{i<j} B_i e^{V(e_i)/2}
     safe = np.minimum(v_end, 2.0 * _MAX_HALF_VARIANCE)
     grow = alpha * i_tail * np.exp(0.5 * safe)
     running = _exclusive_cumsum(grow)
-    cross = (running * np.conj(alpha * i_mean) * np.exp(-0.5 * v_start)).sum(axis=-1)
+    cross = (running * np.conj(alpha * i_mean) * half).sum(axis=-1)
     abs_sq = k_rho[..., 0] * paths.distance_m[None] + same_abs + 2.0 * cross.real
     f_legs = alpha * np.exp(-1.5 * v_start) * i_f
     before = _exclusive_cumsum(f_legs)
-    same_sq = alpha * alpha * np.exp(-2.0 * v_start) * i_same_sq
-    noise = k_rho / gain**2 * alpha * alpha * np.exp(-2.0 * v_start) * i_noise
+    two = np.exp(-2.0 * v_start)
+    same_sq = alpha * alpha * two * i_same_sq
+    noise = k_rho / gain**2 * alpha * alpha * two * i_noise
     sq = 2.0 * (same_sq.sum(axis=-1) + (before * mean_legs).sum(axis=-1)) + noise.sum(axis=-1)
-    cov_dz = (1j * alpha * np.exp(-0.5 * v_start) * (v_start * i_mean + kk * i_stein)).sum(axis=-1)
+    cov_dz = (1j * alpha * half * (v_start * i_mean + k * i_stein)).sum(axis=-1)
     c_abs = abs_sq - np.abs(mean_z) ** 2
     c_sq = sq - mean_z * mean_z
     var_delta = q[:, 2, None] * paths.distance_m[None] + q[:, 8, None] * paths.spin_total_rad[None]
