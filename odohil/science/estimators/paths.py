@@ -210,9 +210,13 @@ class PathModel:
         return out
 
     def moments(self, phis: FloatArray, keys: Sequence[Hashable]) -> tuple[FloatArray, FloatArray]:
-        """The moments of ``keys`` (trial indices) at every row of ``phis``, one batch."""
+        """The moments of ``keys`` (trial indices) at every row of ``phis``, a
+        batch per row: with turn errors, a batch's (Q, 4) x (4, T) products
+        round differently from one row's, and :meth:`point` does one row."""
         indices = [int(k) for k in keys if isinstance(k, int)]
-        means, covs = batch_moments(self.paths, self.rows(np.asarray(phis, dtype=np.float64)))
+        each = [batch_moments(self.paths, self.rows(phi)) for phi in np.asarray(phis, np.float64)]
+        means = np.concatenate([m for m, _ in each])
+        covs = np.concatenate([c for _, c in each])
         return means[:, indices], covs[:, indices]
 
     def point(self, phi: FloatArray, keys: Iterable[Hashable], derivatives: bool) -> ModelPoint:
