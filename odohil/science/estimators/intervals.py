@@ -319,9 +319,11 @@ class _Profile:
             i for i in self.free if not (i in self.rates and phi[i] <= floor and gradient[i] > 0)
         ]
 
-    def _numeric_gradient(self, phi: FloatArray, value: LikelihoodValue) -> FloatArray:
-        """The NLL's own gradient in the free parameters, by forward
-        differences of 1e-4 standard errors (at most 1e-3 in log K)."""
+    def _numeric_points(
+        self, phi: FloatArray, value: LikelihoodValue
+    ) -> tuple[FloatArray, list[float]]:
+        """The points of :meth:`_numeric_gradient` (one row per free
+        parameter) and their steps: 1e-4 standard errors, at most 1e-3 in log K."""
         assert value.information is not None
         steps = []
         for i in self.free:
@@ -333,11 +335,22 @@ class _Profile:
         moved = np.repeat(phi[None], len(self.free), axis=0)
         for row, (i, h) in enumerate(zip(self.free, steps, strict=True)):
             moved[row, i] += h
-        nlls = self._nlls(moved)
+        return moved, steps
+
+    def _differences(
+        self, nlls: FloatArray, steps: list[float], value: LikelihoodValue
+    ) -> FloatArray:
+        """The forward differences of the NLLs at :meth:`_numeric_points`."""
         out = np.zeros(self.layout.size)
         for row, (i, h) in enumerate(zip(self.free, steps, strict=True)):
             out[i] = (float(nlls[row]) - value.nll) / h
         return out
+
+    def _numeric_gradient(self, phi: FloatArray, value: LikelihoodValue) -> FloatArray:
+        """The NLL's own gradient in the free parameters, by forward
+        differences of 1e-4 standard errors (at most 1e-3 in log K)."""
+        moved, steps = self._numeric_points(phi, value)
+        return self._differences(self._nlls(moved), steps, value)
 
     def refit(
         self, psi: float, start: FloatArray
@@ -355,11 +368,17 @@ class _Profile:
         phi = self.layout.bounded(phi, *_LOG_K_RANGE)
         value = self._value(phi)
         numeric = False
+        ready: FloatArray | None = None  # the numeric gradient at phi, when already known
         for _ in range(_INNER_STEPS):
             if not math.isfinite(value.nll) or value.gradient is None:
                 break
             assert value.information is not None
-            gradient = self._numeric_gradient(phi, value) if numeric else value.gradient
+            if not numeric:
+                gradient = value.gradient
+            elif ready is not None:
+                gradient, ready = ready, None
+            else:
+                gradient = self._numeric_gradient(phi, value)
             free = self._nuisance(phi, gradient)
             g = gradient[free]
             try:
@@ -377,12 +396,20 @@ class _Profile:
             if not trial.nll <= value.nll + 1e-9:
                 shorter = _HALVINGS[1:]
                 tried = np.array([self._stepped(phi, free, step, t) for t in shorter])
-                nlls = self._nlls(tried)
+                if numeric:
+                    nlls = self._nlls(tried)
+                else:
+                    # the numeric gradient at phi rides along: it is what
+                    # the next step needs when every halving fails too
+                    points, steps = self._numeric_points(phi, value)
+                    both = self._nlls(np.concatenate([tried, points]))
+                    nlls = both[: len(tried)]
                 kept = [j for j, nll in enumerate(nlls) if nll <= value.nll + 1e-9]
                 if not kept:
                     if numeric:
                         break
                     numeric = True
+                    ready = self._differences(both[len(tried) :], steps, value)
                     continue
                 new = tried[kept[0]]
                 trial = self._value(new)
