@@ -9,6 +9,8 @@ including the edges of the support and invalid degrees of freedom.
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -70,3 +72,28 @@ def test_the_noncentrality_for_a_probability_is_scipy_stats_ncx2s(dof: float) ->
             nc = distributions.ncx2_noncentrality(x, dof, cdf)
             assert float(stats.ncx2.cdf(x, dof, nc)) == pytest.approx(cdf, rel=1e-9)
     assert math.isnan(distributions.ncx2_noncentrality(3.0, 0.0, 0.2))
+
+
+def test_the_written_out_four_sigma_levels_are_the_normal_distributions() -> None:
+    """Two modules write a 4-sigma level out (importing them computes nothing with
+    scipy): exactly the values the functions give."""
+    from odohil.science.estimators import intervals, result
+
+    assert 1.0 - 2.0 * distributions.norm_sf(intervals.FOUR_SIGMA) == intervals.LEVEL_4SIGMA
+    assert distributions.norm_cdf(4.0) == result._FOUR_SIGMA_UPPER
+
+
+def test_importing_the_science_imports_no_scipy_special() -> None:
+    """scipy.special (0.3 s of CPU at start) is imported at the first probability
+    computed, not with the modules (odohil/science/distributions.py)."""
+    probe = (
+        "import sys\n"
+        "import odohil.science.estimators, odohil.science.floor_marks\n"
+        "import odohil.science.validation, odohil.science.pose_selection\n"
+        "print('before', 'scipy.special' in sys.modules)\n"
+        "from odohil.science import distributions\n"
+        "distributions.chi2_sf(1.0, 2.0)\n"
+        "print('after', 'scipy.special' in sys.modules)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60)
+    assert done.stdout.split() == ["before", "False", "after", "True"], done.stderr

@@ -14,8 +14,11 @@ from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters, si_unit
 VARIANCE_RATES = ("K_theta", "K_rho", "K_spin")
 """The parameters that are variance rates (positive, intervals in log K)."""
 Z95 = 1.959963984540054
-_FOUR_SIGMA_UPPER = distributions.norm_cdf(4.0)
 """The 97.5 % quantile of the standard normal."""
+_FOUR_SIGMA_UPPER = 0.9999683287581669
+"""``norm_cdf(4.0)`` written out, so that importing this module computes nothing
+with scipy (odohil/science/distributions.py; tests/science/test_distributions.py
+checks it)."""
 
 
 @dataclass(frozen=True)
