@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import functools
 import math
+import operator
 import re
 import tomllib
 from importlib.resources import files
@@ -35,10 +36,17 @@ from odohil.errors import RecordingError
 from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.odometry_paths import integrate_ticks
 from odohil.science.path_trials import PathTrial
+from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
 from odohil.science.robot_facts import DRIVE_KEYS
 from odohil.session.logs.files import finite_number, read_text
-from odohil.session.logs.recording import ImportOptions, Recording, check_increasing, trials_of
+from odohil.session.logs.recording import (
+    ImportOptions,
+    IntArray,
+    Recording,
+    check_increasing,
+    trials_of,
+)
 
 GEOMETRY_FILE = "datasets/optiodom.toml"
 """The data set's robot, in the ``odohil.robots`` package (data, not a built-in ``--robot``)."""
@@ -59,6 +67,7 @@ MAX_RUNS = 10_000
 """Most run files read in one import."""
 _RUN_NAME = re.compile(r"^(?P<session>.+)_run-(?P<run>\d+)\.csv$")
 _COUNTS_TOLERANCE = 1e-6
+_COMMAS = operator.methodcaller("count", ",")
 
 
 def _metadata(path: Path) -> dict[str, list[str]]:
@@ -131,16 +140,40 @@ def run_files(paths: list[Path]) -> list[Path]:
     return found
 
 
-def read_run(path: Path) -> Recording:
-    """One run file as a recording with one given trial (the run).
+def _parsed_rows(path: Path, text: str) -> tuple[FloatArray, IntArray]:
+    """The rows of a run file's ``text`` (blank lines skipped) and their line
+    numbers: every row parsed with one ``float`` per field over the whole file
+    (:func:`_checked_rows`, row by row, when a row is not six finite numbers:
+    it names the first bad line and field).
 
     Raises:
-        RecordingError: unreadable file, a row without six numbers (the
-            message names the line and the column), time not increasing.
+        RecordingError: see :func:`read_run`.
     """
+    lines = text.splitlines()
+    if all(map(str.strip, lines)):  # no blank line: the usual file
+        kept, where = lines, np.arange(1, len(lines) + 1, dtype=np.int64)
+    else:
+        numbers = [number for number, line in enumerate(lines, start=1) if line.strip()]
+        kept, where = [lines[number - 1] for number in numbers], np.array(numbers, dtype=np.int64)
+    columns = len(RUN_COLUMNS)
+    if kept and set(map(_COMMAS, kept)) == {columns - 1}:
+        try:
+            flat = np.fromiter(
+                map(float, ",".join(kept).split(",")), np.float64, len(kept) * columns
+            )
+        except ValueError:
+            pass  # a field that is not a number: the row by row reading names it
+        else:
+            if np.isfinite(flat).all():
+                return flat.reshape(len(kept), columns), where
+    return _checked_rows(path, lines)
+
+
+def _checked_rows(path: Path, lines: list[str]) -> tuple[FloatArray, IntArray]:
+    """:func:`_parsed_rows` row by row, each field checked (the first bad one raises)."""
     rows: list[list[float]] = []
     where: list[int] = []
-    for number, line in enumerate(read_text(path).splitlines(), start=1):
+    for number, line in enumerate(lines, start=1):
         if not line.strip():
             continue
         fields = line.split(",")
@@ -157,8 +190,18 @@ def read_run(path: Path) -> Recording:
         where.append(number)
     if not rows:
         raise RecordingError(f"{path}: empty run file; no trial")
-    data = np.array(rows, dtype=np.float64)
-    lines = np.array(where, dtype=np.int64)
+    return np.array(rows, dtype=np.float64), np.array(where, dtype=np.int64)
+
+
+def read_run(path: Path) -> Recording:
+    """One run file as a recording with one given trial (the run).
+
+    Raises:
+        RecordingError: unreadable file, a row without six numbers (the
+            message names the line and the column), time not increasing.
+    """
+    data, lines = _parsed_rows(path, read_text(path))
+    rows = len(data)
     check_increasing(data[:, 0], lines, str(path), "t_s", "line")
     geometry = optiodom_geometry()
     per_count = geometry.metres_per_count
@@ -178,7 +221,7 @@ def read_run(path: Path) -> Recording:
         truth=data[:, 1:4],
         where=lines,
         unit="line",
-        trial=(run,) * len(rows),
+        trial=(run,) * rows,
     )
 
 
