@@ -47,9 +47,12 @@ PRELOAD = [
     "odohil.cli.resume",
     "odohil.session.outcome",
     "odohil.science.estimators",
+    "scipy.special",
     "fakes",
 ]
-"""What the fork server imports once: the run and resume commands and the science."""
+"""What the fork server imports once: the run and resume commands and the science
+(scipy.special included: odohil imports it at the first probability it computes,
+odohil/science/distributions.py)."""
 
 _CONTEXT = multiprocessing.get_context("forkserver")
 _CONTEXT.set_forkserver_preload(PRELOAD)

@@ -75,6 +75,10 @@ app = typer.Typer(
 )
 
 
+_VERSION_FLAGS = ("--version", "-V")
+"""The root's eager flags that print and exit before any command is looked at."""
+
+
 def _version(value: bool) -> None:
     if value:
         typer.echo(f"odohil {__version__}")
@@ -85,8 +89,7 @@ def _version(value: bool) -> None:
 def _root(
     version: bool = typer.Option(
         False,
-        "--version",
-        "-V",
+        *_VERSION_FLAGS,
         callback=_version,
         is_eager=True,
         help="Show the version and exit.",
@@ -103,8 +106,11 @@ _MODULE_COMMANDS = {module: command for command, module in _COMMAND_NAMES.items(
 def _modules_to_register(argv: list[str]) -> tuple[str, ...]:
     """The command modules to import: the named command's alone when this
     process is the console script (or ``python -m odohil``) and its first
-    argument names a command, else every one (a typo, ``--help``, an import)."""
+    argument names a command, none when it asks for the version, else every
+    one (a typo, ``--help``, an import)."""
     if len(argv) > 1 and Path(argv[0]).name in ("odohil", "__main__.py"):
+        if argv[1] in _VERSION_FLAGS:
+            return ()
         module = _COMMAND_NAMES.get(argv[1], argv[1])
         if module in COMMAND_MODULES:
             return (module,)
