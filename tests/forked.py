@@ -48,11 +48,13 @@ PRELOAD = [
     "odohil.session.outcome",
     "odohil.science.estimators",
     "scipy.special",
+    "odohil.session.report.plots",
     "fakes",
 ]
 """What the fork server imports once: the run and resume commands and the science
 (scipy.special included: odohil imports it at the first probability it computes,
-odohil/science/distributions.py)."""
+odohil/science/distributions.py), and the report's plots (matplotlib: 0.6 s of
+CPU, which each forked ``odohil report`` paid before)."""
 
 _CONTEXT = multiprocessing.get_context("forkserver")
 _CONTEXT.set_forkserver_preload(PRELOAD)
