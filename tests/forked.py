@@ -50,11 +50,15 @@ PRELOAD = [
     "scipy.special",
     "odohil.session.report.plots",
     "fakes",
+    "typer._adapters",
+    "typer.rich_utils",
 ]
 """What the fork server imports once: the run and resume commands and the science
 (scipy.special included: odohil imports it at the first probability it computes,
 odohil/science/distributions.py), and the report's plots (matplotlib: 0.6 s of
-CPU, which each forked ``odohil report`` paid before)."""
+CPU, which each forked ``odohil report`` paid before); typer's parameter
+adapters (pydantic: 0.1 s of CPU, which every forked command paid when typer
+converted its first option) and its rich help and error rendering (0.06 s)."""
 
 _CONTEXT = multiprocessing.get_context("forkserver")
 _CONTEXT.set_forkserver_preload(PRELOAD)
