@@ -5,7 +5,8 @@ The encoder pose is the ideal integration of the commanded motion
 (x += d cos(steer), y += d sin(steer), CHOICE C8). The true pose (metres,
 radians) is advanced by the science layer's discrete error model
 (:func:`odohil.science.simulator.drive_straight`, one segment at a time by
-:func:`fakes.nomad.segment.drive_segment`, which draws what it would):
+:func:`fakes.nomad.segment.drive_segment`, which draws what it would, or many
+at once by :func:`fakes.nomad.segment.drive_segments`, which draws the same):
 translation in segments of at most ``segment_m`` encoder metres (see below);
 steering rotations change the true heading exactly (in-place turns are error
 free in Martinelli's model).
@@ -28,7 +29,7 @@ import math
 import numpy as np
 
 from fakes.nomad.profile import Profile, plan_move, plan_velocity
-from fakes.nomad.segment import drive_segment
+from fakes.nomad.segment import drive_segments
 from odohil.protocol.nomad import wire_units
 from odohil.science.parameters import ErrorParameters
 from odohil.science.simulator import DEFAULT_SEGMENT_M
@@ -166,8 +167,7 @@ class RobotBody:
 
     def _drive(self, signed_segment_m: float, n: int) -> None:
         pose = (float(self.true_x[0]), float(self.true_y[0]), float(self.true_theta[0]))
-        for _ in range(n):
-            pose = drive_segment(pose, signed_segment_m, self.params, self.rng)
+        pose = drive_segments(pose, signed_segment_m, n, self.params, self.rng)
         self.true_x[0], self.true_y[0], self.true_theta[0] = pose
 
     def _set_encoder_xy(self, x: float, y: float) -> None:

@@ -7,8 +7,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fakes.nomad.segment import drive_segment
-from odohil.science.parameters import ErrorParameters
+from fakes.nomad.draws import ziggurat_tables
+from fakes.nomad.segment import drive_segment, drive_segments
+from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.simulator import drive_straight, make_rng
 
 LOUD = ErrorParameters.from_paper_units(20.0, -0.05, 50.0, 1e-3)
@@ -36,3 +37,27 @@ def test_a_seed_gives_the_same_poses() -> None:
 
     assert run(3) == run(3)
     assert run(3) != run(4)
+
+
+QUIET_TRANSLATION = ErrorParameters.from_paper_units(-0.2, 0.01, 0.02, 0.0)
+
+
+@pytest.mark.parametrize(
+    "params", [LOUD, NOMAD150, QUIET_TRANSLATION], ids=["loud", "nomad150", "k_rho_0"]
+)
+@pytest.mark.parametrize("segment_m", [0.001, -0.02, 0.0007])
+def test_many_segments_at_once_are_the_one_by_one_segments_to_the_last_bit(
+    params: ErrorParameters, segment_m: float
+) -> None:
+    # the bulk path is the one under test: this numpy's draws are followed
+    assert ziggurat_tables() is not None
+    for seed in range(6):
+        for n in (1, 5, 40, 300, 2000):  # 2000 segments meet numpy's rarer draws
+            one_rng, bulk_rng = make_rng(seed), make_rng(seed)
+            start = (0.1, -0.2, 2.0)
+            pose = start
+            for _ in range(n):
+                pose = drive_segment(pose, segment_m, params, one_rng)
+            assert drive_segments(start, segment_m, n, params, bulk_rng) == pose
+            # the generator is left at the same place in its stream
+            assert bulk_rng.random(4).tolist() == one_rng.random(4).tolist()
