@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from odohil.errors import ParameterError
+from odohil.errors import ParameterError, UnexpectedReplyError
 from odohil.protocol.nomad import numbers
 from odohil.protocol.nomad.framing import (
     MAX_LEN,
@@ -25,6 +25,7 @@ from odohil.protocol.nomad.state import (
     StateMask,
     decode_state_payload,
     encode_state_payload,
+    state_timestamp_ms,
 )
 
 from .strategies import (
@@ -99,7 +100,23 @@ def test_state_payload_round_trips_for_any_mask(data: st.DataObject, mask: State
     payload = encode_state_payload(state, mask)
     assert len(payload) == mask.payload_size
     assert decode_state_payload(payload, mask) == state
+    assert state_timestamp_ms(payload, mask) == state.timestamp_ms
     assert StateMask.from_ct(mask.to_ct()) == mask
+
+
+@given(st.binary(min_size=38, max_size=46))
+def test_a_payloads_timestamp_alone_is_the_decoded_ones_or_the_same_refusal(
+    payload: bytes,
+) -> None:
+    if len(payload) != N150_MASK.payload_size:
+        with pytest.raises(UnexpectedReplyError) as decoding:
+            decode_state_payload(payload, N150_MASK)
+        with pytest.raises(UnexpectedReplyError) as reading:
+            state_timestamp_ms(payload, N150_MASK)
+        assert str(reading.value) == str(decoding.value)
+    else:
+        decoded = decode_state_payload(payload, N150_MASK)
+        assert state_timestamp_ms(payload, N150_MASK) == decoded.timestamp_ms
 
 
 @given(st.data())

@@ -43,7 +43,7 @@ from odohil.protocol.nomad.codes import MOTION_CODES, STATE_REPLY_CODES, Code
 from odohil.protocol.nomad.framing import Packet
 from odohil.protocol.nomad.numbers import S16_MAX, U16_MAX
 from odohil.protocol.nomad.replies import decode_reply
-from odohil.protocol.nomad.state import N150_MASK, RobotState, StateMask, decode_state_payload
+from odohil.protocol.nomad.state import N150_MASK, RobotState, StateMask, state_timestamp_ms
 from odohil.protocol.nomad.wire_units import metres_to_wire, radians_to_wire, wire_angle_in_turn
 
 WS_MAX_S = 255
@@ -167,10 +167,10 @@ class NomadRobot:
         if self._last_ms is None or packet.type not in _STATE_TYPES:
             return True
         try:
-            state = decode_state_payload(packet.payload, self._mask)
+            timestamp_ms = state_timestamp_ms(packet.payload, self._mask)
         except ProtocolError:
             return True  # not a state packet after all: decode_reply says why
-        return not is_older_ms(state.timestamp_ms, self._last_ms)
+        return not is_older_ms(timestamp_ms, self._last_ms)
 
     def _call(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> EncoderSample:
         """One request; on failure stop if moving, resync with ``gs``, re-raise."""

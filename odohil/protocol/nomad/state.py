@@ -10,14 +10,13 @@ motor-status byte, the timestamp (u32 ms) and the CPU and motor voltage bytes.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 from odohil.errors import ParameterError, UnexpectedReplyError
 from odohil.protocol.nomad.numbers import (
     S16_MAX,
     U32_MAX,
-    decode_s16,
-    decode_u32,
     encode_s16,
     encode_u32,
 )
@@ -30,6 +29,7 @@ TAIL_BYTES = 1 + 4 + 2
 
 _ALL = (True,) * 16
 _NONE = (False,) * 16
+_NO_IR = (0,) * IR_COUNT
 
 
 def _bits(byte: int) -> tuple[bool, ...]:
@@ -167,13 +167,16 @@ class RobotState:
     ir: tuple[int, ...] = (0,) * IR_COUNT
 
     def __post_init__(self) -> None:
-        if len(self.sonar) != SONAR_COUNT or any(not 0 <= v <= 0xFF for v in self.sonar):
+        sonar, ir = self.sonar, self.ir
+        if len(sonar) != SONAR_COUNT or min(sonar) < 0 or max(sonar) > 0xFF:
             raise ParameterError(f"16 sonar bytes needed, got {self.sonar}")
-        if len(self.ir) != IR_COUNT or any(not 0 <= v <= 0xF for v in self.ir):
+        if len(ir) != IR_COUNT or min(ir) < 0 or max(ir) > 0xF:
             raise ParameterError(f"16 IR nibbles needed, got {self.ir}")
-        for name in ("x", "y", "steer", "turret", "trans_vel", "steer_vel", "turret_vel"):
-            if abs(getattr(self, name)) > S16_MAX:
-                raise ParameterError(f"{name} out of s16 range: {getattr(self, name)}")
+        words = (self.x, self.y, self.steer, self.turret, self.trans_vel, self.steer_vel)
+        if max(map(abs, words)) > S16_MAX or abs(self.turret_vel) > S16_MAX:
+            for name in ("x", "y", "steer", "turret", "trans_vel", "steer_vel", "turret_vel"):
+                if abs(getattr(self, name)) > S16_MAX:
+                    raise ParameterError(f"{name} out of s16 range: {getattr(self, name)}")
         if abs(self.compass) > S16_MAX:
             raise ParameterError(f"compass out of s16 range: {self.compass}")
         if not 0 <= self.bumper <= BUMPER_MAX:
@@ -190,59 +193,118 @@ class RobotState:
         return bool(self.motor_status & 0b111)
 
 
+@dataclass(frozen=True)
+class _Layout:
+    """What a mask puts in a payload, worked out once per mask."""
+
+    supported: bool
+    size: int
+    n_ir: int
+    n_sonar: int
+    all_sonar: bool
+    bumper: bool
+    words: tuple[bool, ...]
+    """x, y, steer, turret, the three velocities, compass."""
+
+
+@functools.cache
+def _layout(mask: StateMask) -> _Layout:
+    return _Layout(
+        supported=mask.supported,
+        size=mask.payload_size,
+        n_ir=sum(mask.ir),
+        n_sonar=sum(mask.sonar),
+        all_sonar=all(mask.sonar),
+        bumper=mask.bumper,
+        words=(*mask.pose, *mask.velocity, mask.compass),
+    )
+
+
 def _require_supported(mask: StateMask, error: type[Exception]) -> None:
-    if not mask.supported:
+    if not _layout(mask).supported:
         raise error("odohil does not support laser or position attachments (CHOICE C14)")
 
 
 def encode_state_payload(state: RobotState, mask: StateMask) -> bytes:
     """The state packet's payload for a mask."""
     _require_supported(mask, ParameterError)
+    layout = _layout(mask)
     out = bytearray()
-    nibbles = [v for v, on in zip(state.ir, mask.ir, strict=True) if on]
-    for i in range(0, len(nibbles), 2):
-        high = nibbles[i + 1] if i + 1 < len(nibbles) else 0
-        out.append(nibbles[i] | high << 4)
-    out += bytes(v for v, on in zip(state.sonar, mask.sonar, strict=True) if on)
-    if mask.bumper:
+    if layout.n_ir:
+        nibbles = [v for v, on in zip(state.ir, mask.ir, strict=True) if on]
+        for i in range(0, len(nibbles), 2):
+            high = nibbles[i + 1] if i + 1 < len(nibbles) else 0
+            out.append(nibbles[i] | high << 4)
+    if layout.all_sonar:
+        out += bytes(state.sonar)
+    else:
+        out += bytes(v for v, on in zip(state.sonar, mask.sonar, strict=True) if on)
+    if layout.bumper:
         out += state.bumper.to_bytes(3, "big")
-    pose = (state.x, state.y, state.steer, state.turret)
-    vel = (state.trans_vel, state.steer_vel, state.turret_vel)
-    for value, on in zip(pose + vel, mask.pose + mask.velocity, strict=True):
-        if on:
-            out += encode_s16(value)
-    if mask.compass:
-        out += encode_s16(state.compass)
+    values = (
+        state.x,
+        state.y,
+        state.steer,
+        state.turret,
+        state.trans_vel,
+        state.steer_vel,
+        state.turret_vel,
+        state.compass,
+    )
+    for value, on in zip(values, layout.words, strict=True):
+        if not on:
+            continue
+        if type(value) is int and -S16_MAX <= value <= S16_MAX:  # encode_s16, inline
+            magnitude = -value if value < 0 else value
+            out.append(magnitude & 0xFF)
+            out.append(magnitude >> 8 | (0x80 if value < 0 else 0))
+        else:
+            out += encode_s16(value)  # raises as it does
     out.append(state.motor_status)
     out += encode_u32(state.timestamp_ms)
     out += bytes((state.voltage_cpu_raw, state.voltage_motor_raw))
     return bytes(out)
 
 
+def _check_payload(payload: bytes, mask: StateMask) -> _Layout:
+    _require_supported(mask, UnexpectedReplyError)
+    layout = _layout(mask)
+    if len(payload) != layout.size:
+        raise UnexpectedReplyError(
+            f"state payload of {len(payload)} bytes, the mask needs {layout.size}"
+        )
+    return layout
+
+
 def decode_state_payload(payload: bytes, mask: StateMask) -> RobotState:
     """A state packet's payload; wrong size raises UnexpectedReplyError."""
-    _require_supported(mask, UnexpectedReplyError)
-    if len(payload) != mask.payload_size:
-        raise UnexpectedReplyError(
-            f"state payload of {len(payload)} bytes, the mask needs {mask.payload_size}"
-        )
+    layout = _check_payload(payload, mask)
     pos = 0
-    n_ir = sum(mask.ir)
-    nibbles = [payload[i // 2] >> (4 * (i % 2)) & 0xF for i in range(n_ir)]
-    pos += (n_ir + 1) // 2
-    ir_values = iter(nibbles)
-    ir = tuple(next(ir_values) if on else 0 for on in mask.ir)
-    sonar_values = iter(payload[pos : pos + sum(mask.sonar)])
-    pos += sum(mask.sonar)
-    sonar = tuple(next(sonar_values) if on else 0 for on in mask.sonar)
+    if layout.n_ir:
+        n_ir = layout.n_ir
+        nibbles = [payload[i // 2] >> (4 * (i % 2)) & 0xF for i in range(n_ir)]
+        pos += (n_ir + 1) // 2
+        ir_values = iter(nibbles)
+        ir = tuple(next(ir_values) if on else 0 for on in mask.ir)
+    else:
+        ir = _NO_IR
+    n_sonar = layout.n_sonar
+    if layout.all_sonar:
+        sonar = tuple(payload[pos : pos + n_sonar])
+    else:
+        sonar_values = iter(payload[pos : pos + n_sonar])
+        sonar = tuple(next(sonar_values) if on else 0 for on in mask.sonar)
+    pos += n_sonar
     bumper = 0
-    if mask.bumper:
+    if layout.bumper:
         bumper = int.from_bytes(payload[pos : pos + 3], "big")
         pos += 3
     words: list[int] = []
-    for on in (*mask.pose, *mask.velocity, mask.compass):
-        if on:
-            words.append(decode_s16(payload[pos : pos + 2]))
+    for on in layout.words:
+        if on:  # decode_s16, inline
+            low, high = payload[pos], payload[pos + 1]
+            magnitude = low | (high & 0x7F) << 8
+            words.append(-magnitude if high & 0x80 else magnitude)
             pos += 2
         else:
             words.append(0)
@@ -258,8 +320,16 @@ def decode_state_payload(payload: bytes, mask: StateMask) -> RobotState:
         turret_vel=words[6],
         compass=words[7],
         motor_status=payload[pos],
-        timestamp_ms=decode_u32(payload[pos + 1 : pos + 5]),
+        timestamp_ms=int.from_bytes(payload[pos + 1 : pos + 5], "little"),
         voltage_cpu_raw=payload[pos + 5],
         voltage_motor_raw=payload[pos + 6],
         ir=ir,
     )
+
+
+def state_timestamp_ms(payload: bytes, mask: StateMask) -> int:
+    """The robot timestamp (ms) of a state packet's payload, the rest not
+    decoded; raises as :func:`decode_state_payload` does (a payload of the
+    right size always decodes)."""
+    layout = _check_payload(payload, mask)
+    return int.from_bytes(payload[layout.size - 6 : layout.size - 2], "little")
