@@ -41,10 +41,10 @@ from odohil.science.parameters import ErrorParameters
 
 FEW = 4
 """Fewer segments than this are driven by :func:`drive_segment` itself..."""
-MIN_BATCH = 64
+MIN_BATCH = 48
 """...fewer than this one by one with their uniforms made of one word each
-(no numpy call for them), and from here in bulk (whose fixed price, about
-sixty numpy calls, is worth it from about here)."""
+(no numpy call for them), and from here in bulk (whose fixed price, some
+forty numpy calls, is worth it from about here)."""
 LOOK_AHEAD = 64
 """How many words past a segment's first four the word after its normals is
 looked for (each word more is a rejection in numpy's ziggurat, of chance
@@ -156,29 +156,24 @@ def _noisy_draws(
     start = bits.state
     words = bits.random_raw(3 * n + n // 8 + 16)
     normals, one_word = one_word_normals(words, tables)
+    slow_words = np.flatnonzero(~one_word).tolist()
     total = len(words)
-    room = [(total - a) // 3 for a in range(3)]
-    slow = []  # per alignment a: the segments j (first word 3 j + a) whose normals read more
-    for a in range(3):
-        quick = (
-            one_word[a + 1 : a + 1 + 3 * room[a] : 3] & one_word[a + 2 : a + 2 + 3 * room[a] : 3]
-        )
-        slow.append(np.flatnonzero(~quick).tolist())
-    firsts: list[np.ndarray] = []  # each segment's first word, in order
+    steps = np.full(n, 3)  # the words each segment reads
     numpy_z0: dict[int, float] = {}  # segment -> its first normal, as numpy drew it
-    pos = done = 0
-    while done < n:
-        a, j = pos % 3, pos // 3
-        after = slow[a]
-        i = bisect.bisect_left(after, j)
-        next_slow = after[i] if i < len(after) else room[a]
-        good = min(n - done, next_slow - j)
-        firsts.append(np.arange(pos, pos + 3 * good, 3))
+    pos = done = k = 0
+    while True:
+        # the next segment from ``pos`` on with a normal that reads more than a
+        # word: the first slow word that is not a segment's uniforms
+        k = bisect.bisect_left(slow_words, pos + 1, k)
+        while k < len(slow_words) and (slow_words[k] - pos) % 3 == 0:
+            k += 1
+        quick = (slow_words[k] - pos - 1) // 3 if k < len(slow_words) else (total - pos) // 3
+        good = min(n - done, quick)
         pos += 3 * good
         done += good
         if done == n:
             break
-        if next_slow >= room[a]:
+        if k == len(slow_words):  # the words ran out
             bits.state = start
             return None
         bits.state = start  # numpy draws this segment's two normals
@@ -189,12 +184,13 @@ def _noisy_draws(
             bits.state = start
             return None
         numpy_z0[done] = first
-        firsts.append(np.array([pos]))
-        pos += 4 + int(following[0])
+        step = 4 + int(following[0])
+        steps[done] = step
+        pos += step
         done += 1
     bits.state = start
     bits.advance(pos)
-    at = np.concatenate(firsts)
+    at = np.cumsum(steps) - steps
     z0 = normals[at + 1]
     for segment, value in numpy_z0.items():
         z0[segment] = value
