@@ -91,9 +91,12 @@ def start_phi(params: ErrorParameters, floor: ErrorParameters | None = None) -> 
 
 
 def _solve(info: FloatArray, rhs: FloatArray, damping: float) -> FloatArray:
-    diag = np.diag(info).copy()
+    diag = info.diagonal().copy()
     diag[diag <= 0] = 1.0
-    system = info + damping * np.diag(diag)
+    # info + damping * np.diag(diag), element by element the same floats (the
+    # off-diagonal entries plus 0.0, the diagonal ones plus damping * diag)
+    system = info + 0.0
+    system.flat[:: diag.size + 1] = info.diagonal() + damping * diag
     scale = 1.0 / np.sqrt(diag)
     scaled = system * np.outer(scale, scale)
     step = np.linalg.lstsq(scaled, rhs * scale, rcond=1e-13)[0]
@@ -122,6 +125,10 @@ def decrement(value: LikelihoodValue, held: Sequence[int] = ()) -> float:
     standard-error units (over the parameters not ``held``)."""
     assert value.gradient is not None
     assert value.information is not None
+    if not held:
+        gradient = value.gradient
+        step = _solve(value.information, gradient, 0.0)
+        return float(abs(gradient @ step))
     free = [i for i in range(value.gradient.size) if i not in held]
     step = _solve(value.information[np.ix_(free, free)], value.gradient[free], 0.0)
     return float(abs(value.gradient[free] @ step))
@@ -139,6 +146,8 @@ def held_at_floor(phi: FloatArray, value: LikelihoodValue, layout: Layout) -> li
 def _free_step(value: LikelihoodValue, held: Sequence[int], damping: float) -> FloatArray:
     assert value.gradient is not None
     assert value.information is not None
+    if not held:
+        return _solve(value.information, -value.gradient, damping)
     free = [i for i in range(value.gradient.size) if i not in held]
     step = np.zeros(value.gradient.size)
     step[free] = _solve(value.information[np.ix_(free, free)], -value.gradient[free], damping)
@@ -202,11 +211,20 @@ def refine(
     damping = 0.0
     iterations = 0
     converged = False
+    # the held rates and the decrement of ``value``, kept until it changes
+    # (a rejected step leaves both as they are; an accepted Cox-Reid step has
+    # just computed them at the new point)
+    known: tuple[list[int], float] | None = None
     while iterations < max_iterations:
         assert value.gradient is not None
         assert value.information is not None
-        held = held_at_floor(point.phi, value, layout)
-        if decrement(value, held) < DECREMENT_TOLERANCE:
+        if known is None:
+            held = held_at_floor(point.phi, value, layout)
+            current = decrement(value, held)
+        else:
+            held, current = known
+        known = (held, current)
+        if current < DECREMENT_TOLERANCE:
             converged = True
             break
         iterations += 1
@@ -220,10 +238,14 @@ def refine(
             else:
                 moved = point.moved(trial_phi, derivatives=True)
             trial = evaluate(groups, moved, cox_reid=True)
-            if trial.gradient is not None and decrement(
-                trial, held_at_floor(trial_phi, trial, layout)
-            ) < decrement(value, held):
+            better = False
+            if trial.gradient is not None:
+                trial_held = held_at_floor(trial_phi, trial, layout)
+                trial_decrement = decrement(trial, trial_held)
+                better = trial_decrement < current
+            if better:
                 point, value = moved, trial
+                known = (trial_held, trial_decrement)
                 damping = 0.0 if damping <= 1e-3 else damping / 10.0
             else:
                 damping = 1e-3 if damping == 0.0 else damping * 10.0
@@ -238,6 +260,7 @@ def refine(
             else:
                 point = point.moved(trial_phi, derivatives=True)
             value = evaluate(groups, point, cox_reid)
+            known = None
             damping = 0.0 if damping <= 1e-3 else damping / 10.0
         else:
             damping = 1e-3 if damping == 0.0 else damping * 10.0
