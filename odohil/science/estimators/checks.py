@@ -18,7 +18,7 @@ method) keeps its inefficiency.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -45,7 +45,7 @@ from odohil.science.fisher import (
     trial_information,
 )
 from odohil.science.grouping import by_design
-from odohil.science.moments import pose_moments
+from odohil.science.moments import PoseMoments, pose_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
 from odohil.science.paths import Design, FloatArray
 from odohil.science.targets import TARGET_FLOORS, TARGET_FRACTIONS
@@ -91,13 +91,18 @@ class Criteria:
         )
 
 
-def mahalanobis2(observations: Sequence[Observation], params: ErrorParameters) -> FloatArray:
+def mahalanobis2(
+    observations: Sequence[Observation],
+    params: ErrorParameters,
+    moments: Mapping[Design, PoseMoments] | None = None,
+) -> FloatArray:
     """Each trial's squared Mahalanobis distance from the model (Delta residual
-    taken modulo 2 pi); vectorised per design."""
+    taken modulo 2 pi); vectorised per design. ``moments``: the model's
+    moments of each design at ``params``, if the caller has them."""
     out = np.empty(len(observations))
     trials = by_design(range(len(observations)), lambda i: observations[i].design)
     for design, index in trials.items():
-        m = pose_moments(design_path(design), params)
+        m = pose_moments(design_path(design), params) if moments is None else moments[design]
         poses = np.array([observations[i].pose_change for i in index])
         resid = poses - m.mean
         resid[:, 2] = units.wrap_angles(resid[:, 2])

@@ -33,6 +33,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Protocol
 
 import numpy as np
@@ -102,13 +103,81 @@ def weighted_groups(
     observations: Sequence[Observation], weights: FloatArray, references: dict[Design, float]
 ) -> list[TrialGroup]:
     """One group per design and measurement covariance, trials weighted."""
-    groups: dict[tuple[Design, bytes], TrialGroup] = {}
-    for obs, weight in zip(observations, weights, strict=True):
-        key = (obs.design, obs.measurement_cov.tobytes())
-        if key not in groups:
-            groups[key] = TrialGroup(obs.design, references[obs.design])
-        groups[key].add(obs, float(weight))
-    return list(groups.values())
+    return _GroupLayout.of(observations, references).groups(weights)
+
+
+@dataclass(frozen=True)
+class _GroupLayout:
+    """The weight-free part of :func:`weighted_groups` (which trials go in
+    which group, their unwrapped pose changes and outer products, the sums of
+    their measurement covariances), so that the EM's M-steps only weight and
+    sum. The sums run over the trials in order, as ``TrialGroup.add`` would."""
+
+    designs: tuple[Design, ...]
+    references: tuple[float, ...]
+    indices: tuple[list[int], ...]
+    poses: tuple[FloatArray, ...]
+    outers: tuple[FloatArray, ...]
+    measurement_totals: tuple[FloatArray, ...]
+
+    @staticmethod
+    def of(observations: Sequence[Observation], references: dict[Design, float]) -> _GroupLayout:
+        members: dict[tuple[Design, bytes], list[int]] = {}
+        for i, obs in enumerate(observations):
+            members.setdefault((obs.design, obs.measurement_cov.tobytes()), []).append(i)
+        designs, refs, indices, poses, outers, totals = [], [], [], [], [], []
+        for (design, _), index in members.items():
+            group = TrialGroup(design, references[design])
+            v = np.array([group.unwrapped(observations[i].pose_change) for i in index])
+            measurement_total = np.zeros((3, 3))
+            for i in index:
+                measurement_total = measurement_total + observations[i].measurement_cov
+            designs.append(design)
+            refs.append(group.reference)
+            indices.append(index)
+            poses.append(v)
+            outers.append(v[:, :, None] * v[:, None, :])
+            totals.append(measurement_total)
+        return _GroupLayout(
+            tuple(designs), tuple(refs), tuple(indices), tuple(poses), tuple(outers), tuple(totals)
+        )
+
+    def groups(self, weights: FloatArray) -> list[TrialGroup]:
+        """The groups with ``weights`` (one per trial) on the residuals."""
+        w_all = np.asarray(weights, dtype=np.float64)
+        out: list[TrialGroup] = []
+        for design, reference, index, v, outer, measurement_total in zip(
+            self.designs,
+            self.references,
+            self.indices,
+            self.poses,
+            self.outers,
+            self.measurement_totals,
+            strict=True,
+        ):
+            w = w_all[index]
+            weight = 0.0
+            for value in w.tolist():
+                weight += value
+            # running sums from 0 in trial order (accumulate is sequential)
+            total = np.add.accumulate(np.concatenate([np.zeros((1, 3)), w[:, None] * v]), axis=0)[
+                -1
+            ].copy()
+            outer_total = np.add.accumulate(
+                np.concatenate([np.zeros((1, 3, 3)), w[:, None, None] * outer]), axis=0
+            )[-1].copy()
+            out.append(
+                TrialGroup(
+                    design,
+                    reference,
+                    len(index),
+                    total,
+                    outer_total,
+                    measurement_total.copy(),
+                    weight,
+                )
+            )
+        return out
 
 
 def _references(groups: Sequence[TrialGroup]) -> dict[Design, float]:
@@ -121,11 +190,12 @@ def _references(groups: Sequence[TrialGroup]) -> dict[Design, float]:
 def mixture_nll(observations: Sequence[Observation], params: ErrorParameters) -> float:
     """Negative log-likelihood of the mixture at ``params`` (constants dropped)."""
     log_det: dict[tuple[Design, bytes], float] = {}
-    d2 = mahalanobis2(observations, params)
     moments = {}
     for obs in observations:
         if obs.design not in moments:
             moments[obs.design] = pose_moments(obs.design.path(), params)
+    d2 = mahalanobis2(observations, params, moments)
+    for obs in observations:
         key = (obs.design, obs.measurement_cov.tobytes())
         if key not in log_det:
             cov = moments[obs.design].cov + obs.measurement_cov
@@ -172,8 +242,12 @@ class _DesignTrials:
     def distances(self, fit: JointFit) -> FloatArray:
         return mahalanobis2(self.observations, fit.params)
 
+    @cached_property
+    def _layout(self) -> _GroupLayout:
+        return _GroupLayout.of(self.observations, self.references)
+
     def groups(self, weights: FloatArray) -> Sequence[GroupStats]:
-        return weighted_groups(self.observations, weights, self.references)
+        return self._layout.groups(weights)
 
     def scores(self, fit: JointFit, weights: FloatArray) -> tuple[FloatArray, FloatArray]:
         return trial_scores(self.observations, fit.point.phi, weights)
@@ -204,8 +278,8 @@ def robust_em(trials: RobustTrials, start: JointFit) -> RobustFit:
     the Gaussian fit without the trial farthest from it (a gross error can drag
     the Gaussian fit so far that it no longer stands out, above all at small
     n); the start whose EM ends at the lower mixture NLL wins."""
-    best = _em(trials, start)
     d2 = trials.distances(start)
+    best = _em(trials, start, d2)
     if len(trials) > 8 and float(d2.max()) > _RESTART_D2:
         worst = int(np.argmax(d2))
         weights = np.ones(len(trials))
@@ -220,14 +294,15 @@ def robust_em(trials: RobustTrials, start: JointFit) -> RobustFit:
     return best
 
 
-def _em(trials: RobustTrials, start: JointFit) -> RobustFit:
-    """EM from ``start``."""
+def _em(trials: RobustTrials, start: JointFit, start_d2: FloatArray | None = None) -> RobustFit:
+    """EM from ``start`` (``start_d2``: the trials' distances from it, if known)."""
     fit = start
     r = np.ones(len(trials))
     converged = False
     iterations = 0
-    for iterations in range(1, _MAX_EM + 1):  # noqa: B007
-        r = clean_probability(trials.distances(fit))
+    for iterations in range(1, _MAX_EM + 1):
+        d2 = trials.distances(fit) if iterations > 1 or start_d2 is None else start_d2
+        r = clean_probability(d2)
         weights = r + (1.0 - r) / INFLATION
         new = refine(trials.groups(weights), fit.point, cox_reid=True)
         assert new.value.information is not None
