@@ -264,15 +264,18 @@ def design_misfit(
 def _variances(info: FloatArray) -> FloatArray:
     """diag(I^-1), inf for parameters the information does not determine."""
     out = np.full(4, math.inf)
-    ok = np.diag(info) > 0
-    if not ok.any():
+    ok = info.diagonal() > 0
+    if ok.all():
+        sub = info
+    elif ok.any():
+        sub = info[np.ix_(ok, ok)]
+    else:
         return out
-    sub = info[np.ix_(ok, ok)]
-    scale = np.sqrt(np.diag(sub))
-    scaled = sub / np.outer(scale, scale)
+    scale = np.sqrt(sub.diagonal())
+    scaled = sub / (scale[:, None] * scale)
     eigen = np.linalg.eigvalsh(scaled)
     if eigen[0] > 1e-12 * eigen[-1]:
-        out[ok] = np.diag(np.linalg.inv(scaled)) / scale**2
+        out[ok] = np.linalg.inv(scaled).diagonal() / scale**2
     return out
 
 
