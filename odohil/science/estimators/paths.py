@@ -49,6 +49,7 @@ from __future__ import annotations
 import math
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -123,14 +124,7 @@ class TurnModel:
     @property
     def layout(self) -> Layout:
         """phi = (E_R, E_T, log K_theta, log K_rho, e_turn..., log K_spin)."""
-        m = len(self.classes)
-        names = (*PARAMETER_NAMES, *(name for name, _ in self.classes))
-        rates: tuple[int, ...] = (2, 3)
-        if self.k_spin:
-            names = (*names, "K_spin")
-            rates = (2, 3, 4 + m)
-        floors = ((1, -0.99), *((4 + i, -0.99) for i in range(m)))
-        return Layout(names, rates, (0, 1, *range(4, 4 + m)), floors)
+        return _layout(self.classes, self.k_spin)
 
     def turn_errors(self, phi: FloatArray) -> TurnErrors | None:
         """The turn errors at phi (None when none are fitted)."""
@@ -141,6 +135,20 @@ class TurnModel:
             scales[list(members)] = phi[4 + i]
         k_spin = math.exp(float(phi[-1])) if self.k_spin else 0.0
         return TurnErrors.of(scales, k_spin)
+
+
+@lru_cache(maxsize=64)
+def _layout(classes: tuple[tuple[str, tuple[int, ...]], ...], k_spin: bool) -> Layout:
+    """:attr:`TurnModel.layout` (built once per turn model: the fit asks for
+    it at every step)."""
+    m = len(classes)
+    names = (*PARAMETER_NAMES, *(name for name, _ in classes))
+    rates: tuple[int, ...] = (2, 3)
+    if k_spin:
+        names = (*names, "K_spin")
+        rates = (2, 3, 4 + m)
+    floors = ((1, -0.99), *((4 + i, -0.99) for i in range(m)))
+    return Layout(names, rates, (0, 1, *range(4, 4 + m)), floors)
 
 
 def _turned(paths: Sequence[EncoderPath]) -> FloatArray:
