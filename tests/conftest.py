@@ -39,6 +39,9 @@ import pytest
 import typer.main
 import typer.testing
 
+from fakes.nomad.process import set_launcher
+from tests.forked import start_fake
+
 WORKERS_PER_CPU = 2
 """xdist workers a CPU under ``-n auto`` (module docstring)."""
 SLOW_FIRST = Path(__file__).with_name("slow_first.txt")
@@ -69,7 +72,9 @@ ignored: an odohil started so ignores them too, as any Unix tool does."""
 
 def pytest_configure(config: pytest.Config) -> None:
     """Point pytest's temporary root at :data:`RAM_ROOT` when nothing else was
-    chosen; restore the default dispositions of :data:`_INHERITED_IGNORE`."""
+    chosen; restore the default dispositions of :data:`_INHERITED_IGNORE`;
+    fork the fake robots from tests/forked.py's server."""
+    set_launcher(start_fake)
     for signum in _INHERITED_IGNORE:
         if signal.getsignal(signum) == signal.SIG_IGN:
             default = signal.default_int_handler if signum == signal.SIGINT else signal.SIG_DFL

@@ -26,6 +26,7 @@ process.
 from __future__ import annotations
 
 import fcntl
+import importlib
 import multiprocessing
 import os
 import signal
@@ -50,6 +51,8 @@ PRELOAD = [
     "scipy.special",
     "odohil.session.report.plots",
     "fakes",
+    "fakes.nomad.__main__",
+    "fakes.create2.__main__",
     "typer._adapters",
     "typer.rich_utils",
 ]
@@ -337,3 +340,74 @@ def completed(
     for ``command = [the odohil console script, *ARGS]``, forked (module docstring)."""
     code, out, err = run(command[1:], timeout, env)
     return subprocess.CompletedProcess(command, code, out, err)
+
+
+FAKE_MODULES = ("fakes.nomad", "fakes.create2")
+"""The fakes :func:`start_fake` forks (``python -m MODULE``)."""
+
+
+def _fake_child(module: str, args: list[str], out: int) -> None:
+    """In the forked process: stdout to the pipe, then ``python -m MODULE ARGS``
+    (the module's ``__main__.main``, which the server imported)."""
+    os.dup2(out, 1)
+    os.close(out)
+    sys.argv = [f"python -m {module}", *args]
+    importlib.import_module(f"{module}.__main__").main(list(args))
+
+
+class ForkedFake:
+    """``python -m MODULE ARGS`` (a fake robot) forked from the server: what
+    fakes/nomad/process.py's ``Started`` asks for, stdout a pipe it reads its
+    two paths from. The fake's own process as an exec'd one would be (its pty,
+    its truth socket, its signal handlers), without the interpreter's start and
+    numpy's import (about 0.25 CPU s each, a hundred fakes a run)."""
+
+    def __init__(self, module: str, args: list[str]) -> None:
+        out_r, out_w = os.pipe()
+        try:
+            self._process = _CONTEXT.Process(
+                target=_fake_child, args=(module, list(args), _PassFd(out_w))
+            )
+            self._process.start()
+        finally:
+            os.close(out_w)
+        self._out: int | None = out_r
+        pid = self._process.pid
+        assert pid is not None
+        self.pid: int = pid
+
+    @property
+    def stdout_fd(self) -> int:
+        assert self._out is not None
+        return self._out
+
+    def poll(self) -> int | None:
+        return self._process.exitcode
+
+    def terminate(self) -> None:
+        if self.poll() is None:
+            os.kill(self.pid, signal.SIGTERM)
+
+    def kill(self) -> None:
+        if self.poll() is None:
+            os.kill(self.pid, signal.SIGKILL)
+
+    def wait(self, timeout: float | None = None) -> int:
+        self._process.join(timeout)
+        code = self._process.exitcode
+        if code is None:
+            raise subprocess.TimeoutExpired(["python", "-m", "fake"], timeout or 0.0)
+        return code
+
+    def close(self) -> None:
+        if self._out is not None:
+            os.close(self._out)
+            self._out = None
+
+
+def start_fake(command: list[str]) -> ForkedFake | None:
+    """``[python, "-m", MODULE, *ARGS]`` of a fake in :data:`FAKE_MODULES`,
+    forked from the server; None for any other command."""
+    if len(command) >= 3 and command[1] == "-m" and command[2] in FAKE_MODULES:
+        return ForkedFake(command[2], command[3:])
+    return None

@@ -23,7 +23,7 @@ class Create2Process:
         use_cli: bool = False,
         startup_timeout_s: float = 20.0,
     ) -> None:
-        self._process = EmulatorProcess(startup_timeout_s=startup_timeout_s)
+        self._process = EmulatorProcess(use_cli=use_cli, startup_timeout_s=startup_timeout_s)
         prefix = (
             [sys.executable, "-m", "odohil", "emulate", "--robot", "create2"]
             if use_cli

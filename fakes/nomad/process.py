@@ -7,11 +7,92 @@ import select
 import subprocess
 import sys
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from types import TracebackType
+from typing import Protocol
 
 from fakes.nomad.truth import TruthClient, TruthSnapshot
 from odohil.errors import ConnectionFailedError
+
+
+class Started(Protocol):
+    """A started fake's process, as :class:`EmulatorProcess` uses it (the
+    subset of :class:`subprocess.Popen` it needs, stdout a pipe)."""
+
+    @property
+    def stdout_fd(self) -> int:
+        """The read end of its stdout."""
+        ...
+
+    def poll(self) -> int | None:
+        """The exit status (minus the signal number) once it has ended, else None."""
+        ...
+
+    def terminate(self) -> None:
+        """SIGTERM."""
+        ...
+
+    def kill(self) -> None:
+        """SIGKILL."""
+        ...
+
+    def wait(self, timeout: float | None = None) -> int:
+        """Its exit status; :class:`subprocess.TimeoutExpired` after ``timeout`` s."""
+        ...
+
+    def close(self) -> None:
+        """Close the read end of its stdout."""
+        ...
+
+
+class _Popen:
+    """:class:`Started` by :class:`subprocess.Popen` (exec of the command)."""
+
+    def __init__(self, command: list[str]) -> None:
+        self._popen = subprocess.Popen(command, stdout=subprocess.PIPE)
+        assert self._popen.stdout is not None
+        self._stdout = self._popen.stdout
+
+    @property
+    def stdout_fd(self) -> int:
+        return self._stdout.fileno()
+
+    def poll(self) -> int | None:
+        return self._popen.poll()
+
+    def terminate(self) -> None:
+        self._popen.terminate()
+
+    def kill(self) -> None:
+        self._popen.kill()
+
+    def wait(self, timeout: float | None = None) -> int:
+        return self._popen.wait(timeout)
+
+    def close(self) -> None:
+        self._stdout.close()
+
+
+Launcher = Callable[[list[str]], Started | None]
+"""Starts a command (``[python, "-m", module, *args]``) as a fake's process,
+or returns None to leave it to exec."""
+
+
+def _exec(command: list[str]) -> Started | None:
+    return None
+
+
+_launcher: Launcher = _exec
+
+
+def set_launcher(launcher: Launcher | None) -> None:
+    """How ``python -m fakes...`` commands are started from now on (None: exec,
+    the default). The test suite forks them from a server that imported the
+    fakes once (tests/forked.py), saving the interpreter's start and numpy's
+    import for each of its hundred fakes; ``odohil emulate`` commands
+    (``use_cli``) are always exec'd."""
+    global _launcher
+    _launcher = _exec if launcher is None else launcher
 
 
 class EmulatorProcess:
@@ -42,11 +123,12 @@ class EmulatorProcess:
             else [sys.executable, "-m", "fakes.nomad"]
         )
         self.command = [*prefix, *args]
+        self.use_cli = use_cli
         self.startup_timeout_s = startup_timeout_s
         self.stop_timeout_s = stop_timeout_s
         self.device = ""
         self.truth_socket = ""
-        self._proc: subprocess.Popen[bytes] | None = None
+        self._proc: Started | None = None
 
     def __enter__(self) -> EmulatorProcess:
         self.start()
@@ -62,10 +144,11 @@ class EmulatorProcess:
 
     def start(self) -> None:
         """Start the process and wait for its two paths."""
-        proc = subprocess.Popen(self.command, stdout=subprocess.PIPE)
+        proc = None if self.use_cli else _launcher(self.command)
+        if proc is None:
+            proc = _Popen(self.command)
         self._proc = proc
-        assert proc.stdout is not None
-        fd = proc.stdout.fileno()
+        fd = proc.stdout_fd
         received = b""
         deadline = time.monotonic() + self.startup_timeout_s
         while received.count(b"\n") < 2:
@@ -96,8 +179,8 @@ class EmulatorProcess:
         """SIGTERM, wait, SIGKILL if needed."""
         proc = self._proc
         if proc is None or proc.poll() is not None:
-            if proc is not None and proc.stdout is not None:
-                proc.stdout.close()
+            if proc is not None:
+                proc.close()
             return
         proc.terminate()
         try:
@@ -105,5 +188,4 @@ class EmulatorProcess:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
-        if proc.stdout is not None:
-            proc.stdout.close()
+        proc.close()

@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 
+import pytest
 import serial
 
-from fakes.nomad.process import EmulatorProcess
+from fakes.create2.process import Create2Process
+from fakes.nomad.process import EmulatorProcess, set_launcher
 from odohil.protocol.nomad import messages as m
 from odohil.protocol.nomad.codes import Code
+from tests.forked import start_fake
 
 from .link import RawLink
 
@@ -30,4 +34,28 @@ def test_odohil_emulate_serves_a_pty_and_exits_cleanly_on_sigterm() -> None:
             port.close()
         truth = process.truth()
         assert not truth.moving
+    assert process.returncode == 0
+
+
+@pytest.fixture
+def exec_fakes() -> Iterator[None]:
+    """``python -m fakes...`` exec'd, as a user or a benchmark starts it (the
+    suite otherwise forks the fakes: tests/conftest.py)."""
+    set_launcher(None)
+    try:
+        yield
+    finally:
+        set_launcher(start_fake)
+
+
+@pytest.mark.parametrize("module", ["nomad", "create2"])
+@pytest.mark.usefixtures("exec_fakes")
+def test_python_m_fakes_exec_serves_a_pty_and_exits_cleanly_on_sigterm(module: str) -> None:
+    process = (
+        EmulatorProcess(["--seed", "3"]) if module == "nomad" else Create2Process(["--seed", "3"])
+    )
+    with process:
+        assert process.device.startswith("/dev/")
+        assert process.truth_socket
+        assert not process.truth().moving
     assert process.returncode == 0
