@@ -63,7 +63,10 @@ def test_run_reads_the_create2_truth_socket_and_validate_accepts_its_fake_url(
     )  # fmt: skip
     assert "truth side channel" not in checked.output
     verdict = json.loads(checked.output[checked.output.index("{") :])
-    assert verdict["n_trials"] == 2, checked.output
+    # both trials driven and measured; a trial whose floor marks fit two poses
+    # is left out and named (seen once in CI under 4 workers, where the
+    # real-time fake's draws differ: a 6 mm forth-and-back pose change)
+    assert verdict["n_trials"] + len(verdict["left_out_ambiguous"]) == 2, checked.output
     # The claim is that validate drives the fake URL and reads its truth; its
     # statistical verdict on a four-trial calibration is not: that calibration's
     # K_rho interval spans a factor of 30 and the validation's prediction takes
