@@ -17,7 +17,7 @@ import typer
 
 from odohil.cli.options import Parameters, option, parameters_option, usage_errors
 from odohil.science.robot_description import DEFAULT_PROTOCOL
-from odohil.session.line import check_socket_path
+from odohil.session.addresses import check_socket_path
 from odohil.session.robot_file import robot_protocol
 from odohil.session.robots import emulate_help, emulated_line, emulator
 

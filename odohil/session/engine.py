@@ -68,6 +68,7 @@ from odohil.science.paths import Design
 from odohil.science.pose_selection import SCALE_FLOOR_M, ParameterBelief, predictive_pose
 from odohil.science.robot_description import RobotDescription
 from odohil.session.events import (
+    FORMAT,
     Estimate,
     Event,
     Finished,
@@ -99,7 +100,6 @@ from odohil.session.signals import (
 )
 from odohil.session.start_pose import StartPose, check_start
 from odohil.session.state import (
-    FORMAT,
     CompletedTrial,
     OpenTrial,
     Phase,

@@ -36,13 +36,30 @@ from typing import Any, ClassVar, Protocol, Union, get_args, get_origin, get_typ
 
 from odohil.errors import ParameterError
 from odohil.science.floor_marks import MarkDistances
+from odohil.science.frames import Pose
 from odohil.science.robot_description import RobotDescription
 from odohil.session.plan import Plan
-from odohil.session.pose_source import Pose
 
 __all__ = [
+    "ESTIMATE",
+    "FINISHED",
+    "FORMAT",
+    "MOTION_DONE",
+    "MOTION_START",
+    "OPERATOR",
+    "PLAN",
     "REST",
+    "RESUMED",
+    "ROBOT",
+    "SESSION",
+    "SOLVED",
     "SOURCE_EVENT_MODULES",
+    "START_POSE",
+    "STOPPED",
+    "STOP_UNCONFIRMED",
+    "TORN_RECORD",
+    "TRIAL_START",
+    "VOID",
     "Estimate",
     "Event",
     "Finished",
@@ -65,6 +82,14 @@ __all__ = [
     "encode",
     "event_types",
 ]
+
+FORMAT = 1
+"""Version of the journal's event schema."""
+
+OPERATOR = "operator"
+"""The wizard's measurement, as journaled in the session header's ``measure``:
+an operator with a tape at the terminal (no ``--measure`` form: ``odohil
+wizard`` asks the distances)."""
 
 REST = {"rest": True}
 """Field metadata: this ``Mapping`` field holds the members no other field names."""
@@ -348,6 +373,26 @@ class Finished(Event):
 
     KIND: ClassVar[str] = "finished"
     n_trials: int | None = None
+
+
+# The record kinds of the session's life, for readers of raw records (the
+# events' ``KIND``s; a pose source's own kinds are its events', e.g.
+# odohil/session/tape_records.py).
+SESSION = SessionHeader.KIND
+PLAN = PlanSet.KIND
+ROBOT = RobotConnected.KIND
+RESUMED = Resumed.KIND
+TORN_RECORD = TornRecordKept.KIND
+TRIAL_START = TrialStart.KIND
+MOTION_START = MotionStart.KIND
+MOTION_DONE = MotionDone.KIND
+SOLVED = Solved.KIND
+ESTIMATE = Estimate.KIND
+VOID = Void.KIND
+STOPPED = Stopped.KIND
+STOP_UNCONFIRMED = StopUnconfirmed.KIND
+FINISHED = Finished.KIND
+START_POSE = StartPoseChecked.KIND
 
 
 # --- the codec ----------------------------------------------------------------

@@ -8,10 +8,8 @@ banner of ``run``, ``wizard`` and ``resume`` prints :meth:`Line.describe`.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 from odohil.errors import InitError, ParameterError
@@ -141,22 +139,3 @@ def open_truth_client(line: Line, truth_socket: str) -> Any:
     client = hooks.truth_client_class()(truth_socket)
     client.open()
     return client
-
-
-SOCKET_PATH_MAX = 107
-"""Longest UNIX socket path, bytes (sun_path holds 108 with the final NUL)."""
-
-
-def check_socket_path(path: str) -> None:
-    """A UNIX socket (the fake's truth channel) can be made at ``path``.
-
-    Raises:
-        ParameterError: the path is empty or longer than
-            :data:`SOCKET_PATH_MAX` bytes, or its folder does not exist.
-    """
-    size = len(os.fsencode(path))
-    if not path or size > SOCKET_PATH_MAX:
-        raise ParameterError(f"a socket path must be 1 to {SOCKET_PATH_MAX} bytes long, got {size}")
-    folder = Path(path).parent
-    if not folder.is_dir():
-        raise ParameterError(f"folder {str(folder)!r} does not exist")

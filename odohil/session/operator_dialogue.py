@@ -29,7 +29,7 @@ from odohil.science.estimators import EstimateResult
 from odohil.science.paths import Drivable
 from odohil.science.robot_description import RobotDescription
 from odohil.session.engine import StartCheck
-from odohil.session.events import Finished, MotionStart, Solved, Void
+from odohil.session.events import OPERATOR, Finished, MotionStart, Solved, Void
 from odohil.session.interrupts import Interrupts
 from odohil.session.journal import Record
 from odohil.session.lifecycle import (
@@ -52,7 +52,6 @@ from odohil.session.operator_words import (
     start_marks,
     trial_header,
 )
-from odohil.session.pose_sources import OPERATOR
 from odohil.session.robot import Robot
 from odohil.session.run_text import Said, Tone
 from odohil.session.sources import OperatorSource, TapeSource

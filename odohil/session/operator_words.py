@@ -14,12 +14,11 @@ from collections.abc import Collection, Sequence
 from odohil import units
 from odohil.science.robot_description import RobotDescription
 from odohil.session.pose_source import TrialContext
+from odohil.session.start_pose import HERE
 from odohil.session.state import CompletedTrial
 from odohil.session.tape_records import TapeContext
 
 END_MARKS = "Mark the floor at the screws again (end marks), then press Enter: "
-HERE = "here"
-"""What the operator types to start a trial where the robot stands."""
 
 
 def trial_header(ctx: TrialContext, resumed: bool) -> str:

@@ -38,6 +38,7 @@ from odohil import units
 from odohil.errors import TrialFileError
 from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design, EncoderPath, Leg, Step, Turn
+from odohil.science.robot_description import RobotDescription
 from odohil.session.path_trial_file import is_path_trial_file, read_path_trials
 from odohil.session.plan import Plan
 from odohil.session.trial_files import (
@@ -47,6 +48,7 @@ from odohil.session.trial_files import (
     MAX_ROWS,
     FloatArray,
     read_trial_text,
+    read_trials,
 )
 
 POSE_COLUMNS = ("dx_m", "dy_m", "dtheta_rad")
@@ -313,3 +315,31 @@ def refuse_rows(path: str | Path, wrong: list[str], what: str) -> None:
             f"--measure {path}: {units.plural(len(wrong), 'row')} of another {what} than the "
             f"plan's:\n  {shown}{more}"
         )
+
+
+def check_trial_file(
+    path: str | Path, description: RobotDescription, plan: Plan, first_trial: int = 1
+) -> None:
+    """A trial file that serves the plan: one row per trial, row k of trial k's
+    design, for trials ``first_trial`` .. the plan's last (a pose file or a
+    general-path trial file).
+
+    Raises:
+        TrialFileError: the file is unreadable, has bad rows, too few rows or a
+            row of another design (the first few are listed).
+    """
+    if file_format(path) != "trials":
+        check_serves(path, plan, first_trial)
+        return
+    trials = read_trials(path, description)
+    check_row_count(path, len(trials), plan)
+    wrong = []
+    for trial in range(first_trial, plan.n_trials + 1):
+        row = trials.trials[trial - 1]
+        wanted = plan.design_of(trial)
+        if row.design != wanted:
+            wrong.append(
+                f"row {trial} (line {row.line}) is {row.design.label()}, "
+                f"trial {trial} runs {wanted.label()}"
+            )
+    refuse_rows(path, wrong, "design")

@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from odohil.errors import InitError, MeasurementError, ParameterError
+from odohil.session.addresses import parse_tcp_url
 from odohil.session.mocap import (
     MotionCaptureSource,
     PoseStream,
@@ -21,7 +22,7 @@ from odohil.session.mocap import (
     require_pose,
     still_criteria_of,
 )
-from odohil.session.mocap.stream import parse_tcp_url
+from odohil.session.path_pose_files import check_trial_file
 from odohil.session.pose_source import PoseSource
 from odohil.session.pose_sources import (
     OPERATOR_WORDS,
@@ -30,7 +31,6 @@ from odohil.session.pose_sources import (
     OpenedSource,
     Preflight,
 )
-from odohil.session.preflight import check_trial_file
 from odohil.session.sources import FakeTruthSource, TapeSource, pose_source_from_file
 
 MOCAP_SCHEME = "tcp://"
@@ -165,7 +165,7 @@ class TrialFileKind:
         return TrialFileSettings(journaled_text(journaled, "trial_file", "PATH (a trial file)"))
 
     def check(self, settings: TrialFileSettings, preflight: Preflight) -> None:
-        """The file serves the plan (odohil/session/preflight.py ``check_trial_file``)."""
+        """The file serves the plan (odohil/session/path_pose_files.py ``check_trial_file``)."""
         check_trial_file(settings.path, preflight.description, preflight.plan)
 
     @contextlib.contextmanager

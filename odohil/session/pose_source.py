@@ -43,14 +43,12 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Protocol
 
 from odohil.science.floor_marks import PosePrior
+from odohil.science.frames import Pose as Pose
 from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
 
 if TYPE_CHECKING:
     from odohil.session.events import SourceEvent, SourceReadings
-
-Pose = tuple[float, float, float]
-"""(x m, y m, theta rad)."""
 
 Covariance3 = tuple[
     tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]

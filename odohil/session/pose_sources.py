@@ -30,35 +30,30 @@ is one object, registered under its name the way robot backends are
   takes a path).
 
 The built-in kinds (odohil/session/pose_kinds.py: ``fake``, ``file``,
-``tcp``) are always there, also in a source checkout without installed
-metadata; another package adds a kind by declaring an entry point in the
-group (``toy = "toy_module:TOY"``: an object with the members above, or a
-class whose instances have them). Nothing here names a kind. The entry
-points found are cached while ``sys.path`` stays the same (:func:`clear_cache`).
+``tcp``, named by string in odohil/session/plugins.py) are always there,
+also in a source checkout without installed metadata; another package adds
+a kind by declaring an entry point in the group (``toy = "toy_module:TOY"``:
+an object with the members above, or a class whose instances have them).
+Nothing here names a kind. The entry points found are cached while
+``sys.path`` stays the same (:func:`clear_cache`).
 """
 
 from __future__ import annotations
 
 import contextlib
-import functools
-import sys
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import AbstractContextManager
 from dataclasses import dataclass, field
-from importlib.metadata import EntryPoint, entry_points
 from typing import Any, Protocol, cast
 
 from odohil.errors import InitError, ParameterError
 from odohil.science.robot_description import RobotDescription
+from odohil.session import plugins
 from odohil.session.plan import Plan
 from odohil.session.pose_source import PoseSource
 from odohil.session.robot import Robot
 
-ENTRY_POINT_GROUP = "odohil.pose_sources"
-
-OPERATOR = "operator"
-"""The wizard's measurement, as journaled: an operator with a tape at the
-terminal (no ``--measure`` form: ``odohil wizard`` asks the distances)."""
+ENTRY_POINT_GROUP = plugins.POSE_SOURCES
 
 
 @dataclass(frozen=True)
@@ -153,59 +148,38 @@ class PoseSourceKind(Protocol):
         ...
 
 
-def _builtin() -> dict[str, PoseSourceKind]:
-    from odohil.session.pose_kinds import BUILTIN_KINDS
-
-    return {kind.name: kind for kind in BUILTIN_KINDS}
-
-
-@functools.lru_cache(maxsize=4)
-def _registered(search_path: tuple[str, ...]) -> tuple[EntryPoint, ...]:
-    """The group's entry points on ``search_path`` (sys.path: the cache
-    follows it), by name."""
-    return tuple(sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name))
-
-
 def clear_cache() -> None:
     """Forget the entry points found so far (a package installed since)."""
-    _registered.cache_clear()
+    plugins.clear_cache()
 
 
-def _entry_points() -> tuple[EntryPoint, ...]:
-    return _registered(tuple(sys.path))
+def _load(name: str, target: str) -> PoseSourceKind:
+    try:
+        loaded = plugins.load_target(target)
+    except (ImportError, AttributeError) as exc:
+        raise InitError(f"pose source {name!r} ({target}) cannot load: {exc}") from exc
+    kind = cast(PoseSourceKind, loaded() if isinstance(loaded, type) else loaded)
+    if kind.name != name:
+        raise InitError(f"pose source {name!r} ({target}) calls itself {kind.name!r}")
+    return kind
 
 
 def kinds() -> dict[str, PoseSourceKind]:
-    """Every kind by name: the built-in ones, then those registered in the
+    """Every kind by name: the built-in ones and those registered in the
     group (an entry point cannot replace a built-in one).
 
     Raises:
-        InitError: a registered kind cannot be loaded (it is named).
+        InitError: a kind cannot be loaded (it is named).
     """
-    found = _builtin()
-    for entry in _entry_points():
-        if entry.name in found:
-            continue
-        try:
-            loaded = entry.load()
-        except (ImportError, AttributeError) as exc:
-            raise InitError(
-                f"pose source {entry.name!r} ({entry.value}) cannot load: {exc}"
-            ) from exc
-        kind = cast(PoseSourceKind, loaded() if isinstance(loaded, type) else loaded)
-        if kind.name != entry.name:
-            raise InitError(
-                f"pose source {entry.name!r} ({entry.value}) calls itself {kind.name!r}"
-            )
-        found[entry.name] = kind
-    return found
+    return {
+        name: _load(name, target) for name, target in plugins.targets(ENTRY_POINT_GROUP).items()
+    }
 
 
 def kind_names() -> tuple[str, ...]:
     """The names of every pose source (built-in and registered), sorted,
-    without loading a registered one."""
-    names = set(_builtin()) | {e.name for e in _entry_points()}
-    return tuple(sorted(names))
+    without loading one."""
+    return plugins.names(ENTRY_POINT_GROUP)
 
 
 def accepted_forms() -> str:

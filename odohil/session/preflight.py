@@ -1,7 +1,8 @@
 """Pre-flight checks of a session's inputs, made before any session folder is
-created or any port opened: the plan against what the robot does, the
-session folder, and a trial file against the plan. The ordered list that
-every command runs is odohil/session/lifecycle/checks.py.
+created or any port opened: the plan against what the robot does. The
+session folder's check is in odohil/session/lifecycle/checks.py (the ordered
+list that every command runs), a trial file's in
+odohil/session/path_pose_files.py.
 
 Every check raises an :class:`~odohil.errors.OdohilError` whose message names
 the option or file and what is accepted; nothing has moved yet.
@@ -9,10 +10,8 @@ the option or file and what is accepted; nothing has moved yet.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from dataclasses import replace
-from pathlib import Path
 
 from odohil import units
 from odohil.errors import ParameterError
@@ -29,14 +28,7 @@ from odohil.science.path_plans import (
 from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
-from odohil.session.path_pose_files import (
-    check_row_count,
-    check_serves,
-    file_format,
-    refuse_rows,
-)
 from odohil.session.plan import Plan
-from odohil.session.trial_files import read_trials
 
 
 def default_variant(description: RobotDescription) -> str:
@@ -192,46 +184,3 @@ def check_trials_per_design(
             "could not be exported. Give n >= "
             f"{min_trials_per_design} for every design, or --allow-few-trials to run it anyway"
         )
-
-
-def check_session_folder(session: Path | None) -> None:
-    """A ``--session`` that exists must be a folder, and a symbolic link must
-    lead somewhere (ParameterError otherwise)."""
-    if session is not None and session.is_symlink() and not session.exists():
-        raise ParameterError(
-            f"--session {session} is a symbolic link to {os.readlink(session)}, which does "
-            "not exist: create that folder, or give another --session"
-        )
-    if session is not None and session.exists() and not session.is_dir():
-        raise ParameterError(
-            f"--session {session} is a file, not a session folder: give a new or "
-            "existing session folder"
-        )
-
-
-def check_trial_file(
-    path: str | Path, description: RobotDescription, plan: Plan, first_trial: int = 1
-) -> None:
-    """A trial file that serves the plan: one row per trial, row k of trial k's
-    design, for trials ``first_trial`` .. the plan's last (a pose file or a
-    general-path trial file: odohil/session/path_pose_files.py).
-
-    Raises:
-        TrialFileError: the file is unreadable, has bad rows, too few rows or a
-            row of another design (the first few are listed).
-    """
-    if file_format(path) != "trials":
-        check_serves(path, plan, first_trial)
-        return
-    trials = read_trials(path, description)
-    check_row_count(path, len(trials), plan)
-    wrong = []
-    for trial in range(first_trial, plan.n_trials + 1):
-        row = trials.trials[trial - 1]
-        wanted = plan.design_of(trial)
-        if row.design != wanted:
-            wrong.append(
-                f"row {trial} (line {row.line}) is {row.design.label()}, "
-                f"trial {trial} runs {wanted.label()}"
-            )
-    refuse_rows(path, wrong, "design")

@@ -23,12 +23,10 @@ time scales. :func:`fake_hooks` is the one place that reads them.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import importlib
-import sys
 from collections.abc import Callable
 from dataclasses import dataclass
-from importlib.metadata import EntryPoint, entry_points
+from importlib.metadata import EntryPoint
 from typing import Any, Protocol, cast
 
 from odohil.errors import InitError, OdohilError, ParameterError, RobotDescriptionError
@@ -39,9 +37,10 @@ from odohil.science.robot_description import (
     parse_robot_description,
 )
 from odohil.science.robot_facts import FakeFacts, RobotFacts
+from odohil.session import plugins
 from odohil.session.robot import Robot
 
-ENTRY_POINT_GROUP = "odohil.robots"
+ENTRY_POINT_GROUP = plugins.ROBOTS
 
 
 class RobotBackend(Protocol):
@@ -57,27 +56,18 @@ class RobotBackend(Protocol):
         ...
 
 
-@functools.lru_cache(maxsize=4)
-def _registered(search_path: tuple[str, ...]) -> tuple[EntryPoint, ...]:
-    """The group's entry points on ``search_path`` (sys.path: the cache
-    follows it), by name. Reading every installed distribution's metadata
-    costs tens of milliseconds, and a session's estimate asks for its
-    backend's facts several times (as odohil/session/pose_sources.py)."""
-    return tuple(sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name))
-
-
 def clear_cache() -> None:
     """Forget the entry points found so far (a package installed since)."""
-    _registered.cache_clear()
+    plugins.clear_cache()
 
 
 def _named(protocol: str) -> tuple[EntryPoint, ...]:
-    return tuple(e for e in _registered(tuple(sys.path)) if e.name == protocol)
+    return tuple(e for e in plugins.registered(ENTRY_POINT_GROUP) if e.name == protocol)
 
 
 def backend_names() -> tuple[str, ...]:
     """The registered backend names, sorted."""
-    return tuple(sorted(e.name for e in _registered(tuple(sys.path))))
+    return plugins.names(ENTRY_POINT_GROUP)
 
 
 def find_backend(protocol: str) -> RobotBackend:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import SafetyError
-from odohil.session.operator_words import HERE
+from odohil.science.frames import Pose
 from odohil.session.robot import Robot
 from odohil.session.state import Phase, SessionState
 from odohil.units import wrap_angle
@@ -32,9 +32,8 @@ POSITION_TOLERANCE_M = 0.02
 """How far (metres) the encoders may read from the trial's start."""
 HEADING_TOLERANCE_DEG = 2.0
 """How far (degrees) the encoder heading may be from the trial's start."""
-
-Pose = tuple[float, float, float]
-"""(x m, y m, heading rad) in the encoder frame."""
+HERE = "here"
+"""What the operator types to start a trial where the robot stands."""
 
 
 def pose_text(pose: Pose) -> str:

@@ -29,7 +29,12 @@ from odohil.science.path_designs import PathDesign
 from odohil.science.path_trials import Direction, PathTrial
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription
+from odohil.session import plugins
+from odohil.session.addresses import parse_tcp_url
 from odohil.session.events import (
+    FORMAT,
+    OPERATOR,
+    SESSION,
     Estimate,
     Event,
     Finished,
@@ -51,34 +56,10 @@ from odohil.session.events import (
     decode,
 )
 from odohil.session.journal import Record, TornRecord, read_journal
-from odohil.session.mocap.stream import parse_tcp_url
 from odohil.session.plan import Plan, TrialShape, check_session_plan, driven_backward
-from odohil.session.pose_sources import OPERATOR, kind_names
 from odohil.session.robots import parse_description as parse_robot_description
 from odohil.session.trial_files import Trial, TrialSet
 from odohil.units import wrap_angle
-
-FORMAT = 1
-"""Version of the journal's event schema."""
-
-# The record kinds of the session's life, for readers of raw records (the
-# events' ``KIND``s; a pose source's own kinds are its events', e.g.
-# odohil/session/tape_records.py).
-SESSION = SessionHeader.KIND
-PLAN = PlanSet.KIND
-ROBOT = RobotConnected.KIND
-RESUMED = Resumed.KIND
-TORN_RECORD = TornRecordKept.KIND
-TRIAL_START = TrialStart.KIND
-MOTION_START = MotionStart.KIND
-MOTION_DONE = MotionDone.KIND
-SOLVED = Solved.KIND
-ESTIMATE = Estimate.KIND
-VOID = Void.KIND
-STOPPED = Stopped.KIND
-STOP_UNCONFIRMED = StopUnconfirmed.KIND
-FINISHED = Finished.KIND
-START_POSE = StartPoseChecked.KIND
 
 
 class Phase(Enum):
@@ -246,8 +227,9 @@ def replay(records: Iterable[Record]) -> SessionState:
 
 def measures() -> tuple[str, ...]:
     """The measurement sources a session header may name: the wizard's
-    operator and every pose source (odohil/session/pose_sources.py), sorted."""
-    return tuple(sorted({OPERATOR, *kind_names()}))
+    operator and every pose source (the ``odohil.pose_sources`` plug-ins of
+    odohil/session/plugins.py), sorted."""
+    return tuple(sorted({OPERATOR, *plugins.names(plugins.POSE_SOURCES)}))
 
 
 _SETTING_TYPES: dict[str, tuple[type, ...]] = {

@@ -26,9 +26,9 @@ from typing import Any
 from odohil import units
 from odohil.errors import JournalError, MeasurementError, ParameterError
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
+from odohil.session.events import OPERATOR
 from odohil.session.lifecycle import SessionSpec
 from odohil.session.plan import Plan
-from odohil.session.pose_sources import OPERATOR
 from odohil.session.state import SessionState, load_session
 from odohil.session.validation import (
     PATH_SYNTAX,

@@ -17,7 +17,7 @@ import pytest
 from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import Journal
 from odohil.session.plan import parse_plan
 

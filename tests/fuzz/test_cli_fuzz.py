@@ -25,7 +25,7 @@ from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
 from odohil.science.limits import RANGES
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import Journal
 
 CASE_SECONDS = 20.0

@@ -12,6 +12,7 @@ import pytest
 from odohil.errors import JournalError
 from odohil.session import state as st
 from odohil.session.events import (
+    FORMAT,
     Estimate,
     Event,
     Finished,
@@ -96,7 +97,7 @@ def test_a_solved_records_source_details_are_its_own_members() -> None:
 
 
 def _state() -> SessionState:
-    header = SessionHeader(format=st.FORMAT, plan=PLAN)
+    header = SessionHeader(format=FORMAT, plan=PLAN)
     return SessionState(header=header, plan=PLAN, n_records=1)
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import pytest
 
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import read_journal
 from odohil.session.tape_records import Remeasured
 from tests.demo_run import demo_run

@@ -24,7 +24,7 @@ from typer.testing import CliRunner, Result
 from fakes.nomad.process import EmulatorProcess
 from odohil.cli.app import app
 from odohil.science.estimators import estimate
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import JOURNAL_NAME, read_journal
 from odohil.session.state import (
     Phase,

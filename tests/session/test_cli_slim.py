@@ -14,8 +14,8 @@ import pytest
 from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError, ParameterError, RobotDescriptionError
 from odohil.science.paths import Design
+from odohil.session.addresses import SOCKET_PATH_MAX, check_socket_path
 from odohil.session.demo import DEMO_PLAN, TURN_FREE_PLAN, demo_session
-from odohil.session.line import SOCKET_PATH_MAX, check_socket_path
 from odohil.session.motion_steps import MotionSteps, pose_text, step_fraction
 from odohil.session.outcome import parse_exclude
 from odohil.session.robot_file import builtin_path, resolve_robot, robot_protocol

@@ -35,7 +35,7 @@ from odohil.session.design_tools import (
     predict_rows,
     write_simulated_trials,
 )
-from odohil.session.events import Event, Void, encode
+from odohil.session.events import OPERATOR, Event, Void, encode
 from odohil.session.interrupts import Interrupts
 from odohil.session.journal import Record
 from odohil.session.lifecycle import SessionSpec, open_session, preflight, require, run_session
@@ -48,7 +48,7 @@ from odohil.session.operator_dialogue import (
     OperatorWatch,
     wizard_spec,
 )
-from odohil.session.operator_words import HERE, measured_again, remeasured
+from odohil.session.operator_words import measured_again, remeasured
 from odohil.session.outcome import estimate_source
 from odohil.session.outcome_text import (
     number_text,
@@ -60,11 +60,10 @@ from odohil.session.path_planning import ScoredPaths, plan_outcome
 from odohil.session.path_trial_file import read_path_trials
 from odohil.session.plan import parse_plan
 from odohil.session.planning import PlannedExperiment, PlanRequest
-from odohil.session.pose_sources import OPERATOR
 from odohil.session.recording_import import import_recording
 from odohil.session.robots import emulate_help, emulated_backends
 from odohil.session.run_text import RunWatch, Said
-from odohil.session.start_pose import StartPose
+from odohil.session.start_pose import HERE, StartPose
 from odohil.session.state import CompletedTrial, SessionState
 from odohil.session.tape_entry import INSTRUCTIONS
 from odohil.session.tape_records import (

@@ -14,7 +14,7 @@ from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError
 from odohil.science.estimators import EstimateResult
 from odohil.science.floor_marks import marks_from_pose
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.engine import (
     CallbackObserver,
     IncrementalLiveEstimator,
@@ -34,7 +34,7 @@ from odohil.session.sources import (
     recorded_source_from_file,
     relative_true_pose,
 )
-from odohil.session.state import SessionState, load_session_trials, replay
+from odohil.session.state import Phase, SessionState, load_session_trials, replay
 from odohil.session.tape_entry import parse_metres
 from odohil.session.tape_records import Measurement, MeasurementsRejected, TapeContext
 from tests.session.helpers import FAST, ROBOT_TOML, PortTruth, description, fake_robot
@@ -142,7 +142,7 @@ def test_cut_off_while_measuring_resumes_at_the_next_distance(tmp_path: Path) ->
             SessionEngine(journal, state, robot, _tape(failing)).run()
         before = replay(read_journal(tmp_path).records)
         assert before.open_trial is not None
-        assert before.open_trial.phase is ev.Phase.MEASURING
+        assert before.open_trial.phase is Phase.MEASURING
         assert before.open_trial.readings is not None
         assert len(before.open_trial.readings.values) == 2
 

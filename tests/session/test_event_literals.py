@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from odohil.session import state
+from odohil.session import events
 from odohil.session.events import event_types
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -21,11 +21,11 @@ EDGE = {Path("odohil/session/journal.py"), Path("odohil/session/events.py")}
 KINDS = frozenset(event_types())
 KIND_NAMES = frozenset(
     name
-    for name in dir(state)
-    if name.isupper() and isinstance(getattr(state, name), str) and getattr(state, name) in KINDS
+    for name in dir(events)
+    if name.isupper() and isinstance(getattr(events, name), str) and getattr(events, name) in KINDS
 ) | frozenset(kind.upper() for kind in KINDS)
-"""The constants that name a kind (``state.SOLVED``...; a pose source's kinds,
-which the state does not name, by their upper-case spelling: ``MEASUREMENTS_REJECTED``)."""
+"""The constants that name a kind (``events.SOLVED``...; a pose source's kinds,
+which the events module does not name, by their upper-case spelling: ``MEASUREMENTS_REJECTED``)."""
 
 
 def _names_a_kind(node: ast.expr) -> bool:

@@ -18,7 +18,7 @@ import pytest
 
 from fakes.nomad.process import EmulatorProcess
 from odohil.errors import JournalError
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import read_journal
 from odohil.session.state import load_session_trials
 from tests import forked

@@ -18,7 +18,7 @@ from odohil.cli.exit_codes import EXIT_BAD_INPUT, exit_for_check, exit_for_run
 from odohil.errors import JournalError
 from odohil.robots import __file__ as robots_init
 from odohil.science.estimators import EstimateResult
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.engine import IncrementalLiveEstimator, start_session
 from odohil.session.journal import Record, read_journal
 from odohil.session.lifecycle import (

@@ -26,7 +26,7 @@ from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
 from odohil.cli.app import app
 from odohil.science.parameters import ErrorParameters
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import JOURNAL_NAME, read_journal
 from odohil.session.mocap.still import StillCriteria
 from tests import forked

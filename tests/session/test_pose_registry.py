@@ -22,7 +22,7 @@ from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
 from odohil.robots import __file__ as robots_init
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import read_journal
 from odohil.session.pose_sources import kind_names, parse_measure
 

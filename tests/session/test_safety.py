@@ -25,7 +25,7 @@ from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthSnapshot
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import JournalError, StopUnconfirmedError
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.engine import start_session
 from odohil.session.journal import JOURNAL_NAME, read_journal
 from odohil.session.plan import parse_plan

@@ -19,7 +19,7 @@ import fakes  # noqa: F401  (registers fakerobot://)
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.floor_marks import marks_from_pose
 from odohil.science.robot_description import RobotDescription
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.engine import (
     IncrementalLiveEstimator,
     MotionSettings,

@@ -15,7 +15,7 @@ from fakes.nomad.process import EmulatorProcess
 from odohil.cli.app import app
 from odohil.errors import ParameterError
 from odohil.science.robot_description import parse_robot_description
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import read_journal
 from odohil.session.line import resolve_line
 from odohil.session.robots import open_robot

@@ -49,7 +49,7 @@ from fakes.nomad.truth import TruthClient
 from odohil.cli.app import app
 from odohil.driver.odometry import DriveSettings
 from odohil.protocol.create2.opcodes import Opcode
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import read_journal
 from odohil.session.signals import (
     HANDLED_SIGNALS,

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 
 from odohil.errors import JournalError
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.events import Estimate
 from odohil.session.journal import Record
 from odohil.session.plan import parse_plan

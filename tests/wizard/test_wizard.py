@@ -33,7 +33,7 @@ from odohil.science.floor_marks import (
     solve_marks,
 )
 from odohil.science.robot_description import parse_robot_description
-from odohil.session import state as ev
+from odohil.session import events as ev
 from odohil.session.journal import journal_path, read_journal
 from odohil.session.sources import relative_true_pose
 from odohil.session.state import replay

@@ -11,6 +11,7 @@ of odohil/session/preflight.py, plan.py, floor_space.py and line.py.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,7 +32,6 @@ from odohil.session.outcome import check_exclude
 from odohil.session.plan import Plan, check_session_plan, parse_plan
 from odohil.session.preflight import (
     check_estimable,
-    check_session_folder,
     check_trials_per_design,
     check_turns,
     default_variant,
@@ -142,6 +142,21 @@ class _List:
     def fail(self, name: str, message: str) -> None:
         self.checks.append(PreflightCheck(name, False, message))
         raise _Stop
+
+
+def check_session_folder(session: Path | None) -> None:
+    """A ``--session`` that exists must be a folder, and a symbolic link must
+    lead somewhere (ParameterError otherwise)."""
+    if session is not None and session.is_symlink() and not session.exists():
+        raise ParameterError(
+            f"--session {session} is a symbolic link to {os.readlink(session)}, which does "
+            "not exist: create that folder, or give another --session"
+        )
+    if session is not None and session.exists() and not session.is_dir():
+        raise ParameterError(
+            f"--session {session} is a file, not a session folder: give a new or "
+            "existing session folder"
+        )
 
 
 def preflight(spec: SessionSpec) -> Preflight:

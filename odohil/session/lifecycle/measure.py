@@ -13,9 +13,9 @@ from typing import Any
 
 from odohil.errors import ParameterError, TrialFileError
 from odohil.science.robot_description import RobotDescription
+from odohil.session.events import OPERATOR
 from odohil.session.plan import Plan
 from odohil.session.pose_sources import (
-    OPERATOR,
     MeasureOption,
     Preflight,
     check_measure,

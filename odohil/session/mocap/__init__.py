@@ -2,10 +2,11 @@
 (``--measure tcp://HOST:PORT``), still poses at a trial's start and end, and
 the pose change with its covariance. See docs/motion-capture.md."""
 
+from odohil.session.addresses import parse_tcp_url
 from odohil.session.mocap.change import pose_change_with_covariance
 from odohil.session.mocap.source import MotionCaptureSource, pose_sigma_of, still_criteria_of
 from odohil.session.mocap.still import StillCriteria, StillPose, require_pose, take_still_pose
-from odohil.session.mocap.stream import PoseStream, StreamedPose, parse_tcp_url
+from odohil.session.mocap.stream import PoseStream, StreamedPose
 
 __all__ = [
     "MotionCaptureSource",

@@ -40,9 +40,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from types import TracebackType
 from typing import Any
-from urllib.parse import urlsplit
 
-from odohil.errors import ConnectionFailedError, ParameterError
+from odohil.errors import ConnectionFailedError
+from odohil.session.addresses import parse_tcp_url
 from odohil.session.bounded_io import LineSplitter
 
 MAX_LINE_BYTES = 4096
@@ -107,31 +107,6 @@ class StreamStatus:
     closed: str
     n_bad_time: int = 0
     last_bad_time: str = ""
-
-
-def parse_tcp_url(url: str) -> tuple[str, int]:
-    """``tcp://HOST:PORT`` as (host, port).
-
-    Raises:
-        ParameterError: not of that form (the message names the form).
-    """
-    form = "tcp://HOST:PORT (e.g. tcp://192.168.1.20:5555)"
-    parts = urlsplit(url)
-    try:
-        port = parts.port
-    except ValueError:
-        port = None
-    if (
-        parts.scheme != "tcp"
-        or not parts.hostname
-        or port is None
-        or not 0 < port < 65536
-        or parts.path not in ("", "/")
-        or parts.query
-        or parts.fragment
-    ):
-        raise ParameterError(f"--measure {url!r}: a motion-capture stream is given as {form}")
-    return parts.hostname, port
 
 
 def parse_pose_line(line: bytes, received_s: float) -> StreamedPose:
