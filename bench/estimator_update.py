@@ -8,7 +8,7 @@ time of each update is recorded, both for the fit alone
 (``IncrementalEstimator.add``) and for the whole live update
 (``add`` plus ``result().to_json_dict()``: the model check, sufficiency and
 verdict the live display and journal get, as in
-odohil/session/engine.py's IncrementalLiveEstimator). Prints the median and
+odohil/session/run/engine.py's IncrementalLiveEstimator). Prints the median and
 the maximum of each.
 """
 

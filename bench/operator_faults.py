@@ -4,7 +4,7 @@ Usage: ``python bench/operator_faults.py [--experiments 200] [--workers 2]
 [--n-per-design 30] [--coverage-n 5,10,20,30] [--coverage-experiments 0] [--seed S]``
 
 Simulated experiments through the full floor-marks path, the way a session
-runs them (odohil/session/engine.py):
+runs them (odohil/session/run/engine.py):
 
 - the trials in the order and direction a session drives them (one-way
   trials alternate forwards and backwards, odohil/science/paths.py's

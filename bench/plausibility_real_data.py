@@ -1,4 +1,4 @@
-"""The per-trial check (odohil/session/plausibility.py) on real straight runs.
+"""The per-trial check (odohil/session/measure/plausibility.py) on real straight runs.
 
 The optiodom data set's straight runs (``ivanjko`` sessions: a real
 differential-drive robot, OptiTrack ground truth at the robot's centre, see
@@ -25,8 +25,8 @@ import numpy as np
 from odohil.science.paths import Design
 from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.science.robot_description import ParameterPriors
-from odohil.session.plausibility import judge
-from odohil.session.pose_source import MeasuredPose, Pose
+from odohil.session.measure.plausibility import judge
+from odohil.session.measure.protocol import MeasuredPose, Pose
 from odohil.units import wrap_angle
 
 WHEEL_D_M, WHEEL_BASE_M, COUNTS_PER_TURN = 0.084, 0.20, 2796.8

@@ -5,7 +5,7 @@ Usage: ``python bench/real_data.py [--data ../shared/data/optiodom-june]``
 June)":
 
 - the fits (odohil/science/estimators/paths.py estimate_paths, robust, read by
-  odohil/session/logs with docs/examples/optiodom.toml): straight runs with the
+  odohil/session/trials/logs with docs/examples/optiodom.toml): straight runs with the
   four-parameter model; circles with the four-parameter model, with one e_turn
   and with e_turn per direction; squares likewise; in-place spins with e_turn
   and K_spin; each with its verdict and wall time;
@@ -36,9 +36,9 @@ from odohil.science.estimators.paths import estimate_paths, predict
 from odohil.science.estimators.result import EstimateResult
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray
-from odohil.session.logs import ImportOptions, read_recording
-from odohil.session.logs.optiodom import read_run
-from odohil.session.robot_file import load_robot_description
+from odohil.session.robots.description import load_robot_description
+from odohil.session.trials.logs import ImportOptions, read_recording
+from odohil.session.trials.logs.optiodom import read_run
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = Path(os.environ.get("ODOHIL_OPTIODOM", ROOT.parent / "shared/data/optiodom-june"))
@@ -161,7 +161,7 @@ def main() -> None:
     ivanjko = read_recording([args.data / "ivanjko"], robot, options)
     circles = read_recording([args.data / "circular"], robot, options)
     squares = read_recording([args.data / "square"], robot, options)
-    print(f"read 102 runs in {time.perf_counter() - start:.2f} s (odohil/session/logs)")
+    print(f"read 102 runs in {time.perf_counter() - start:.2f} s (odohil/session/trials/logs)")
     straight = [t for t in ivanjko if t.family == "straight"]
     spins = [t for t in ivanjko if t.family == "spin"]
     print()

@@ -3,7 +3,7 @@
 A robot's facts (line speeds, wire units, what one wire command can carry,
 leg limits, counts per revolution) belong to its backend: the backend
 declares them in its RobotFacts (odohil/driver/<robot>/) and every other
-layer reads them through the registry (odohil/session/robots.py). This scans
+layer reads them through the registry (odohil/session/robots/registry.py). This scans
 the code of every other package of odohil for the numeric literals and the
 names those facts had before they moved. Robot description files
 (odohil/robots/*.toml) are data and are not scanned.

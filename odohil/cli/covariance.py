@@ -1,5 +1,5 @@
 """``odohil covariance``: mean and covariance of the odometry pose change of a
-path (odohil/session/design_tools.py computes)."""
+path (odohil/session/commands/design.py computes)."""
 
 from __future__ import annotations
 
@@ -27,8 +27,8 @@ from odohil.cli.options import (
 )
 from odohil.cli.render import drawn
 from odohil.science.simulator import DEFAULT_SEGMENT_M
-from odohil.session.design_tables import covariance_table
-from odohil.session.design_tools import covariance_document, named_path, path_moments
+from odohil.session.commands.design import covariance_document, named_path, path_moments
+from odohil.session.commands.design_tables import covariance_table
 
 
 class PathChoice(StrEnum):

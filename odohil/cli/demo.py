@@ -2,7 +2,7 @@
 
 The fake robot of the chosen backend runs in process with known, exaggerated
 error parameters; the session lifecycle runs it through the real driver with
-the fake's ground truth as measurement source (odohil/session/demo.py), and
+the fake's ground truth as measurement source (odohil/session/commands/demo.py), and
 the estimates are printed beside the true values.
 """
 
@@ -23,9 +23,9 @@ from odohil.cli.options import (
     usage_errors,
 )
 from odohil.cli.session_view import drive, finish
-from odohil.session.demo import demo_session
-from odohil.session.lifecycle import Opened
-from odohil.session.robot_file import robot_protocol
+from odohil.session.commands.demo import demo_session
+from odohil.session.robots.description import robot_protocol
+from odohil.session.run import Opened
 
 _ROBOT_HELP = (
     "Which fake robot: nomad150 or create2, or a robot description file whose "

@@ -2,7 +2,7 @@
 pseudo-terminal.
 
 Which fake, and its defaults (line rate, time scale), come from the robot
-backend's facts (``RobotFacts.fake``, read through odohil/session/robots.py);
+backend's facts (``RobotFacts.fake``, read through odohil/session/robots/registry.py);
 the fake (fakes/nomad/, fakes/create2/) is imported only when the command
 runs, through the emulator its backend names, so that no other ``odohil``
 command loads it.
@@ -18,8 +18,8 @@ import typer
 from odohil.cli.options import Parameters, option, parameters_option, usage_errors
 from odohil.science.robot_description import DEFAULT_PROTOCOL
 from odohil.session.addresses import check_socket_path
-from odohil.session.robot_file import robot_protocol
-from odohil.session.robots import emulate_help, emulated_line, emulator
+from odohil.session.robots.description import robot_protocol
+from odohil.session.robots.registry import emulate_help, emulated_line, emulator
 
 _FAULT_HELP = (
     "Inject a fault: NAME, NAME:CODE or NAME:CODE@N (only the N-th matching request); "
@@ -52,7 +52,7 @@ def emulate(
     params: Parameters,
 ) -> None:
     """Serve a fake robot on a pseudo-terminal until Ctrl-C: the one --robot
-    names (its backend's fake, odohil/session/robots.py ``fake_hooks``).
+    names (its backend's fake, odohil/session/robots/registry.py ``fake_hooks``).
 
     Prints the device path (first line) and the truth socket path (second line).
     """

@@ -16,9 +16,9 @@ from odohil.cli.exit_codes import exit_for_outcome
 from odohil.cli.options import UNITS_DEFAULT, JsonOption, UnitsOption, robot_option, unit_system
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, print_outcome, torn_warning
-from odohil.session.logs import ImportOptions
-from odohil.session.outcome import EstimateOutcome, Selection, estimate_source
-from odohil.session.robot_file import load_robot_description
+from odohil.session.results.outcome import EstimateOutcome, Selection, estimate_source
+from odohil.session.robots.description import load_robot_description
+from odohil.session.trials.logs import ImportOptions
 
 SOURCES_HELP = (
     "A session folder; a trial file (pose rows or raw floor marks; a general-path trial "
@@ -45,7 +45,7 @@ def load_outcome(
     selection: Selection | None = None,
 ) -> EstimateOutcome:
     """The one recipe's outcome of a source (session folder, trial file or
-    recording: :func:`odohil.session.outcome.estimate_source`); a torn last
+    recording: :func:`odohil.session.results.outcome.estimate_source`); a torn last
     journal record is reported on ``err``; any bad input exits 2 (said on ``err``)."""
     with bad_inputs(err):
         description = load_robot_description(robot) if robot is not None else None

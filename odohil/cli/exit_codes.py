@@ -9,7 +9,7 @@
 | 4 | the robot's stop could not be confirmed: it may still be moving |
 | 128 + N | ended by signal N after the robot was stopped |
 
-A failed pre-flight check (odohil/session/lifecycle/checks.py) exits by its
+A failed pre-flight check (odohil/session/run/checks.py) exits by its
 class (:func:`exit_for_check`), the same from run, resume, demo, validate and
 the wizard: 2 bad input, 1 an error (a port or stream that does not answer);
 either way nothing moved. A session run exits by how it ended
@@ -17,7 +17,7 @@ either way nothing moved. A session run exits by how it ended
 
 Status 3: the verdict is doubtful or failed, or the trials give no estimate
 (too few, or every one left out); for report and export also a trusted
-estimate too imprecise to export (odohil/session/outcome.py). Every command
+estimate too imprecise to export (odohil/session/results/outcome.py). Every command
 that estimates maps its outcome through :func:`exit_for_outcome`.
 
 128 + N: 130 Ctrl-C (SIGINT), 143 SIGTERM, 129 SIGHUP, 131 SIGQUIT.
@@ -28,10 +28,10 @@ from __future__ import annotations
 import signal
 from typing import TYPE_CHECKING
 
-from odohil.session.outcome import EstimateOutcome
+from odohil.session.results.outcome import EstimateOutcome
 
 if TYPE_CHECKING:
-    from odohil.session.lifecycle import PreflightCheck, RunOutcome
+    from odohil.session.run import PreflightCheck, RunOutcome
 
 EXIT_OK = 0
 EXIT_ERROR = 1

@@ -21,9 +21,9 @@ from odohil.science.exports import (
 )
 from odohil.science.limits import RANGES
 from odohil.science.planner import DEFAULT_SPEED_M_PER_S
-from odohil.session.exports import export_text
-from odohil.session.logs import ImportOptions
-from odohil.session.outcome import Selection
+from odohil.session.results.exports import export_text
+from odohil.session.results.outcome import Selection
+from odohil.session.trials.logs import ImportOptions
 
 
 def _ranged(flag: str, name: str, text: str) -> object:

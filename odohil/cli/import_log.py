@@ -1,6 +1,6 @@
 """``odohil import LOG... --robot R --out trials.jsonl``: trials from a recorded
 log of any path (odometry and ground truth), written as a general-path trial
-file (odohil/session/recording_import.py; formats in docs/recording.md)."""
+file (odohil/session/commands/import_log.py; formats in docs/recording.md)."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from rich.console import Console
 from odohil.cli.options import robot_option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, drawn
-from odohil.session.logs import ImportOptions
-from odohil.session.recording_import import import_recording
+from odohil.session.commands.import_log import import_recording
+from odohil.session.trials.logs import ImportOptions
 
 
 @source_options(selection=False, exclude=False)

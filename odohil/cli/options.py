@@ -1,7 +1,7 @@
 """Command-line options shared by several commands, declared once: the four
 error parameters in the paper's units (defaults: the paper's Nomad 150 values),
 the forth-and-back variant, units, ``--robot`` (a robot description file, or
-the name of a built-in one: odohil/session/robot_file.py finds it; anything
+the name of a built-in one: odohil/session/robots/description.py finds it; anything
 else is a usage error, exit 2, naming the option and the names), and the
 options of the commands that run a session (port, baud, truth socket, --json,
 --exclude, --allow-turns)."""
@@ -22,7 +22,7 @@ from odohil import units
 from odohil.errors import OdohilError
 from odohil.science.limits import RANGES
 from odohil.science.parameters import NOMAD150, ErrorParameters
-from odohil.session.robot_file import builtin_names, resolve_robot
+from odohil.session.robots.description import builtin_names, resolve_robot
 
 N = TypeVar("N", int, float, int | None, float | None)
 Command = Callable[..., None]

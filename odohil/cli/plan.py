@@ -1,5 +1,5 @@
 """``odohil plan``: recommend calibration designs for a budget (the work is
-odohil/session/planning.py's)."""
+odohil/session/commands/plan.py's)."""
 
 from __future__ import annotations
 
@@ -33,8 +33,8 @@ from odohil.science.planner import (
     MAX_DESIGNS,
 )
 from odohil.science.robot_description import MAX_FLOOR_M
-from odohil.session import path_planning as paths
-from odohil.session.planning import (
+from odohil.session.commands import plan_paths as paths
+from odohil.session.commands.plan import (
     DEFAULT_SIGMA_M,
     PlannedExperiment,
     PlanRequest,

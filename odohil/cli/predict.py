@@ -24,8 +24,8 @@ from odohil.cli.options import (
 from odohil.cli.render import drawn
 from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.paths import Design
-from odohil.session.design_tables import predict_table
-from odohil.session.design_tools import predict_document
+from odohil.session.commands.design import predict_document
+from odohil.session.commands.design_tables import predict_table
 
 
 @parameters_option

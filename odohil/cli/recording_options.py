@@ -1,9 +1,9 @@
 """The options of every command that reads a source in place of a session
 (``import``, ``estimate``, ``export``, ``report``, ``validate``), declared and
 resolved in one place: :func:`source_options` adds them to a command, which
-receives them typed: ``recording`` (:class:`~odohil.session.logs.ImportOptions`:
+receives them typed: ``recording`` (:class:`~odohil.session.trials.logs.ImportOptions`:
 format, bag topics, time association, rest thresholds), ``selection``
-(:class:`~odohil.session.outcome.Selection`: ``--family``/``--direction``) and
+(:class:`~odohil.session.results.outcome.Selection`: ``--family``/``--direction``) and
 ``exclude`` (the trial numbers of ``--exclude``). A value the session layer
 refuses is reported as every bad input is (exit 2, nothing done)."""
 
@@ -16,8 +16,8 @@ from typing import Any
 
 from odohil.cli.options import EXCLUDE_HELP, Command, add_options, keyword
 from odohil.cli.render import bad_inputs
-from odohil.session.logs import ImportOptions
-from odohil.session.outcome import Selection, parse_exclude
+from odohil.session.results.outcome import Selection, parse_exclude
+from odohil.session.trials.logs import ImportOptions
 
 
 class FormatChoice(StrEnum):

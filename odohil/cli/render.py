@@ -1,6 +1,6 @@
 """Rich renderings shared by the commands: an error, an estimate's outcome
 (verdict line and table), checks, the live estimate. The words
-are the session's (odohil/session/outcome_text.py)."""
+are the session's (odohil/session/text/outcome.py)."""
 
 from __future__ import annotations
 
@@ -19,10 +19,11 @@ from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED
 from odohil.errors import OdohilError
 from odohil.science.estimators import EstimateResult
 from odohil.science.estimators.verdict import Verdict
-from odohil.session.design_observables import observables_table
-from odohil.session.lifecycle import PreflightCheck
-from odohil.session.outcome import EstimateOutcome
-from odohil.session.outcome_text import (
+from odohil.session.journal.state import CompletedTrial
+from odohil.session.results.outcome import EstimateOutcome
+from odohil.session.run import PreflightCheck
+from odohil.session.table_text import TableText
+from odohil.session.text.outcome import (
     export_refusal_lines,
     more_trials_lines,
     outcome_line,
@@ -31,9 +32,8 @@ from odohil.session.outcome_text import (
     refusal_line,
     verdict_line,
 )
-from odohil.session.run_text import Said, error_said
-from odohil.session.state import CompletedTrial
-from odohil.session.table_text import TableText
+from odohil.session.text.run import Said, error_said
+from odohil.session.wizard.observables import observables_table
 
 
 def drawn(text: TableText) -> Table:
@@ -57,7 +57,7 @@ _TONES = {
     "good": "green",
     "done": "bold green",
 }
-"""The colour of each tone of odohil/session/run_text.py's lines."""
+"""The colour of each tone of odohil/session/text/run.py's lines."""
 
 
 def said_text(line: Said) -> Text:

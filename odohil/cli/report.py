@@ -13,9 +13,9 @@ from odohil.cli.estimate import SOURCES_HELP, load_outcome
 from odohil.cli.options import robot_option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, verdict_or_refuse
-from odohil.session.logs import ImportOptions
-from odohil.session.outcome import Selection
-from odohil.session.report.command import session_report, write_any_report
+from odohil.session.commands.report import session_report, write_any_report
+from odohil.session.results.outcome import Selection
+from odohil.session.trials.logs import ImportOptions
 
 
 @source_options()

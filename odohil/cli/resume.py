@@ -19,14 +19,14 @@ from odohil.cli.options import (
     unit_system,
 )
 from odohil.cli.session_view import drive, finish
-from odohil.session.lifecycle import Opened, SessionSpec
-from odohil.session.run_text import resuming
-from odohil.session.start_pose import (
+from odohil.session.run import Opened, SessionSpec
+from odohil.session.run.start_pose import (
     HEADING_TOLERANCE_DEG,
     POSITION_TOLERANCE_M,
     StartPose,
     refuse_off_start,
 )
+from odohil.session.text.run import resuming
 
 _FROM_HERE_HELP = (
     "Go on although the robot is not where the next trial starts "

@@ -1,7 +1,7 @@
 """``odohil run``: an unattended calibration session on the robot.
 
-Parses the options into a :class:`~odohil.session.lifecycle.SessionSpec` and
-runs the session lifecycle (odohil/session/lifecycle/): pre-flight, open,
+Parses the options into a :class:`~odohil.session.run.SessionSpec` and
+runs the session lifecycle (odohil/session/run/): pre-flight, open,
 run; odohil/cli/session_view.py shows it, with the exit statuses of
 odohil/cli/exit_codes.py (0 trusted, 1 error, 2 bad input or session in use,
 3 not trusted, 4 stop unconfirmed, 128 + N signal N).
@@ -30,8 +30,8 @@ from odohil.cli.options import (
 )
 from odohil.cli.render import bad_inputs
 from odohil.cli.session_view import drive, finish
-from odohil.session.lifecycle import Opened, SessionSpec, default_session_folder
-from odohil.session.outcome import parse_exclude
+from odohil.session.results.outcome import parse_exclude
+from odohil.session.run import Opened, SessionSpec, default_session_folder
 
 _PLAN_HELP = (
     'Designs and trial counts, e.g. "k=1,l=6,n=30;k=20,l=0.5,n=30" '

@@ -1,5 +1,5 @@
 """What run, resume, demo, validate and the wizard show of a session's
-lifecycle (odohil/session/lifecycle/): the pre-flight failure, the progress
+lifecycle (odohil/session/run/): the pre-flight failure, the progress
 bar, how the run ended, the verdict line and the summary; the exit statuses
 are odohil/cli/exit_codes.py's. Also the one place the CLI registers the
 fakes' pyserial URL handlers (the only layer that may import the fakes)."""
@@ -33,8 +33,9 @@ from odohil.errors import (
     StopUnconfirmedError,
     TrialFileError,
 )
-from odohil.session.engine import StartCheck
-from odohil.session.lifecycle import (
+from odohil.session.journal.state import SessionState
+from odohil.session.robots.registry import fake_url_schemes
+from odohil.session.run import (
     Opened,
     Preflight,
     PreflightCheck,
@@ -50,12 +51,11 @@ from odohil.session.lifecycle import (
     require,
     run_session,
 )
-from odohil.session.lifecycle.opening import CheckSeen
-from odohil.session.outcome_text import parameters_text
-from odohil.session.robots import fake_url_schemes
-from odohil.session.run_text import MAY_STILL_MOVE, RunWatch, Said, error_said, run_ended
+from odohil.session.run.engine import StartCheck
+from odohil.session.run.opening import CheckSeen
 from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
-from odohil.session.state import SessionState
+from odohil.session.text.outcome import parameters_text
+from odohil.session.text.run import MAY_STILL_MOVE, RunWatch, Said, error_said, run_ended
 
 
 def register_fake_urls(port: str) -> None:
@@ -121,13 +121,13 @@ def drive(
     verdict: bool = True,
 ) -> RunOutcome:
     """Pre-flight, open (``say`` tells what was opened), run with a progress
-    bar (what it shows: odohil/session/run_text.py :class:`RunWatch`;
+    bar (what it shows: odohil/session/text/run.py :class:`RunWatch`;
     afterwards the slip check's summary) and say how the run ended (a finished
     one: its verdict line unless not ``verdict``); what escapes exits by its
     status (:func:`session_exit_codes`). The bar shows a live E_R value only,
     so the cheap incremental fit serves it instead of the recipe's robust fit
     per trial where it can (``progress_estimator``: not for a plan with
-    general paths); the verdict is the recipe's (odohil/session/lifecycle)."""
+    general paths); the verdict is the recipe's (odohil/session/run)."""
     with session_exit_codes(console, json_out):
         prepared = prepared_or_exit(preflight(spec), console)
         with open_session(prepared, say_opened(console)) as opened:
@@ -152,8 +152,8 @@ def drive(
 
 class ProgressBar:
     """A rich progress bar of completed trials, on stderr, with lines above it:
-    the :class:`~odohil.session.run_text.RunView` of a run's
-    :class:`~odohil.session.run_text.RunWatch`."""
+    the :class:`~odohil.session.text.run.RunView` of a run's
+    :class:`~odohil.session.text.run.RunWatch`."""
 
     def __init__(self, console: Console, state: SessionState) -> None:
         assert state.plan is not None
@@ -195,7 +195,7 @@ def report_run(
 ) -> None:
     """How the run ended: the verdict line (and why it may not be exported)
     when it finished; else what ended it and what was checked on the way out
-    (odohil/session/run_text.py ``run_ended``)."""
+    (odohil/session/text/run.py ``run_ended``)."""
     if outcome.status == "finished":
         print_verdict(console, outcome.estimate)
     else:

@@ -1,5 +1,5 @@
 """``odohil simulate``: Monte Carlo trials of a forth-and-back design, written
-as a trial file (odohil/session/design_tools.py writes it)."""
+as a trial file (odohil/session/commands/design.py writes it)."""
 
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ from odohil.cli.options import (
 from odohil.science.paths import Design
 from odohil.science.simulator import DEFAULT_SEGMENT_M
 from odohil.science.simulator import simulate as run_simulation
-from odohil.session.design_tools import check_simulation, fresh_seed, write_simulated_trials
+from odohil.session.commands.design import check_simulation, fresh_seed, write_simulated_trials
 
 _PROGRESS_AFTER_S = 1.0
 

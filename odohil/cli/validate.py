@@ -1,5 +1,5 @@
 """``odohil validate SESSION --path ...``: does the calibrated model predict a
-path it was not fitted on? (odohil/session/validation.py,
+path it was not fitted on? (odohil/session/results/validation.py,
 odohil/science/validation.py)."""
 
 from __future__ import annotations
@@ -27,23 +27,23 @@ from odohil.errors import (
 )
 from odohil.science.estimators import EstimateResult
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
-from odohil.session.lifecycle import Opened, SessionSpec
-from odohil.session.logs import ImportOptions
-from odohil.session.outcome_text import outcome_line
-from odohil.session.run_text import error_said
-from odohil.session.validation import (
-    PATH_SYNTAX,
-    ValidationTrials,
-    check_trials,
-    trials_of_session,
-)
-from odohil.session.validation_drive import (
+from odohil.session.commands.validate import (
     chi_square_table,
     held_out,
     validation_setup,
     verdict_lines,
 )
-from odohil.session.validation_steps import validation_document
+from odohil.session.commands.validate_steps import validation_document
+from odohil.session.results.validation import (
+    PATH_SYNTAX,
+    ValidationTrials,
+    check_trials,
+    trials_of_session,
+)
+from odohil.session.run import Opened, SessionSpec
+from odohil.session.text.outcome import outcome_line
+from odohil.session.text.run import error_said
+from odohil.session.trials.logs import ImportOptions
 
 _HELP = (
     f"Test the calibrated model of SESSION on a path it was not fitted on. --path is "

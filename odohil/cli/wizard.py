@@ -59,8 +59,9 @@ from odohil.driver.odometry import OdometrySample
 from odohil.science.estimators import EstimateResult
 from odohil.science.paths import Drivable
 from odohil.science.planner import DEFAULT_MAX_LEG_M
-from odohil.session.interrupts import Interrupts, wait_readable
-from odohil.session.lifecycle import (
+from odohil.session.journal.state import CompletedTrial, SessionState
+from odohil.session.results.validation import PATH_SYNTAX
+from odohil.session.run import (
     Opened,
     PreflightCheck,
     PreflightFailed,
@@ -69,25 +70,24 @@ from odohil.session.lifecycle import (
     open_session,
     preflight,
 )
-from odohil.session.motion_steps import MotionSteps, pose_text
-from odohil.session.operator_dialogue import WIZARD_PLAN, continue_with, guided_run, wizard_spec
-from odohil.session.outcome_text import outcome_line
-from odohil.session.run_text import MAY_STILL_MOVE, Said
 from odohil.session.signals import signal_of, signals_raise
-from odohil.session.state import CompletedTrial, SessionState
-from odohil.session.validation import PATH_SYNTAX
-from odohil.session.validation_wizard import (
+from odohil.session.text.outcome import outcome_line
+from odohil.session.text.run import MAY_STILL_MOVE, Said
+from odohil.session.wizard.dialogue import WIZARD_PLAN, continue_with, guided_run, wizard_spec
+from odohil.session.wizard.interrupts import Interrupts, wait_readable
+from odohil.session.wizard.motion_steps import MotionSteps, pose_text
+from odohil.session.wizard.validate import (
     GuidedValidation,
 )
 
 
 class WizardScreen:
-    """The wizard's console, the :class:`~odohil.session.operator_dialogue.OperatorScreen`
+    """The wizard's console, the :class:`~odohil.session.wizard.dialogue.OperatorScreen`
     of the operator's dialogue: it renders lines, the motion bar and the live
     panel, and reads replies; what is said and asked when is
-    odohil/session/operator_dialogue.py's. The motion bar counts a motion's
+    odohil/session/wizard/dialogue.py's. The motion bar counts a motion's
     steps (legs and turns), each filled by how far its distance or angle has
-    been covered (odohil/session/motion_steps.py), beside the live encoder pose."""
+    been covered (odohil/session/wizard/motion_steps.py), beside the live encoder pose."""
 
     def __init__(
         self, console: Console, system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM
@@ -251,7 +251,7 @@ def _run(
 
 def final_screen(console: Console, state: SessionState) -> int:
     """The wizard's last words: the session's verdict by the one recipe
-    (odohil/session/outcome.py), why it may not be exported, and the exit status."""
+    (odohil/session/results/outcome.py), why it may not be exported, and the exit status."""
     outcome = final_estimate(state)
     print_verdict(console, outcome)
     return exit_for_outcome(outcome)

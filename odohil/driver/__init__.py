@@ -1,5 +1,5 @@
 """Robot drivers: one backend subpackage per robot protocol, each behind the
-session's ``Robot`` protocol (odohil/session/robot.py).
+session's ``Robot`` protocol (odohil/session/robots/protocol.py).
 
 Shared by every backend: ``port`` (a serial URL opened with
 ``serial.serial_for_url``, so a real port, ``socket://``, ``rfc2217://`` and

@@ -2,7 +2,7 @@
 
 A backend (odohil/driver/nomad/, odohil/driver/create2/, ...) converts its
 wire units here, once, so nothing above the driver layer knows a robot's
-units. The session layer's ``Robot`` protocol (odohil/session/robot.py) is
+units. The session layer's ``Robot`` protocol (odohil/session/robots/protocol.py) is
 written in these types.
 """
 

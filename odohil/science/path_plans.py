@@ -49,7 +49,7 @@ spinning); :func:`compare_with_paths` compares the best turn-free plan, the
 best forth-and-back plan and the best plan with the given general shapes of
 the same time, and says per parameter what the general shapes buy
 (:class:`PathComparison`). :func:`plan_estimability` is the pre-flight's
-statement of what a plan can and cannot estimate (odohil/session/preflight.py).
+statement of what a plan can and cannot estimate (odohil/session/plans/checks.py).
 """
 
 from __future__ import annotations

@@ -3,7 +3,7 @@
 A forth-and-back session names its trials by :class:`~odohil.science.paths.Design`;
 a recording (odometry and ground truth logged on any path) cannot, so each of its
 trials carries its own encoder path. This is the one value that crosses from the
-log readers (odohil/session/logs/) to the general-path estimator and validation.
+log readers (odohil/session/trials/logs/) to the general-path estimator and validation.
 
 Conventions (as :class:`~odohil.science.estimators.observations.Observation`):
 the pose change is the true end pose in the start pose's frame, x and y in

@@ -2,8 +2,8 @@
 scored against the encoders and the model's predictive distribution, and the
 operator-slip check.
 
-Used the same way live (odohil/session/engine.py) and offline
-(odohil/session/trial_files.py); see docs/measurements.md.
+Used the same way live (odohil/session/run/engine.py) and offline
+(odohil/session/trials/trial_file.py); see docs/measurements.md.
 
 1. **Predictive distribution** of one trial's pose change (dx m, dy m,
    dtheta rad): the model's moments (odohil/science/moments.py) at a

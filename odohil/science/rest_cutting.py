@@ -22,7 +22,7 @@ from the first (back from the last) whose *odometry* stays within
 report exact zeros at rest, while the optiodom ground truth jitters up to
 14 mrad peak to peak in the last half second of some runs.
 
-The thresholds, in SI, and why (``ImportOptions`` in odohil/session/logs/
+The thresholds, in SI, and why (``ImportOptions`` in odohil/session/trials/logs/
 lets a user change the durations):
 
 - 0.006 m/s and 0.08 rad/s over 0.25 s windows (1.5 mm and 20 mrad between

@@ -1,7 +1,7 @@
 """The robot description: where the marking screws are, how good a tape reading is,
 which cross distances are measured, and how to reach the robot.
 
-Parsed from TOML text (the file itself is read by :mod:`odohil.session.robot_file`)::
+Parsed from TOML text (the file itself is read by :mod:`odohil.session.robots.description`)::
 
     [screws]                 # positions in the robot frame (x forward, y left), metres
     A = [0.20, 0.0]
@@ -45,7 +45,7 @@ What depends on the robot (its line speeds, its ``[robot]`` keys, its nominal
 constants, whether its turns are exact) comes from its backend's
 :class:`~odohil.science.robot_facts.RobotFacts`, handed to the parser as a
 value (``facts``; the session's ``parse_description`` hands the registry's,
-odohil/session/robots.py); this module names no robot.
+odohil/session/robots/registry.py); this module names no robot.
 """
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ class RobotSettings:
 
     Attributes:
         protocol: the driver backend's name in the ``odohil.robots``
-            entry-point group (odohil/session/robots.py).
+            entry-point group (odohil/session/robots/registry.py).
     """
 
     protocol: str = DEFAULT_PROTOCOL
@@ -222,7 +222,7 @@ class RobotDescription:
         robot: which robot this is (``[robot]``).
         still_window_s: how long motion capture collects the frames of one
             still pose, s (``[measurement] still_window_s``); None: the still
-            window's default (odohil/session/mocap/still.py, 0.5 s). A still
+            window's default (odohil/session/measure/mocap/still.py, 0.5 s). A still
             pose is the median of the window's frames, so pose_sigma is the
             spread of still poses taken over this window.
     """
@@ -277,7 +277,7 @@ def parse_robot_description(
     """Parse and validate a robot description from TOML text.
 
     ``facts`` gives the backend's facts of the description's protocol
-    (odohil/session/robots.py ``parse_description`` passes the registry's);
+    (odohil/session/robots/registry.py ``parse_description`` passes the registry's);
     with them the description is checked against the robot: ``[serial] baud``
     one of its line speeds, only its ``[robot]`` keys, its nominal constants
     and ``turns_exact`` as defaults. Without (None, or no such backend): any

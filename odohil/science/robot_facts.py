@@ -1,7 +1,7 @@
 """What a robot backend declares about its robot: :class:`RobotFacts`.
 
 The type only: each backend fills one (odohil/driver/<robot>/facts.py) and the
-session reads it through the registry (odohil/session/robots.py
+session reads it through the registry (odohil/session/robots/registry.py
 ``robot_facts``). It lives in the science layer so that every layer can take
 it as a value (the robot description's parser checks a description against
 it); no robot's numbers are written here.

@@ -25,9 +25,9 @@ POSE_SOURCES = "odohil.pose_sources"
 
 BUILTIN: dict[str, dict[str, str]] = {
     POSE_SOURCES: {
-        "fake": "odohil.session.pose_kinds:FAKE",
-        "file": "odohil.session.pose_kinds:TRIAL_FILE",
-        "tcp": "odohil.session.pose_kinds:MOTION_CAPTURE",
+        "fake": "odohil.session.measure.kinds:FAKE",
+        "file": "odohil.session.measure.kinds:TRIAL_FILE",
+        "tcp": "odohil.session.measure.kinds:MOTION_CAPTURE",
     },
 }
 """The built-in plug-ins of each group, by name: there also in a source

@@ -17,7 +17,7 @@ from odohil.cli.app import app
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_OK, EXIT_UNTRUSTED
 from odohil.cli.render import verdict_text
 from odohil.science.estimators.verdict import Status, Verdict
-from odohil.session.outcome_text import verdict_line
+from odohil.session.text.outcome import verdict_line
 
 HEADER = "k,l_m,variant,dx_m,dy_m,dtheta_rad"
 

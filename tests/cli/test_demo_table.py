@@ -10,9 +10,9 @@ import re
 import pytest
 
 from odohil import units
-from odohil.session.demo import DEMO_TRUTH
-from odohil.session.journal import read_journal
-from odohil.session.tape_records import MeasurementsRejected, Remeasured
+from odohil.session.commands.demo import DEMO_TRUTH
+from odohil.session.journal.file import read_journal
+from odohil.session.measure.tape.records import MeasurementsRejected, Remeasured
 from tests.demo_run import demo_run
 
 

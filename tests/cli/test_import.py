@@ -10,9 +10,9 @@ import pytest
 from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
-from odohil.session.logs.csv_log import write_csv_log
-from odohil.session.logs.recording import Recording
-from odohil.session.path_trial_file import read_path_trials
+from odohil.session.trials.logs.csv_log import write_csv_log
+from odohil.session.trials.logs.recording import Recording
+from odohil.session.trials.path_trial_file import read_path_trials
 from tests.logs.data import OPTIODOM, OPTIODOM_ROBOT, needs_optiodom
 from tests.logs.synth import Motion, synth_log, varied_motions
 
@@ -66,7 +66,7 @@ def test_the_optiodom_folders_as_given(tmp_path: Path) -> None:
     )
     assert result.exit_code == 0, result.output
     # 20.965 m: each run's path spans its rests' still parts (the creep inside a
-    # rest is driven; odohil/session/logs/recording.py)
+    # rest is driven; odohil/session/trials/logs/recording.py)
     assert "straight forward 14 20.965" in flat(result)
     assert len(read_path_trials(out)) == 42
 

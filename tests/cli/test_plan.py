@@ -15,7 +15,7 @@ from odohil.science.fisher import default_description
 from odohil.science.parameters import NOMAD150, PARAMETER_NAMES
 from odohil.science.paths import Design
 from odohil.science.planner import expected_standard_errors
-from odohil.session.robot_file import load_robot_description
+from odohil.session.robots.description import load_robot_description
 from tests import forked
 
 ODOHIL = shutil.which("odohil") or "odohil"

@@ -18,12 +18,12 @@ from odohil.robots import __file__ as robots_init
 from odohil.science.path_designs import parse_path_design
 from odohil.science.path_plans import RobotModel, Shape, score_plan
 from odohil.science.paths import Design
-from odohil.session.path_planning import (
+from odohil.session.commands.plan_paths import (
     PathComparisonRequest,
     compare_paths,
     comparison_document,
 )
-from odohil.session.robot_file import load_robot_description
+from odohil.session.robots.description import load_robot_description
 
 CREATE2 = Path(robots_init).parent / "create2.toml"
 PLAN = "path=square:1,cw,n=10;k=1,l=2,n=10"

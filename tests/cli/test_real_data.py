@@ -1,7 +1,7 @@
 """Issue 20's acceptance on a real robot's recording (../shared/data/optiodom-june):
 ``estimate``, ``export`` and ``validate`` read the optiodom folders, an odohil
 log CSV and general-path trial files through the one loader
-(odohil/session/outcome.py), in process through the CLI.
+(odohil/session/results/outcome.py), in process through the CLI.
 
 The figures are the issue's outside fit: straight runs E_R -0.63 deg/m
 [-0.85, -0.41], E_T -0.25 % [-0.28, -0.22]; circles: a turn-scale error of
@@ -25,10 +25,10 @@ from typer.testing import CliRunner, Result
 from odohil import units
 from odohil.cli.app import app
 from odohil.science.path_trials import PathTrial
-from odohil.session.logs import ImportOptions, read_recording
-from odohil.session.logs.csv_log import write_csv_log
-from odohil.session.logs.optiodom import joined_runs
-from odohil.session.path_trial_file import write_path_trials
+from odohil.session.trials.logs import ImportOptions, read_recording
+from odohil.session.trials.logs.csv_log import write_csv_log
+from odohil.session.trials.logs.optiodom import joined_runs
+from odohil.session.trials.path_trial_file import write_path_trials
 from tests.logs.data import OPTIODOM, OPTIODOM_ROBOT, needs_optiodom, optiodom_robot
 
 pytestmark = needs_optiodom

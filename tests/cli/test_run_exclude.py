@@ -15,7 +15,7 @@ from typer.testing import CliRunner, Result
 
 from fakes.nomad.process import EmulatorProcess
 from odohil.cli.app import app
-from odohil.session.state import ambiguous_trials, load_session
+from odohil.session.journal.state import ambiguous_trials, load_session
 from tests.session.helpers import write_robot
 
 PLAN = "k=1,l=0.5,n=4;k=0.5,l=0.5,n=4"

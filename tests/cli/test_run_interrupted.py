@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 from fakes.nomad.process import EmulatorProcess
-from odohil.session import events as ev
-from odohil.session.journal import journal_path, read_journal
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import journal_path, read_journal
 from tests import forked
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML
 from tests.session.test_safety import PARAMS

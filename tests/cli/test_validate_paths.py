@@ -31,7 +31,7 @@ import pytest
 from typer.testing import CliRunner
 
 from odohil.cli.app import app
-from odohil.session.validation import parse_validation_path
+from odohil.session.results.validation import parse_validation_path
 from tests.session.test_trust_runs import readme_robot
 
 NOMAD_WRONG = f"&E_R={3 * -0.202:g}&K_theta={9 * 0.012:g}"

@@ -17,9 +17,9 @@ import pytest
 from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
-from odohil.session import events as ev
-from odohil.session.journal import Journal
-from odohil.session.plan import parse_plan
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import Journal
+from odohil.session.plans.plan import parse_plan
 
 ROBOT_TOML = """\
 [screws]

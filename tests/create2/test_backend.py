@@ -12,8 +12,8 @@ from odohil.errors import RobotDescriptionError
 from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotSettings
-from odohil.session.robots import find_backend, open_robot
-from odohil.session.robots import parse_description as parse_robot_description
+from odohil.session.robots.registry import find_backend, open_robot
+from odohil.session.robots.registry import parse_description as parse_robot_description
 
 fakes.register_url_handlers()
 

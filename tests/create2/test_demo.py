@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 
 from odohil.science.parameters import PARAMETER_NAMES
-from odohil.session.demo import DEMO_TRUTH, TURN_FREE_PLAN
-from odohil.session.plan import parse_plan
+from odohil.session.commands.demo import DEMO_TRUTH, TURN_FREE_PLAN
+from odohil.session.plans.plan import parse_plan
 
 ODOHIL = shutil.which("odohil") or "odohil"
 

@@ -1,5 +1,5 @@
 """One place decides whether a fake robot carries a truth side channel and
-which client reads it: the robot backend declares it (odohil/session/robots.py
+which client reads it: the robot backend declares it (odohil/session/robots/registry.py
 ``fake_hooks``), so run, resume and validate agree on both robots (issue 18).
 
 The fake Create 2 runs as a process on a pty where the pty is the point (the
@@ -15,7 +15,7 @@ from typer.testing import CliRunner, Result
 
 from fakes.create2.process import Create2Process
 from odohil.cli.app import app
-from odohil.session.robots import fake_hooks
+from odohil.session.robots.registry import fake_hooks
 
 FAKE = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15&skip_waits=1"
 """The in-process fake Create 2. Its clock is the wall clock unless ``max_gap_ms``

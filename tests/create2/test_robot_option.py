@@ -18,11 +18,11 @@ from odohil.cli.app import app
 from odohil.driver.create2.robot import Create2Robot
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.diff_drive import DiffDriveGeometry
-from odohil.session.line import resolve_line
-from odohil.session.robot_file import builtin_names, builtin_path, load_robot_description
-from odohil.session.robots import open_robot
-from odohil.session.robots import parse_description as parse_robot_description
-from odohil.session.state import load_session
+from odohil.session.journal.state import load_session
+from odohil.session.robots.description import builtin_names, builtin_path, load_robot_description
+from odohil.session.robots.line import resolve_line
+from odohil.session.robots.registry import open_robot
+from odohil.session.robots.registry import parse_description as parse_robot_description
 
 fakes.register_url_handlers()
 

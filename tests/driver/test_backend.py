@@ -13,8 +13,8 @@ from odohil.driver.nomad.backend import NomadBackend
 from odohil.driver.odometry import DriveSettings, OdometrySample
 from odohil.errors import StopUnconfirmedError
 from odohil.science.paths import Design
-from odohil.session.robot import Robot
-from odohil.session.robots import find_backend, open_robot
+from odohil.session.robots.protocol import Robot
+from odohil.session.robots.registry import find_backend, open_robot
 
 FAST = DriveSettings(speed_m_s=1.0, turn_rate_rad_s=3.0, watchdog_s=0.0)
 

@@ -38,8 +38,8 @@ from odohil.protocol.create2.opcodes import Opcode
 from odohil.protocol.nomad.wire_units import METRES_PER_WIRE_LENGTH, RADIANS_PER_WIRE_ANGLE
 from odohil.science.path_designs import PathDesign, parse_path_design
 from odohil.science.paths import EncoderPath, Leg, Turn
-from odohil.session.robot import Robot
-from odohil.session.robots import open_robot
+from odohil.session.robots.protocol import Robot
+from odohil.session.robots.registry import open_robot
 
 SETTINGS = DriveSettings(
     speed_m_s=0.5, turn_rate_rad_s=1.0, turn_acceleration_rad_s2=2.0, watchdog_s=0.0

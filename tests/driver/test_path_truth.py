@@ -6,7 +6,7 @@ Each fake runs as a real process on a pty (fakes/nomad/process.py,
 fakes/create2/process.py: ``python -m fakes.nomad`` / ``python -m fakes.create2``
 with their truth socket), noise free (every error parameter zero, the Create 2's
 turn scale and spin variance too). The robot is driven through the session's
-``Robot`` (odohil/session/robots.py ``open_robot``); whenever a sample shows the
+``Robot`` (odohil/session/robots/registry.py ``open_robot``); whenever a sample shows the
 robot standing still (before the first step and at the end of every step) the
 truth socket is read and compared with that sample: (a) the fake's own encoder
 state with what the driver read (exactly), (b) the true pose since the trial's
@@ -34,7 +34,7 @@ from odohil.protocol.create2.geometry import CREATE2_GEOMETRY
 from odohil.protocol.nomad.wire_units import METRES_PER_WIRE_LENGTH, RADIANS_PER_WIRE_ANGLE
 from odohil.science import frames
 from odohil.science.path_designs import PathDesign
-from odohil.session.robots import open_robot
+from odohil.session.robots.registry import open_robot
 from odohil.units import wrap_angle
 
 pytestmark = pytest.mark.slow

@@ -27,7 +27,7 @@ from odohil.driver.odometry import DriveSettings
 from odohil.driver.step_limit import LIMIT_MARGIN_S, profile_time_s, step_limit
 from odohil.errors import MotionError, OdohilTimeoutError, ParameterError
 from odohil.science.paths import Design
-from odohil.session.robots import open_robot
+from odohil.session.robots.registry import open_robot
 
 fakes.register_url_handlers()
 

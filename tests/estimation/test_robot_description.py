@@ -13,8 +13,8 @@ from odohil.science.robot_description import (
     Screw,
     SerialSettings,
 )
-from odohil.session.robot_file import load_robot_description
-from odohil.session.robots import parse_description as parse_robot_description
+from odohil.session.robots.description import load_robot_description
+from odohil.session.robots.registry import parse_description as parse_robot_description
 
 EXAMPLE = """
 [screws]                 # positions in the robot frame (x forward, y left), metres
@@ -197,7 +197,7 @@ def test_bad_pose_sigma_names_the_key_and_the_range(value: str, message: str) ->
 
 
 def test_the_still_window_for_motion_capture_is_optional_parsed_and_bounded() -> None:
-    from odohil.session.mocap import StillCriteria, still_criteria_of
+    from odohil.session.measure.mocap import StillCriteria, still_criteria_of
 
     plain = parse_robot_description(MINIMAL)
     assert plain.still_window_s is None

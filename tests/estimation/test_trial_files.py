@@ -12,7 +12,7 @@ from odohil.errors import TrialFileError
 from odohil.science.floor_marks import MarkDistances, PosePrior, marks_from_pose, solve_marks
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription, Screw
-from odohil.session.trial_files import Trial, read_trials, write_pose_trials
+from odohil.session.trials.trial_file import Trial, read_trials, write_pose_trials
 
 SCREWS = (Screw("A", 0.2, 0.0), Screw("B", -0.1, 0.1732), Screw("C", -0.1, -0.1732))
 TWO_CROSS = RobotDescription(SCREWS, sigma_m=0.001, cross_pairs=(("A", "B"), ("B", "C")))

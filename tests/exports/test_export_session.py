@@ -13,8 +13,8 @@ import yaml
 
 from odohil.science.estimators import EstimateResult
 from odohil.science.exports import Linearisation
-from odohil.session.exports import FILE_NAMES, export_files, export_text, write_exports
-from odohil.session.outcome import estimate_path
+from odohil.session.results.exports import FILE_NAMES, export_files, export_text, write_exports
+from odohil.session.results.outcome import estimate_path
 from tests import forked
 from tests.report.session_factory import build_session
 
@@ -180,7 +180,7 @@ def test_the_report_writes_the_same_files_beside_its_page(
 ) -> None:
     """What ``odohil report`` does with them:
     ``write_report(..., extra_exports=export_files(...))``."""
-    from odohil.session.report import load_report, write_report
+    from odohil.session.results.report import load_report, write_report
 
     data = load_report(session)
     assert data.result is not None

@@ -23,7 +23,7 @@ from odohil.science.exports import (
 from odohil.science.moments import pose_moments
 from odohil.science.parameters import NOMAD150, ErrorParameters
 from odohil.science.paths import EncoderPath, Leg
-from odohil.session.exports import yaml_list, yaml_scalar
+from odohil.session.results.exports import yaml_list, yaml_scalar
 
 # Exaggerated so that the cross-track terms stand well above the Monte Carlo noise,
 # with K_theta * a small so the leading-order step formula is exact to 0.2 %.

@@ -25,8 +25,8 @@ from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
 from odohil.science.limits import RANGES
-from odohil.session import events as ev
-from odohil.session.journal import Journal
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import Journal
 
 CASE_SECONDS = 20.0
 """Per-case time bound: a case that takes longer is a hang."""

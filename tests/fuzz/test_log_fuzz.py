@@ -12,8 +12,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from odohil.errors import RecordingError, TrialFileError
-from odohil.session.logs import ImportOptions, read_recording
-from odohil.session.path_trial_file import read_path_trials
+from odohil.session.trials.logs import ImportOptions, read_recording
+from odohil.session.trials.path_trial_file import read_path_trials
 from tests.logs.data import optiodom_robot
 
 CELLS = st.one_of(

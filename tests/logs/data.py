@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from odohil.science.robot_description import RobotDescription
-from odohil.session.robot_file import load_robot_description
+from odohil.session.robots.description import load_robot_description
 
 ROOT = Path(__file__).resolve().parents[2]
 OPTIODOM = Path(os.environ.get("ODOHIL_OPTIODOM", ROOT.parent / "shared/data/optiodom-june"))

@@ -1,4 +1,4 @@
-"""odohil's log CSV (odohil/session/logs/csv_log.py): written with the csv
+"""odohil's log CSV (odohil/session/trials/logs/csv_log.py): written with the csv
 module as odohil writes it, cut at rest or by a trial column, and refused
 with the file, line and field when it cannot be used."""
 
@@ -12,11 +12,11 @@ import pytest
 
 from odohil.errors import RecordingError
 from odohil.science.robot_description import RobotDescription
-from odohil.session.logs import ImportOptions, read_recording
-from odohil.session.logs.csv_log import write_csv_log
-from odohil.session.logs.optiodom import joined_runs, read_run
-from odohil.session.logs.recording import Recording
-from odohil.session.robot_file import load_robot_description
+from odohil.session.robots.description import load_robot_description
+from odohil.session.trials.logs import ImportOptions, read_recording
+from odohil.session.trials.logs.csv_log import write_csv_log
+from odohil.session.trials.logs.optiodom import joined_runs, read_run
+from odohil.session.trials.logs.recording import Recording
 from tests.logs.data import OPTIODOM, needs_optiodom, optiodom_robot
 from tests.logs.synth import Motion, SynthLog, rest, synth_log, varied_motions
 

@@ -11,8 +11,8 @@ import pytest
 
 from odohil.errors import RecordingError
 from odohil.science.odometry_paths import odometry_end_pose
-from odohil.session.logs import ImportOptions, read_recording
-from odohil.session.logs.optiodom import read_run
+from odohil.session.trials.logs import ImportOptions, read_recording
+from odohil.session.trials.logs.optiodom import read_run
 from tests.logs.data import OPTIODOM, needs_optiodom, optiodom_robot
 
 pytestmark = needs_optiodom

@@ -1,4 +1,4 @@
-"""General-path trial files (odohil/session/path_trial_file.py): written and
+"""General-path trial files (odohil/session/trials/path_trial_file.py): written and
 read back to the same trials; bad files refused with the line and the key."""
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import pytest
 from odohil.errors import TrialFileError
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import EncoderPath, Leg, Turn, square
-from odohil.session.logs import ImportOptions, read_recording
-from odohil.session.path_trial_file import (
+from odohil.session.trials.logs import ImportOptions, read_recording
+from odohil.session.trials.path_trial_file import (
     is_path_trial_file,
     read_path_trials,
     write_path_trials,

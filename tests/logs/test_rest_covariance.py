@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from odohil.session.logs.recording import ImportOptions, Recording, trials_of
+from odohil.session.trials.logs.recording import ImportOptions, Recording, trials_of
 from tests.logs.data import optiodom_robot
 from tests.logs.synth import synth_log, varied_motions
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from odohil.session.logs.recording import ImportOptions, Recording, trials_of
+from odohil.session.trials.logs.recording import ImportOptions, Recording, trials_of
 from tests.logs.data import optiodom_robot
 
 

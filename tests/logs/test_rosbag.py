@@ -1,4 +1,4 @@
-"""ROS 2 bags (odohil/session/logs/rosbag.py), written by the rosbags
+"""ROS 2 bags (odohil/session/trials/logs/rosbag.py), written by the rosbags
 library itself in both storage formats (sqlite3 and MCAP)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
 from odohil.errors import RecordingError
-from odohil.session.logs import ImportOptions, guess_format, read_recording
+from odohil.session.trials.logs import ImportOptions, guess_format, read_recording
 from tests.logs.data import optiodom_robot
 from tests.logs.synth import SynthLog, synth_log, varied_motions
 

@@ -1,4 +1,4 @@
-"""TUM trajectory pairs (odohil/session/logs/tum.py), written as the evo tool
+"""TUM trajectory pairs (odohil/session/trials/logs/tum.py), written as the evo tool
 writes them (``np.savetxt`` of ``timestamp tx ty tz qx qy qz qw``, space
 separated, full precision), associated by time as evo does."""
 
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from odohil.errors import RecordingError
-from odohil.session.logs import ImportOptions, read_recording
+from odohil.session.trials.logs import ImportOptions, read_recording
 from tests.logs.data import optiodom_robot
 from tests.logs.synth import SynthLog, synth_log, varied_motions
 
@@ -96,7 +96,7 @@ def test_a_bad_line_names_the_line_and_the_field(tmp_path: Path, edit, message: 
 
 
 def test_headings_come_from_the_quaternion_about_z(tmp_path: Path) -> None:
-    from odohil.session.logs.tum import heading_of
+    from odohil.session.trials.logs.tum import heading_of
 
     for angle in (-3.0, -1.0, 0.0, 0.5, 3.1):
         assert math.isclose(heading_of(0.0, 0.0, math.sin(angle / 2), math.cos(angle / 2)), angle)

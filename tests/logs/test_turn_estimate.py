@@ -14,7 +14,7 @@ from functools import cache
 from odohil import units
 from odohil.science.estimators.paths import estimate_paths
 from odohil.science.path_trials import PathTrial
-from odohil.session.logs import ImportOptions, read_recording
+from odohil.session.trials.logs import ImportOptions, read_recording
 from tests.logs.data import OPTIODOM, needs_optiodom, optiodom_robot
 
 pytestmark = needs_optiodom

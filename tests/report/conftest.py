@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from odohil.session.state import SessionState
+from odohil.session.journal.state import SessionState
 
 from .session_factory import build_session
 

@@ -10,17 +10,17 @@ import serial
 import fakes  # noqa: F401  (registers fakerobot://)
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.robot_description import RobotDescription
-from odohil.session.engine import (
+from odohil.session.journal.state import SessionState
+from odohil.session.measure.sources import FakeTruthSource, TapeSource, TrialContext
+from odohil.session.measure.tape.records import TapeContext
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import (
     IncrementalLiveEstimator,
     MotionSettings,
     SessionEngine,
     description_of,
     start_session,
 )
-from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource, TapeSource, TrialContext
-from odohil.session.state import SessionState
-from odohil.session.tape_records import TapeContext
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 
 

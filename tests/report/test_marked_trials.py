@@ -17,8 +17,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
-from odohil.session.report import SessionReport, TrialPoint, load_report
-from odohil.session.report.plots import (
+from odohil.session.results.report import SessionReport, TrialPoint, load_report
+from odohil.session.results.report.plots import (
     convergence_figure,
     end_points_figure,
     model_check_figure,

@@ -8,10 +8,10 @@ from pathlib import Path
 import pytest
 
 from odohil.science.estimators import estimate
-from odohil.session.exports import FILE_NAMES
-from odohil.session.journal import read_journal
-from odohil.session.report import load_report
-from odohil.session.state import SessionState, replay, session_observations
+from odohil.session.journal.file import read_journal
+from odohil.session.journal.state import SessionState, replay, session_observations
+from odohil.session.results.exports import FILE_NAMES
+from odohil.session.results.report import load_report
 
 from .page import assert_self_contained, parse_page
 from .run import run_report

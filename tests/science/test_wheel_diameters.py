@@ -9,7 +9,7 @@ import pytest
 
 from odohil.errors import RobotDescriptionError
 from odohil.protocol.create2.geometry import CREATE2_GEOMETRY
-from odohil.session.robots import parse_description as parse_robot_description
+from odohil.session.robots.registry import parse_description as parse_robot_description
 
 BASE = """
 [screws]

@@ -1,5 +1,5 @@
-"""The typed events and their dispatch (odohil/session/events.py,
-odohil/session/state.py): every kind has one handler, JSON only at the
+"""The typed events and their dispatch (odohil/session/journal/events.py,
+odohil/session/journal/state.py): every kind has one handler, JSON only at the
 journal's edge, a pose source's own readings pass the state unopened."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ from typing import ClassVar
 import pytest
 
 from odohil.errors import JournalError
-from odohil.session import state as st
-from odohil.session.events import (
+from odohil.session.journal import state as st
+from odohil.session.journal.events import (
     FORMAT,
     Estimate,
     Event,
@@ -35,11 +35,10 @@ from odohil.session.events import (
     encode,
     event_types,
 )
-from odohil.session.journal import Journal, Record, read_journal
-from odohil.session.plan import parse_plan
-from odohil.session.pose_source import TrialContext
-from odohil.session.state import Phase, SessionState, apply, apply_event, replay
-from odohil.session.tape_records import (
+from odohil.session.journal.file import Journal, Record, read_journal
+from odohil.session.journal.state import Phase, SessionState, apply, apply_event, replay
+from odohil.session.measure.protocol import TrialContext
+from odohil.session.measure.tape.records import (
     ExtraDistance,
     Measurement,
     MeasurementsRejected,
@@ -47,6 +46,7 @@ from odohil.session.tape_records import (
     TapeContext,
     TapeReadings,
 )
+from odohil.session.plans.plan import parse_plan
 from tests.session.helpers import Heard
 
 PLAN = parse_plan("k=1,l=1,n=2")

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import pytest
 
-from odohil.session import events as ev
-from odohil.session.journal import read_journal
-from odohil.session.tape_records import Remeasured
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import read_journal
+from odohil.session.measure.tape.records import Remeasured
 from tests.demo_run import demo_run
 
 

@@ -29,8 +29,8 @@ from typer.testing import CliRunner
 from odohil.cli.app import app
 from odohil.errors import JournalError, TrialFileError
 from odohil.session.bounded_io import LineSplitter, read_file_bytes
-from odohil.session.journal import JOURNAL_NAME
-from odohil.session.trial_files import MAX_LINE_BYTES, read_trials
+from odohil.session.journal.file import JOURNAL_NAME
+from odohil.session.trials.trial_file import MAX_LINE_BYTES, read_trials
 from tests import forked
 from tests.report.session_factory import build_session
 

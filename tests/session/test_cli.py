@@ -24,9 +24,9 @@ from typer.testing import CliRunner, Result
 from fakes.nomad.process import EmulatorProcess
 from odohil.cli.app import app
 from odohil.science.estimators import estimate
-from odohil.session import events as ev
-from odohil.session.journal import JOURNAL_NAME, read_journal
-from odohil.session.state import (
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import JOURNAL_NAME, read_journal
+from odohil.session.journal.state import (
     Phase,
     load_session,
     load_session_trials,

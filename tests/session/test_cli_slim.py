@@ -15,12 +15,12 @@ from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError, ParameterError, RobotDescriptionError
 from odohil.science.paths import Design
 from odohil.session.addresses import SOCKET_PATH_MAX, check_socket_path
-from odohil.session.demo import DEMO_PLAN, TURN_FREE_PLAN, demo_session
-from odohil.session.motion_steps import MotionSteps, pose_text, step_fraction
-from odohil.session.outcome import parse_exclude
-from odohil.session.robot_file import builtin_path, resolve_robot, robot_protocol
-from odohil.session.robots import emulated_backends, emulator
+from odohil.session.commands.demo import DEMO_PLAN, TURN_FREE_PLAN, demo_session
+from odohil.session.results.outcome import parse_exclude
+from odohil.session.robots.description import builtin_path, resolve_robot, robot_protocol
+from odohil.session.robots.registry import emulated_backends, emulator
 from odohil.session.signals import ctrl_c_in_words
+from odohil.session.wizard.motion_steps import MotionSteps, pose_text, step_fraction
 
 
 def _at(x: float, y: float = 0.0, theta: float = 0.0, moving: bool = True) -> OdometrySample:

@@ -3,12 +3,12 @@
 for the first round), in process over the fake Nomad's URL handler:
 ``odohil validate``'s spec of a driven validation session, the finished one it
 tests again without driving, the options a trial file does not use
-(odohil/session/validation_drive.py); the wizard's put-back answer
-(odohil/session/start_pose.py); how a run that did not finish is told
-(odohil/session/run_text.py); what ``odohil plan`` prints of a plan
-(odohil/session/planning.py); the rows of predict and covariance
-(odohil/session/design_tools.py); what report writes
-(odohil/session/report/command.py); the live E_R and the demo's truth;
+(odohil/session/commands/validate.py); the wizard's put-back answer
+(odohil/session/run/start_pose.py); how a run that did not finish is told
+(odohil/session/text/run.py); what ``odohil plan`` prints of a plan
+(odohil/session/commands/plan.py); the rows of predict and covariance
+(odohil/session/commands/design.py); what report writes
+(odohil/session/commands/report.py); the live E_R and the demo's truth;
 emulate's line; simulate's fresh seed."""
 
 from __future__ import annotations
@@ -26,29 +26,29 @@ from odohil.science.closed_forms import forth_and_back_means
 from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design
 from odohil.science.simulator import simulate
-from odohil.session.demo import demo_session
-from odohil.session.design_tools import (
+from odohil.session.commands.demo import demo_session
+from odohil.session.commands.design import (
     covariance_rows,
     fresh_seed,
     path_moments,
     predict_rows,
     write_simulated_trials,
 )
-from odohil.session.engine import StopOutcome
-from odohil.session.lifecycle import open_session, preflight, require, run_session
-from odohil.session.logs import ImportOptions
-from odohil.session.outcome import Selection, estimate_source
-from odohil.session.outcome_text import live_e_r
-from odohil.session.path_planning import plan_outcome
-from odohil.session.plan import Plan, PlanItem
-from odohil.session.planning import PlannedExperiment, PlanRequest, trial_minutes
-from odohil.session.report.command import session_report, write_any_report
-from odohil.session.robots import emulated_line, emulator, parse_description
-from odohil.session.run_text import MAY_STILL_MOVE, Said, error_said, resuming, run_ended
-from odohil.session.start_pose import StartPose, put_back
-from odohil.session.validation import parse_validation_path
-from odohil.session.validation_drive import check_file_options, journaled_trials, validation_spec
-from odohil.session.validation_steps import CalibrationRobot
+from odohil.session.commands.plan import PlannedExperiment, PlanRequest, trial_minutes
+from odohil.session.commands.plan_paths import plan_outcome
+from odohil.session.commands.report import session_report, write_any_report
+from odohil.session.commands.validate import check_file_options, journaled_trials, validation_spec
+from odohil.session.commands.validate_steps import CalibrationRobot
+from odohil.session.plans.plan import Plan, PlanItem
+from odohil.session.results.outcome import Selection, estimate_source
+from odohil.session.results.validation import parse_validation_path
+from odohil.session.robots.registry import emulated_line, emulator, parse_description
+from odohil.session.run import open_session, preflight, require, run_session
+from odohil.session.run.engine import StopOutcome
+from odohil.session.run.start_pose import StartPose, put_back
+from odohil.session.text.outcome import live_e_r
+from odohil.session.text.run import MAY_STILL_MOVE, Said, error_said, resuming, run_ended
+from odohil.session.trials.logs import ImportOptions
 
 ROBOT = Path(robots_init).parent / "nomad150.toml"
 PORT = "fakerobot://?seed=2&time_scale=2000"
@@ -122,7 +122,7 @@ def test_a_trial_file_takes_no_port_and_no_measure(tmp_path: Path) -> None:
 
 
 def test_the_operator_puts_the_robot_back_or_starts_here(tmp_path: Path) -> None:
-    """The wizard's put-back answer (odohil/session/start_pose.py ``put_back``):
+    """The wizard's put-back answer (odohil/session/run/start_pose.py ``put_back``):
     ``here`` leaves the encoders; anything else sets them to the trial's start."""
     spec = validation_spec(
         tmp_path / "v", parse_validation_path("forth-back:1,0.5"), tmp_path, _robot(), 2, "fake"
@@ -141,7 +141,7 @@ def test_the_operator_puts_the_robot_back_or_starts_here(tmp_path: Path) -> None
 
 
 def test_how_a_run_that_did_not_finish_is_told(tmp_path: Path) -> None:
-    """odohil/session/run_text.py ``run_ended``: what ended the run, the robot's
+    """odohil/session/text/run.py ``run_ended``: what ended the run, the robot's
     stop (confirmed or not), the journal and the command that continues; and
     ``resuming``: where a resumed session stands."""
     spec = validation_spec(
@@ -179,7 +179,7 @@ def test_how_a_run_that_did_not_finish_is_told(tmp_path: Path) -> None:
 
 
 def test_what_plan_prints_of_an_evaluated_plan() -> None:
-    """odohil/session/planning.py PlannedExperiment: the designs' rows, the
+    """odohil/session/commands/plan.py PlannedExperiment: the designs' rows, the
     errors' rows in either unit system, the time and the verdict in words."""
     request = PlanRequest(NOMAD150, {"E_R": 0.01}, evaluate="k=1,l=6,n=30;k=20,l=0.5,n=30")
     planned = plan_outcome(request)
@@ -201,7 +201,7 @@ def test_what_plan_prints_of_an_evaluated_plan() -> None:
 
 
 def test_the_rows_of_predict_and_covariance() -> None:
-    """odohil/session/design_tools.py: predict's rows (phi1 and phi2 also in
+    """odohil/session/commands/design.py: predict's rows (phi1 and phi2 also in
     degrees) and covariance's (the simulated column only when simulated)."""
     design = Design(1, 2.0)
     means = forth_and_back_means(design, NOMAD150)
@@ -225,7 +225,7 @@ def test_the_rows_of_predict_and_covariance() -> None:
 
 
 def test_what_report_writes_of_a_session_and_of_a_trial_file(tmp_path: Path) -> None:
-    """odohil/session/report/command.py: a session folder gets its own report
+    """odohil/session/commands/report.py: a session folder gets its own report
     (not when a path family is chosen); a trial file the summary page; both
     with the exports beside."""
     trials, design = tmp_path / "trials.csv", Design(1, 2.0)
@@ -252,8 +252,8 @@ def test_what_report_writes_of_a_session_and_of_a_trial_file(tmp_path: Path) -> 
 
 
 def test_the_live_e_r_and_the_demo_truth(tmp_path: Path) -> None:
-    """odohil/session/outcome_text.py ``live_e_r`` (beside the progress bar, in
-    either unit system) and odohil/session/demo.py ``truth_document`` (demo --json)."""
+    """odohil/session/text/outcome.py ``live_e_r`` (beside the progress bar, in
+    either unit system) and odohil/session/commands/demo.py ``truth_document`` (demo --json)."""
     trials, design = tmp_path / "trials.csv", Design(1, 2.0)
     poses = simulate(design.path(), NOMAD150, 12, seed=2, segment_m=0.01).pose_change
     write_simulated_trials(trials, design, poses)
@@ -269,7 +269,7 @@ def test_the_live_e_r_and_the_demo_truth(tmp_path: Path) -> None:
 
 
 def test_the_emulated_line_is_the_robots_own_unless_given() -> None:
-    """odohil/session/robots.py ``emulated_line``: emulate's baud and time scale."""
+    """odohil/session/robots/registry.py ``emulated_line``: emulate's baud and time scale."""
     facts, hooks, _ = emulator("nomad150")
     assert emulated_line(facts, hooks, None, None) == (
         facts.default_baud,
@@ -281,7 +281,7 @@ def test_the_emulated_line_is_the_robots_own_unless_given() -> None:
 
 
 def test_a_fresh_seed_is_a_nonnegative_63_bit_number() -> None:
-    """odohil/session/design_tools.py ``fresh_seed``: simulate's seed given none."""
+    """odohil/session/commands/design.py ``fresh_seed``: simulate's seed given none."""
     seeds = {fresh_seed() for _ in range(4)}
     assert len(seeds) == 4
     assert all(0 <= seed < 2**63 for seed in seeds)

@@ -1,6 +1,6 @@
 """What the CLI used to decide itself and now asks the session layer for
 (issue 18, third round; tests/session/test_cli_slim2.py for the second), in
-process: the wizard's dialogue with the operator (odohil/session/operator_dialogue.py)
+process: the wizard's dialogue with the operator (odohil/session/wizard/dialogue.py)
 on a scripted screen: the trial's header once per attempt, a refused reply
 and the instructions, which distances a rejection asks for again, the slip
 check's question, the put-back of the start check; and what the operator sees
@@ -26,59 +26,59 @@ from odohil.science.floor_marks import distance_labels
 from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design, Drivable
 from odohil.science.simulator import simulate
-from odohil.session.demo import demo_session
-from odohil.session.design_observables import OBSERVABLE_COLUMNS, observables_rows
-from odohil.session.design_tables import covariance_table, predict_table
-from odohil.session.design_tools import (
+from odohil.session.commands.demo import demo_session
+from odohil.session.commands.design import (
     named_path,
     path_moments,
     predict_rows,
     write_simulated_trials,
 )
-from odohil.session.events import OPERATOR, Event, Void, encode
-from odohil.session.interrupts import Interrupts
-from odohil.session.journal import Record
-from odohil.session.lifecycle import SessionSpec, open_session, preflight, require, run_session
-from odohil.session.logs import ImportOptions
-from odohil.session.logs.csv_log import write_csv_log
-from odohil.session.logs.recording import Recording
-from odohil.session.operator_dialogue import (
-    WIZARD_PLAN,
-    OperatorDialogue,
-    OperatorWatch,
-    wizard_spec,
-)
-from odohil.session.operator_words import measured_again, remeasured
-from odohil.session.outcome import estimate_source
-from odohil.session.outcome_text import (
-    number_text,
-    parameter_rows,
-    parameters_line,
-    parameters_text,
-)
-from odohil.session.path_planning import ScoredPaths, plan_outcome
-from odohil.session.path_trial_file import read_path_trials
-from odohil.session.plan import parse_plan
-from odohil.session.planning import PlannedExperiment, PlanRequest
-from odohil.session.recording_import import import_recording
-from odohil.session.robots import emulate_help, emulated_backends
-from odohil.session.run_text import RunWatch, Said
-from odohil.session.start_pose import HERE, StartPose
-from odohil.session.state import CompletedTrial, SessionState
-from odohil.session.tape_entry import INSTRUCTIONS
-from odohil.session.tape_records import (
-    MeasurementsRejected,
-    Remeasured,
-    TapeContext,
-    TapeReadings,
-)
-from odohil.session.validation import ValidationTrials, check_trials, trials_of_session
-from odohil.session.validation_drive import (
+from odohil.session.commands.design_tables import covariance_table, predict_table
+from odohil.session.commands.import_log import import_recording
+from odohil.session.commands.plan import PlannedExperiment, PlanRequest
+from odohil.session.commands.plan_paths import ScoredPaths, plan_outcome
+from odohil.session.commands.validate import (
     chi_square_table,
     held_out,
     validation_setup,
     verdict_lines,
 )
+from odohil.session.journal.events import OPERATOR, Event, Void, encode
+from odohil.session.journal.file import Record
+from odohil.session.journal.state import CompletedTrial, SessionState
+from odohil.session.measure.tape.records import (
+    MeasurementsRejected,
+    Remeasured,
+    TapeContext,
+    TapeReadings,
+)
+from odohil.session.plans.plan import parse_plan
+from odohil.session.results.outcome import estimate_source
+from odohil.session.results.validation import ValidationTrials, check_trials, trials_of_session
+from odohil.session.robots.registry import emulate_help, emulated_backends
+from odohil.session.run import SessionSpec, open_session, preflight, require, run_session
+from odohil.session.run.start_pose import HERE, StartPose
+from odohil.session.text.operator import measured_again, remeasured
+from odohil.session.text.outcome import (
+    number_text,
+    parameter_rows,
+    parameters_line,
+    parameters_text,
+)
+from odohil.session.text.run import RunWatch, Said
+from odohil.session.trials.logs import ImportOptions
+from odohil.session.trials.logs.csv_log import write_csv_log
+from odohil.session.trials.logs.recording import Recording
+from odohil.session.trials.path_trial_file import read_path_trials
+from odohil.session.wizard.dialogue import (
+    WIZARD_PLAN,
+    OperatorDialogue,
+    OperatorWatch,
+    wizard_spec,
+)
+from odohil.session.wizard.interrupts import Interrupts
+from odohil.session.wizard.observables import OBSERVABLE_COLUMNS, observables_rows
+from odohil.session.wizard.tape_entry import INSTRUCTIONS
 from tests.logs.synth import synth_log, varied_motions
 from tests.session.helpers import description
 
@@ -90,7 +90,7 @@ LABELS = distance_labels(description())
 
 @dataclass
 class Screen:
-    """An :class:`~odohil.session.operator_dialogue.OperatorScreen` that answers
+    """An :class:`~odohil.session.wizard.dialogue.OperatorScreen` that answers
     from ``replies`` and keeps what was said (EOFError when no reply is left)."""
 
     replies: list[str]
@@ -233,7 +233,7 @@ def _anywhere(start: StartPose) -> None:
 
 
 def test_the_rows_of_the_parameters_table(tmp_path: Path) -> None:
-    """odohil/session/outcome_text.py ``parameter_rows`` (a truth column: yes or NO)."""
+    """odohil/session/text/outcome.py ``parameter_rows`` (a truth column: yes or NO)."""
     result = estimate_source([_trial_file(tmp_path, Design(1, 2.0), 12, 2)]).result
     assert result is not None
     truth = {p.name: p.value for p in result.parameters} | {"K_rho": 1.0}
@@ -252,7 +252,7 @@ def test_the_rows_of_the_parameters_table(tmp_path: Path) -> None:
 
 
 def test_a_file_validation_is_set_up_read_and_told(tmp_path: Path) -> None:
-    """odohil/session/validation_drive.py: ``validation_setup`` (a bad --alpha
+    """odohil/session/commands/validate.py: ``validation_setup`` (a bad --alpha
     refused before anything is read), ``held_out`` of a file (nothing driven),
     the verdict lines and the tests' rows."""
     calibration = _trial_file(tmp_path, Design(1, 2.0), 12, 2)
@@ -341,7 +341,7 @@ def test_a_driven_validation_is_driven_once_then_tested_again(tmp_path: Path) ->
 
 @dataclass
 class View:
-    """A :class:`~odohil.session.run_text.RunView` that keeps what it was shown."""
+    """A :class:`~odohil.session.text.run.RunView` that keeps what it was shown."""
 
     shown: list[object] = field(default_factory=list)
 
@@ -364,7 +364,7 @@ def _record(event: Event) -> Record:
 
 
 def test_what_a_run_shows_as_it_runs() -> None:
-    """odohil/session/run_text.py ``RunWatch``: the progress at each solved
+    """odohil/session/text/run.py ``RunWatch``: the progress at each solved
     trial, a voided attempt, distances taken again after a rejection, and the
     slip check's summary of the trials whose doubted distance was taken again."""
     view = View()
@@ -386,7 +386,7 @@ def test_what_a_run_shows_as_it_runs() -> None:
 
 
 def test_emulate_help_names_each_fake_and_its_own_defaults() -> None:
-    """odohil/session/robots.py ``emulate_help``: from the backends' facts."""
+    """odohil/session/robots/registry.py ``emulate_help``: from the backends' facts."""
     shown = emulate_help()
     for facts in emulated_backends():
         assert f"{facts.name} (the {facts.label})" in shown.robot
@@ -396,7 +396,7 @@ def test_emulate_help_names_each_fake_and_its_own_defaults() -> None:
 
 
 def test_a_plan_of_turn_designs_on_turns_with_error_is_warned_of() -> None:
-    """odohil/session/planning.py ``PlannedExperiment.turn_warning``: on the
+    """odohil/session/commands/plan.py ``PlannedExperiment.turn_warning``: on the
     Create 2 (turns carry error) a turn design is named; reverse ones are not."""
     create2 = Path(robots_init).parent / "create2.toml"
     for variant, named in (("turn", True), ("reverse", False)):
@@ -413,7 +413,7 @@ def test_a_plan_of_turn_designs_on_turns_with_error_is_warned_of() -> None:
 
 
 def test_an_imported_recording_is_written_and_summed_up(tmp_path: Path) -> None:
-    """odohil/session/recording_import.py ``import_recording``: the trials
+    """odohil/session/commands/import_log.py ``import_recording``: the trials
     written, their rows per family and direction, the distance driven."""
     log = synth_log(varied_motions())
     path = tmp_path / "log.csv"
@@ -474,7 +474,7 @@ def test_the_tables_commands_print_are_the_sessions_words(tmp_path: Path) -> Non
 
 
 def test_the_demo_says_where_its_fake_is_and_its_truth(tmp_path: Path) -> None:
-    """odohil/session/demo.py ``Demo.heading``, in either unit system."""
+    """odohil/session/commands/demo.py ``Demo.heading``, in either unit system."""
     demo = demo_session("nomad150", 1, tmp_path / "demo")
     systems: tuple[units.UnitSystem, ...] = ("paper", "si")
     for system in systems:
@@ -483,10 +483,10 @@ def test_the_demo_says_where_its_fake_is_and_its_truth(tmp_path: Path) -> None:
 
 
 def test_the_wizard_guides_a_calibration_unless_told_to_validate(tmp_path: Path) -> None:
-    """odohil/session/operator_dialogue.py ``wizard_spec``: a calibration with
+    """odohil/session/wizard/dialogue.py ``wizard_spec``: a calibration with
     the operator's tape and the wizard's default plan; ``--path`` without
     ``--validate`` (and no validation session) refused; and the Ctrl-C policy
-    that writes to standard error (odohil/session/interrupts.py ``on_stderr``)."""
+    that writes to standard error (odohil/session/wizard/interrupts.py ``on_stderr``)."""
     spec, guide = wizard_spec(tmp_path / "s", ROBOT, None, PORT, None, 6.0, False, None, None, None)
     assert guide is None
     assert (spec.folder, spec.mode, spec.robot_path) == (tmp_path / "s", "auto", ROBOT)

@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 from odohil.science.parameters import PARAMETER_NAMES, SI_UNITS
-from odohil.session.demo import DEMO_PLAN, DEMO_TRUTH
-from odohil.session.plan import parse_plan
-from odohil.session.state import load_session
+from odohil.session.commands.demo import DEMO_PLAN, DEMO_TRUTH
+from odohil.session.journal.state import load_session
+from odohil.session.plans.plan import parse_plan
 
 ODOHIL = shutil.which("odohil") or "odohil"
 

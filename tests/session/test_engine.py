@@ -14,17 +14,10 @@ from odohil.driver.odometry import OdometrySample
 from odohil.errors import MeasurementError
 from odohil.science.estimators import EstimateResult
 from odohil.science.floor_marks import marks_from_pose
-from odohil.session import events as ev
-from odohil.session.engine import (
-    CallbackObserver,
-    IncrementalLiveEstimator,
-    SessionEngine,
-    resume_session,
-    start_session,
-)
-from odohil.session.journal import Record, read_journal
-from odohil.session.plan import parse_plan
-from odohil.session.sources import (
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import Record, read_journal
+from odohil.session.journal.state import Phase, SessionState, load_session_trials, replay
+from odohil.session.measure.sources import (
     FakeTruthSource,
     MeasurementSource,
     OperatorSource,
@@ -34,9 +27,16 @@ from odohil.session.sources import (
     recorded_source_from_file,
     relative_true_pose,
 )
-from odohil.session.state import Phase, SessionState, load_session_trials, replay
-from odohil.session.tape_entry import parse_metres
-from odohil.session.tape_records import Measurement, MeasurementsRejected, TapeContext
+from odohil.session.measure.tape.records import Measurement, MeasurementsRejected, TapeContext
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import (
+    CallbackObserver,
+    IncrementalLiveEstimator,
+    SessionEngine,
+    resume_session,
+    start_session,
+)
+from odohil.session.wizard.tape_entry import parse_metres
 from tests.session.helpers import FAST, ROBOT_TOML, PortTruth, description, fake_robot
 
 PLAN = "k=1,l=1,n=3;k=0.5,l=1.5,n=3"
@@ -220,7 +220,7 @@ def test_recorded_row_of_another_design_is_refused(tmp_path: Path) -> None:
 class _TapeOperator:
     """An operator with a perfect tape behind the wizard's parser: each distance
     is typed with more digits than a float holds ("0.1 + tiny digits"), parsed
-    once by :func:`odohil.session.tape_entry.parse_metres` and handed over as a float;
+    once by :func:`odohil.session.wizard.tape_entry.parse_metres` and handed over as a float;
     ``negative`` makes the interface hand over a negative number instead."""
 
     def __init__(self, truth: PortTruth, negative: bool = False) -> None:
@@ -273,7 +273,7 @@ def test_a_typed_distance_reaches_the_journal_as_the_same_float(tmp_path: Path) 
 
 
 def test_a_distance_that_is_no_distance_is_refused_once_by_name(tmp_path: Path) -> None:
-    """The one check (odohil.session.sources.check_distance) stands where every
+    """The one check (odohil.session.measure.sources.check_distance) stands where every
     source's distances enter the session: nothing unchecked reaches the journal."""
     with fake_robot(QUERY) as (robot, truth):
         journal, state = _start(tmp_path, "k=1,l=1,n=1")

@@ -1,7 +1,7 @@
 """No journal event is written as a dict literal outside the journal's edge
-(odohil/session/journal.py and odohil/session/events.py): the engine, the
-sources and the CLI hand typed events (odohil/session/events.py,
-odohil/session/tape_records.py) to ``Journal.write``."""
+(odohil/session/journal/file.py and odohil/session/journal/events.py): the engine, the
+sources and the CLI hand typed events (odohil/session/journal/events.py,
+odohil/session/measure/tape/records.py) to ``Journal.write``."""
 
 from __future__ import annotations
 
@@ -10,12 +10,12 @@ from pathlib import Path
 
 import pytest
 
-from odohil.session import events
-from odohil.session.events import event_types
+from odohil.session.journal import events
+from odohil.session.journal.events import event_types
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "odohil"
-EDGE = {Path("odohil/session/journal.py"), Path("odohil/session/events.py")}
+EDGE = {Path("odohil/session/journal/file.py"), Path("odohil/session/journal/events.py")}
 """The journal's edge: the only files where an event is JSON."""
 
 KINDS = frozenset(event_types())
@@ -118,7 +118,7 @@ def test_no_event_dict_literal_outside_the_journal_module() -> None:
 TAPE_NAMES = frozenset(
     {"rejections", "remeasures", "extra", "labels", "distance_labels", "MarkDistances"}
 )
-"""The tape's own fields and helpers (odohil/session/tape_records.py)."""
+"""The tape's own fields and helpers (odohil/session/measure/tape/records.py)."""
 
 
 def tape_names(source: str) -> set[str]:
@@ -142,7 +142,9 @@ def test_the_check_finds_the_tape_fields_the_engine_and_state_carried_before() -
     assert tape_names(before) == {"labels", "distance_labels", "rejections", "remeasures"}
 
 
-@pytest.mark.parametrize("module", ["odohil/session/engine.py", "odohil/session/state.py"])
+@pytest.mark.parametrize(
+    "module", ["odohil/session/run/engine.py", "odohil/session/journal/state.py"]
+)
 def test_the_engine_and_the_state_carry_nothing_of_the_tape(module: str) -> None:
     """The tape's readings are its own record (TapeReadings), opaque here."""
     assert tape_names((ROOT / module).read_text(encoding="utf-8")) == set()

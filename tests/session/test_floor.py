@@ -18,9 +18,9 @@ import pytest
 
 from fakes.nomad.process import EmulatorProcess
 from odohil.errors import JournalError
-from odohil.session import events as ev
-from odohil.session.journal import read_journal
-from odohil.session.state import load_session_trials
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import read_journal
+from odohil.session.journal.state import load_session_trials
 from tests import forked
 from tests.session.helpers import write_robot
 
@@ -167,7 +167,7 @@ def test_floor_length_is_read_checked_and_bounds_the_planner() -> None:
 
 
 def test_choreography_cost_does_not_grow_with_the_trial_count() -> None:
-    from odohil.session.plan import Plan, parse_plan
+    from odohil.session.plans.plan import Plan, parse_plan
 
     plan = parse_plan("k=0.5,l=2,n=1000000000;k=1,l=3,n=1000000000")
     started = time.monotonic()

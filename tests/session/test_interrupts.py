@@ -1,4 +1,4 @@
-"""The interactive session's Ctrl-C policy (odohil/session/interrupts.py).
+"""The interactive session's Ctrl-C policy (odohil/session/wizard/interrupts.py).
 
 The first Ctrl-C during a motion is deferred to the next encoder sample, in
 process; the second Ctrl-C ends the process at once, so that is checked in a
@@ -16,12 +16,12 @@ from collections.abc import Iterator
 
 import pytest
 
-from odohil.session.interrupts import Interrupts
+from odohil.session.wizard.interrupts import Interrupts
 
 CHILD = """
 import os, signal, sys, time
 from tests.session.helpers import FAST, fake_robot
-from odohil.session.interrupts import Interrupts
+from odohil.session.wizard.interrupts import Interrupts
 
 interrupts = Interrupts(lambda text: os.write(2, text.encode()), 130, 4, "may still move")
 interrupts.install()

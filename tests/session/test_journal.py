@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from odohil.errors import JournalError
-from odohil.session.journal import (
+from odohil.session.journal.file import (
     JOURNAL_NAME,
     Journal,
     encode_record,

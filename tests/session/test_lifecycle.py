@@ -18,10 +18,11 @@ from odohil.cli.exit_codes import EXIT_BAD_INPUT, exit_for_check, exit_for_run
 from odohil.errors import JournalError
 from odohil.robots import __file__ as robots_init
 from odohil.science.estimators import EstimateResult
-from odohil.session import events as ev
-from odohil.session.engine import IncrementalLiveEstimator, start_session
-from odohil.session.journal import Record, read_journal
-from odohil.session.lifecycle import (
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import Record, read_journal
+from odohil.session.journal.state import SessionState, load_session
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run import (
     PreflightFailed,
     Prepared,
     SessionSpec,
@@ -31,9 +32,8 @@ from odohil.session.lifecycle import (
     require,
     run_session,
 )
-from odohil.session.plan import parse_plan
-from odohil.session.start_pose import StartPose
-from odohil.session.state import SessionState, load_session
+from odohil.session.run.engine import IncrementalLiveEstimator, start_session
+from odohil.session.run.start_pose import StartPose
 
 ROBOTS = Path(robots_init).parent
 BACKENDS = {

@@ -18,8 +18,8 @@ from typer.testing import CliRunner
 
 from fakes.nomad.process import EmulatorProcess
 from odohil.cli.app import app
-from odohil.session import events as ev
-from odohil.session.journal import read_journal
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import read_journal
 from tests import forked
 from tests.session.helpers import write_robot
 

@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 from odohil.cli.app import app
 from odohil.cli.exit_codes import EXIT_BAD_INPUT
 from odohil.errors import ParameterError
-from odohil.session.pose_sources import parse_measure
+from odohil.session.measure.registry import parse_measure
 
 
 @pytest.mark.parametrize("word", ["tape", "operator", "wizard", "Tape"])

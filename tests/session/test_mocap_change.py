@@ -11,9 +11,13 @@ import numpy as np
 import pytest
 
 from odohil.science.paths import Design
-from odohil.session.mocap import MotionCaptureSource, PoseStream, pose_change_with_covariance
-from odohil.session.mocap.still import StillPose
-from odohil.session.pose_source import TrialContext
+from odohil.session.measure.mocap import (
+    MotionCaptureSource,
+    PoseStream,
+    pose_change_with_covariance,
+)
+from odohil.session.measure.mocap.still import StillPose
+from odohil.session.measure.protocol import TrialContext
 
 
 def _world(pose: tuple[float, float, float], rotation: float, shift: tuple[float, float]):

@@ -26,9 +26,9 @@ from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
 from odohil.cli.app import app
 from odohil.science.parameters import ErrorParameters
-from odohil.session import events as ev
-from odohil.session.journal import JOURNAL_NAME, read_journal
-from odohil.session.mocap.still import StillCriteria
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import JOURNAL_NAME, read_journal
+from odohil.session.measure.mocap.still import StillCriteria
 from tests import forked
 from tests.session.helpers import ROBOT_TOML
 from tests.session.mocap_server import FrameServer, pose_line, republish_truth

@@ -15,10 +15,10 @@ import pytest
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
 from odohil.errors import ConnectionFailedError, JournalError, MeasurementError, ParameterError
-from odohil.session.mocap import PoseStream, StillCriteria, parse_tcp_url, take_still_pose
-from odohil.session.mocap.still import judge_window
-from odohil.session.mocap.stream import StreamedPose, StreamStatus
-from odohil.session.state import validate_header
+from odohil.session.journal.state import validate_header
+from odohil.session.measure.mocap import PoseStream, StillCriteria, parse_tcp_url, take_still_pose
+from odohil.session.measure.mocap.still import judge_window
+from odohil.session.measure.mocap.stream import StreamedPose, StreamStatus
 from tests.session.mocap_server import FrameServer, pose_line, republish_truth
 
 SIGMA = (0.001, 0.001, 0.002)

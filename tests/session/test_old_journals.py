@@ -14,10 +14,10 @@ from typing import Any
 
 import pytest
 
-from odohil.session.engine import IncrementalLiveEstimator
-from odohil.session.events import encode
-from odohil.session.state import load_session, session_trials
-from odohil.session.tape_records import TapeReadings
+from odohil.session.journal.events import encode
+from odohil.session.journal.state import load_session, session_trials
+from odohil.session.measure.tape.records import TapeReadings
+from odohil.session.run.engine import IncrementalLiveEstimator
 
 JOURNALS = Path(__file__).resolve().parent / "data" / "journals"
 

@@ -22,8 +22,8 @@ from typer.testing import CliRunner, Result
 from odohil.cli.app import app
 from odohil.cli.wizard import final_screen
 from odohil.robots import __file__ as robots_init
-from odohil.session.outcome import estimate_path
-from odohil.session.state import load_session
+from odohil.session.journal.state import load_session
+from odohil.session.results.outcome import estimate_path
 
 NOMAD = Path(robots_init).with_name("nomad150.toml")
 PORT = "fakerobot://?seed=3&time_scale=100"

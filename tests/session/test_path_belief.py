@@ -25,8 +25,8 @@ from typer.testing import CliRunner
 
 from odohil.cli.app import app
 from odohil.cli.exit_codes import EXIT_OK
-from odohil.session.lifecycle.running import PathBeliefEstimator, final_estimate
-from odohil.session.state import load_session
+from odohil.session.journal.state import load_session
+from odohil.session.run.running import PathBeliefEstimator, final_estimate
 
 PLAN = "k=0.5,l=2,n=4;path=square:0.5,cw,n=8;path=square:0.5,ccw,n=8"
 URL = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15&skip_waits=1"
@@ -51,7 +51,7 @@ def test_squares_are_predicted_with_the_turn_errors_of_the_squares_before(
     # measured (seed 3): 14 of the 16 squares re-measured before; after, only
     # the first squares, whose turn errors no trial pins yet
     assert len(remeasured & squares) <= 4, sorted(remeasured)
-    # the live belief (Wald intervals, odohil/session/lifecycle's
+    # the live belief (Wald intervals, odohil/session/run's
     # PathBeliefEstimator) is the recipe's fit: the same values, standard
     # errors and correlations as `odohil estimate` of the same trials
     state = load_session(session).state

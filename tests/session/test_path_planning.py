@@ -1,5 +1,5 @@
 """The comparison of general paths with forth-and-back plans as a planning
-command would ask for it (odohil/session/path_planning.py, issue 19
+command would ask for it (odohil/session/commands/plan_paths.py, issue 19
 deliverable 3): paths in the ``--path`` syntax, a time budget, the robot."""
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import pytest
 
 from odohil.errors import ParameterError
 from odohil.robots import __file__ as robots_init
-from odohil.session.path_planning import (
+from odohil.session.commands.plan_paths import (
     PathComparisonRequest,
     compare_paths,
     comparison_document,

@@ -17,15 +17,15 @@ from odohil.robots import __file__ as robots_init
 from odohil.science.floor_marks import PosePrior
 from odohil.science.path_designs import PathDesign, parse_path_design
 from odohil.science.paths import Design
-from odohil.session.floor_space import check_floor
-from odohil.session.lifecycle import SessionSpec, open_session, preflight, require, run_session
-from odohil.session.outcome import estimate_state
-from odohil.session.plan import Plan, parse_plan, path_floor_m
-from odohil.session.plausibility import judge
-from odohil.session.pose_source import MeasuredPose
-from odohil.session.robots import parse_description
-from odohil.session.start_pose import StartPose
-from odohil.session.state import load_session, session_path_trials
+from odohil.session.journal.state import load_session, session_path_trials
+from odohil.session.measure.plausibility import judge
+from odohil.session.measure.protocol import MeasuredPose
+from odohil.session.plans.floor_space import check_floor
+from odohil.session.plans.plan import Plan, parse_plan, path_floor_m
+from odohil.session.results.outcome import estimate_state
+from odohil.session.robots.registry import parse_description
+from odohil.session.run import SessionSpec, open_session, preflight, require, run_session
+from odohil.session.run.start_pose import StartPose
 
 ROBOTS = Path(robots_init).parent
 

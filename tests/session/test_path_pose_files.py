@@ -8,7 +8,7 @@ path=square:1,cw,n=10 --measure poses.csv`` likewise: a trial file served only
 forth-and-back designs. Now row k of a pose file or of a general-path trial
 file (JSON lines, as ``odohil import`` writes) serves trial k of the driven
 path, and a file that does not serve the plan is refused before anything moves,
-naming the row and what it should be (odohil/session/path_pose_files.py).
+naming the row and what it should be (odohil/session/trials/pose_file.py).
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ import pytest
 
 from odohil.science.path_designs import PathDesign, parse_path_design
 from odohil.science.path_trials import PathTrial
-from odohil.session.path_trial_file import write_path_trials
-from odohil.session.state import load_session
-from odohil.session.validation import load_calibration, predict_calibrated
+from odohil.session.journal.state import load_session
+from odohil.session.results.validation import load_calibration, predict_calibrated
+from odohil.session.trials.path_trial_file import write_path_trials
 from tests.cli.test_validate_paths import calibrate, odohil, robot_option
 
 URL = "fakerobot://?seed=5&time_scale=2000"

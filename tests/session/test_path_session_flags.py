@@ -5,7 +5,7 @@ parameters.json, ``export --format json`` and the estimate's text) listed no
 flagged trial for a session whose plan names a square, although the report's
 table pointed out the squares whose pose from the marks was in doubt: the
 flags came from the session's forth-and-back trial set
-(odohil/session/state.py ``session_trials``), which a session with general
+(odohil/session/journal/state.py ``session_trials``), which a session with general
 paths estimates without (its trials are ``session_path_trials``).
 """
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from odohil.session.report.data import load_report
+from odohil.session.results.report.data import load_report
 from tests.cli.test_validate_paths import odohil
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 

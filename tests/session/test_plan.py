@@ -6,7 +6,7 @@ import pytest
 
 from odohil.errors import ParameterError
 from odohil.science.paths import Design
-from odohil.session.plan import Plan, PlanItem, parse_plan
+from odohil.session.plans.plan import Plan, PlanItem, parse_plan
 
 
 def test_two_designs_with_and_without_variant() -> None:

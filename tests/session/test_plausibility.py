@@ -1,4 +1,4 @@
-"""The per-trial check of a measured pose change (odohil/session/plausibility.py,
+"""The per-trial check of a measured pose change (odohil/session/measure/plausibility.py,
 odohil/science/pose_selection.py's pose_check), issue 17: a frozen stream, a
 unit error and a wrong rigid body are refused with their likely cause; clean
 measurements drawn from the prediction are kept, flagged about as rarely as
@@ -19,9 +19,9 @@ from odohil.science.pose_selection import (
     predictive_pose,
 )
 from odohil.science.robot_description import ParameterPriors
-from odohil.session.plan import parse_plan
-from odohil.session.plausibility import judge
-from odohil.session.pose_source import MeasuredPose, Pose
+from odohil.session.measure.plausibility import judge
+from odohil.session.measure.protocol import MeasuredPose, Pose
+from odohil.session.plans.plan import parse_plan
 
 POSE_SIGMA = np.array([0.0005, 0.0005, 0.001])
 """A still pose's standard deviations: the pose change's are about sqrt 2 times."""

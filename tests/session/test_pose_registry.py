@@ -22,9 +22,9 @@ from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
 from odohil.robots import __file__ as robots_init
-from odohil.session import events as ev
-from odohil.session.journal import read_journal
-from odohil.session.pose_sources import kind_names, parse_measure
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import read_journal
+from odohil.session.measure.registry import kind_names, parse_measure
 
 NOMAD = Path(robots_init).with_name("nomad150.toml")
 PORT = "fakerobot://?seed=3&time_scale=100"
@@ -38,9 +38,9 @@ import contextlib
 from dataclasses import dataclass
 
 from odohil.errors import ParameterError
-from odohil.session.pose_kinds import SnapshotTruth
-from odohil.session.pose_sources import OpenedSource
-from odohil.session.sources import TruthPoseSource
+from odohil.session.measure.kinds import SnapshotTruth
+from odohil.session.measure.registry import OpenedSource
+from odohil.session.measure.sources import TruthPoseSource
 
 OPENED = []
 

@@ -11,25 +11,25 @@ from typing import Any
 import numpy as np
 
 from odohil.science.floor_marks import marks_from_pose, pose_covariance
-from odohil.session.engine import SessionEngine, start_session
-from odohil.session.journal import read_journal
-from odohil.session.plan import parse_plan
-from odohil.session.pose_source import PoseSource, TrialContext
-from odohil.session.sources import (
+from odohil.session.journal.file import read_journal
+from odohil.session.journal.state import SessionState, session_trials
+from odohil.session.measure.protocol import PoseSource, TrialContext
+from odohil.session.measure.sources import (
     PoseFileSource,
     TapeSource,
     TruthPoseSource,
     pose_source_from_file,
 )
-from odohil.session.state import SessionState, session_trials
-from odohil.session.tape_records import Measurement
+from odohil.session.measure.tape.records import Measurement
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import SessionEngine, start_session
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot, readings_of
 
 QUERY = f"seed=11&{FAST}&E_R=-1.0&E_T=-0.05&K_theta=0.3&K_rho=0.0009"
 POSES = [(0.5, 0.001, -0.004), (-0.49, -0.0005, 0.003)]
 """Two trials of k=0.5, l=0.5 m (the second driven backwards: its end lies
 behind its start), each within what the encoders and the priors predict (the
-engine refuses an implausible pose, odohil/session/plausibility.py)."""
+engine refuses an implausible pose, odohil/session/measure/plausibility.py)."""
 
 
 def _start(folder: Path, plan: str) -> tuple[Any, SessionState]:

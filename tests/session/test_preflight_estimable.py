@@ -28,11 +28,11 @@ from odohil.science.parameters import NOMAD150
 from odohil.science.path_designs import parse_path_design
 from odohil.science.paths import Design, square
 from odohil.science.simulator import simulate
-from odohil.session.lifecycle import SessionSpec, preflight
-from odohil.session.plan import Plan, PlanItem, parse_plan
-from odohil.session.preflight import check_estimable, check_turns, estimability, turn_designs
-from odohil.session.robot_file import read_robot_toml
-from odohil.session.robots import parse_description
+from odohil.session.plans.checks import check_estimable, check_turns, estimability, turn_designs
+from odohil.session.plans.plan import Plan, PlanItem, parse_plan
+from odohil.session.robots.description import read_robot_toml
+from odohil.session.robots.registry import parse_description
+from odohil.session.run import SessionSpec, preflight
 
 ROBOTS = Path(robots_init).parent
 
@@ -164,7 +164,7 @@ def test_the_preflight_of_a_robot_whose_turns_are_exact_says_so(tmp_path: Path) 
 
 def test_a_plan_of_squares_on_a_create2_estimates_its_turn_errors() -> None:
     """A plan naming general paths is estimated from general paths with the
-    turn errors (odohil/session/outcome.py): the statement names them
+    turn errors (odohil/session/results/outcome.py): the statement names them
     estimated with the four, and what the paths leave out."""
     description = parse_description(
         read_robot_toml(ROBOTS / "create2.toml", what="robot"), "create2.toml"

@@ -15,8 +15,8 @@ from odohil.cli.app import app
 from odohil.errors import ParameterError, RobotDescriptionError, StopUnconfirmedError
 from odohil.protocol.nomad.limits import check_leg_length_m
 from odohil.science.robot_facts import RobotFacts
-from odohil.session.plan import check_session_plan, parse_plan
-from odohil.session.robots import (
+from odohil.session.plans.plan import check_session_plan, parse_plan
+from odohil.session.robots.registry import (
     backend_names,
     fake_hooks,
     open_robot,

@@ -25,11 +25,11 @@ from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthSnapshot
 from odohil.driver.nomad.robot import NomadRobot
 from odohil.errors import JournalError, StopUnconfirmedError
-from odohil.session import events as ev
-from odohil.session.engine import start_session
-from odohil.session.journal import JOURNAL_NAME, read_journal
-from odohil.session.plan import parse_plan
-from odohil.session.state import replay
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import JOURNAL_NAME, read_journal
+from odohil.session.journal.state import replay
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import start_session
 from tests import forked
 from tests.session.helpers import write_robot
 

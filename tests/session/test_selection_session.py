@@ -19,17 +19,16 @@ import fakes  # noqa: F401  (registers fakerobot://)
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.floor_marks import marks_from_pose
 from odohil.science.robot_description import RobotDescription
-from odohil.session import events as ev
-from odohil.session.engine import (
-    IncrementalLiveEstimator,
-    MotionSettings,
-    SessionEngine,
-    description_of,
-    start_session,
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import read_journal
+from odohil.session.journal.state import (
+    SessionState,
+    ambiguous_trials,
+    replay,
+    session_observations,
+    session_trials,
 )
-from odohil.session.journal import read_journal
-from odohil.session.plan import parse_plan
-from odohil.session.sources import (
+from odohil.session.measure.sources import (
     FakeTruthSource,
     MeasurementSource,
     OperatorSource,
@@ -37,18 +36,19 @@ from odohil.session.sources import (
     TrialContext,
     relative_true_pose,
 )
-from odohil.session.state import (
-    SessionState,
-    ambiguous_trials,
-    replay,
-    session_observations,
-    session_trials,
-)
-from odohil.session.tape_records import (
+from odohil.session.measure.tape.records import (
     ExtraDistance,
     MeasurementsRejected,
     Remeasured,
     TapeContext,
+)
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import (
+    IncrementalLiveEstimator,
+    MotionSettings,
+    SessionEngine,
+    description_of,
+    start_session,
 )
 from tests import forked
 from tests.report.session_factory import PortTruth

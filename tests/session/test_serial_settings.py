@@ -15,10 +15,10 @@ from fakes.nomad.process import EmulatorProcess
 from odohil.cli.app import app
 from odohil.errors import ParameterError
 from odohil.science.robot_description import parse_robot_description
-from odohil.session import events as ev
-from odohil.session.journal import read_journal
-from odohil.session.line import resolve_line
-from odohil.session.robots import open_robot
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import read_journal
+from odohil.session.robots.line import resolve_line
+from odohil.session.robots.registry import open_robot
 from tests.session.helpers import ROBOT_TOML
 
 

@@ -11,9 +11,9 @@ from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
 from odohil.robots import __file__ as robots_init
-from odohil.session.engine import start_session
-from odohil.session.journal import read_journal
-from odohil.session.plan import parse_plan
+from odohil.session.journal.file import read_journal
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import start_session
 
 NOMAD = Path(robots_init).with_name("nomad150.toml")
 NO_PORT = "/dev/odohil-no-such-port"

@@ -49,8 +49,9 @@ from fakes.nomad.truth import TruthClient
 from odohil.cli.app import app
 from odohil.driver.odometry import DriveSettings
 from odohil.protocol.create2.opcodes import Opcode
-from odohil.session import events as ev
-from odohil.session.journal import read_journal
+from odohil.session.journal import events as ev
+from odohil.session.journal.file import read_journal
+from odohil.session.journal.state import Phase, SessionState, replay
 from odohil.session.signals import (
     HANDLED_SIGNALS,
     MOTION_SIGNALS,
@@ -60,7 +61,6 @@ from odohil.session.signals import (
     signal_name,
     signals_raise,
 )
-from odohil.session.state import Phase, SessionState, replay
 from tests import forked
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML
 from tests.session.test_safety import PARAMS, _still_after_exit, _wait_for

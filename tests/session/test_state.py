@@ -8,12 +8,12 @@ from typing import Any
 import pytest
 
 from odohil.errors import JournalError
-from odohil.session import events as ev
-from odohil.session.events import Estimate
-from odohil.session.journal import Record
-from odohil.session.plan import parse_plan
-from odohil.session.state import Phase, replay
-from odohil.session.tape_records import Measurement, MeasurementsRejected
+from odohil.session.journal import events as ev
+from odohil.session.journal.events import Estimate
+from odohil.session.journal.file import Record
+from odohil.session.journal.state import Phase, replay
+from odohil.session.measure.tape.records import Measurement, MeasurementsRejected
+from odohil.session.plans.plan import parse_plan
 from tests.session.helpers import readings_of
 
 PLAN = parse_plan("k=1,l=1,n=2;k=0.5,l=2,n=1")

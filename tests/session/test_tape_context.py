@@ -7,7 +7,7 @@ engine built every context with ``labels=()`` and wrapped a tape distance
 source itself, and the state named the tape's record kinds
 (``MEASUREMENTS_REJECTED``...) and kept a trial's ``slip``. Now a context
 carries the source's own readings as one opaque value (``readings``, the
-tape's :class:`~odohil.session.tape_records.TapeReadings`), the tape's words
+tape's :class:`~odohil.session.measure.tape.records.TapeReadings`), the tape's words
 live in the tape's modules, and a flagged trial says why in generic words
 (``flag_reason``); the journal on disk is unchanged (tests/session/test_old_journals.py).
 """
@@ -21,14 +21,14 @@ from collections.abc import Iterator, Mapping
 from pathlib import Path
 from typing import Any, ClassVar
 
-import odohil.session.engine
-import odohil.session.pose_source
-import odohil.session.state
-from odohil.session.engine import SessionEngine, start_session
-from odohil.session.events import SourceEvent, SourceReadings
-from odohil.session.plan import parse_plan
-from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
-from odohil.session.sources import TruthPoseSource
+import odohil.session.journal.state
+import odohil.session.measure.protocol
+import odohil.session.run.engine
+from odohil.session.journal.events import SourceEvent, SourceReadings
+from odohil.session.measure.protocol import MeasuredPose, MeasurementLog, TrialContext
+from odohil.session.measure.sources import TruthPoseSource
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import SessionEngine, start_session
 from tests.session.helpers import FAST, ROBOT_TOML, Heard, fake_robot
 
 TAPE_WORDS = frozenset(
@@ -63,9 +63,13 @@ distance sources. ``measurement`` alone stays generic, and so does ``label``
 TAPE_RECORD_KINDS = frozenset(
     {"measurement", "measurements_rejected", "remeasured", "extra_distance"}
 )
-"""The tape's journal record kinds (odohil/session/tape_records.py)."""
+"""The tape's journal record kinds (odohil/session/measure/tape/records.py)."""
 
-GENERIC_MODULES = (odohil.session.pose_source, odohil.session.engine, odohil.session.state)
+GENERIC_MODULES = (
+    odohil.session.measure.protocol,
+    odohil.session.run.engine,
+    odohil.session.journal.state,
+)
 
 
 def _words(identifier: str) -> set[str]:

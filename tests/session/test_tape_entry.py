@@ -1,4 +1,4 @@
-"""The operator's entry of tape distances (odohil/session/tape_entry.py), in
+"""The operator's entry of tape distances (odohil/session/wizard/tape_entry.py), in
 process: what a typed line means, the expected ranges from the session's
 prediction, typed floor-mark rejections, and the wizard's floor check of the
 plan (issue 18)."""
@@ -20,10 +20,11 @@ from odohil.science.floor_marks import (
     solve_marks,
 )
 from odohil.science.robot_description import parse_robot_description
-from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
-from odohil.session.plan import parse_plan
-from odohil.session.sources import OperatorSource, TapeSource, relative_true_pose
-from odohil.session.tape_entry import (
+from odohil.session.measure.sources import OperatorSource, TapeSource, relative_true_pose
+from odohil.session.measure.tape.records import TapeContext, TapeReadings
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import IncrementalLiveEstimator, SessionEngine, start_session
+from odohil.session.wizard.tape_entry import (
     ExpectedRange,
     TapeEntries,
     TapeEntry,
@@ -33,7 +34,6 @@ from odohil.session.tape_entry import (
     parse_metres,
     parse_optional_metres,
 )
-from odohil.session.tape_records import TapeContext, TapeReadings
 from tests.session.helpers import FAST, ROBOT_TOML, PortTruth, description, fake_robot
 
 DESIGN = parse_plan("k=1,l=1,n=2", "reverse").items[0].design

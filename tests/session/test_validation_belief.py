@@ -18,16 +18,16 @@ import numpy as np
 from odohil.cli.exit_codes import EXIT_OK, EXIT_UNTRUSTED
 from odohil.science.parameters import ErrorParameters
 from odohil.science.pose_selection import ParameterBelief, predictive_pose
-from odohil.session.engine import SessionEngine, start_session
-from odohil.session.journal import read_journal
-from odohil.session.lifecycle.running import validation_calibration
-from odohil.session.plan import parse_plan
-from odohil.session.pose_source import MeasuredPose, MeasurementLog, TrialContext
-from odohil.session.sources import TruthPoseSource
-from odohil.session.state import load_session
-from odohil.session.tape_records import Remeasured
-from odohil.session.validation import load_calibration
-from odohil.session.validation_wizard import guided_validation
+from odohil.session.journal.file import read_journal
+from odohil.session.journal.state import load_session
+from odohil.session.measure.protocol import MeasuredPose, MeasurementLog, TrialContext
+from odohil.session.measure.sources import TruthPoseSource
+from odohil.session.measure.tape.records import Remeasured
+from odohil.session.plans.plan import parse_plan
+from odohil.session.results.validation import load_calibration
+from odohil.session.run.engine import SessionEngine, start_session
+from odohil.session.run.running import validation_calibration
+from odohil.session.wizard.validate import guided_validation
 from tests.cli.test_validate_paths import ROBOTS, odohil, robot_option
 from tests.session.helpers import FAST, ROBOT_TOML, fake_robot
 from tests.wizard.test_wizard_validation import calibrate

@@ -1,8 +1,8 @@
 """The wizard's live screen (issue 18): the estimate shown after a trial is
-the one recipe's (odohil/session/outcome.py), so the live interval for E_R
+the one recipe's (odohil/session/results/outcome.py), so the live interval for E_R
 after the last trial is the one ``odohil estimate`` gives on the same trials.
 In process: the session engine on the in-process fake robot, the wizard's
-watch (odohil/session/operator_dialogue.py) on its screen writing to a string."""
+watch (odohil/session/wizard/dialogue.py) on its screen writing to a string."""
 
 from __future__ import annotations
 
@@ -13,13 +13,13 @@ from rich.console import Console
 
 from odohil.cli.render import drawn
 from odohil.cli.wizard import WizardScreen
-from odohil.session.engine import IncrementalLiveEstimator, SessionEngine, start_session
-from odohil.session.interrupts import Interrupts
-from odohil.session.lifecycle import final_estimate
-from odohil.session.operator_dialogue import OperatorWatch
-from odohil.session.outcome_text import parameters_text
-from odohil.session.plan import parse_plan
-from odohil.session.sources import FakeTruthSource, TapeSource
+from odohil.session.measure.sources import FakeTruthSource, TapeSource
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run import final_estimate
+from odohil.session.run.engine import IncrementalLiveEstimator, SessionEngine, start_session
+from odohil.session.text.outcome import parameters_text
+from odohil.session.wizard.dialogue import OperatorWatch
+from odohil.session.wizard.interrupts import Interrupts
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot
 
 

@@ -24,9 +24,9 @@ import pexpect
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
 from odohil.science import frames
-from odohil.session.journal import read_journal
-from odohil.session.state import replay
-from odohil.session.validation_wizard import validation_of
+from odohil.session.journal.file import read_journal
+from odohil.session.journal.state import replay
+from odohil.session.wizard.validate import validation_of
 from tests.cli.test_validate_paths import odohil
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 from tests.wizard.test_wizard import (

@@ -173,7 +173,7 @@ class Create2Robot:
     """A connected Create 2 (context manager; :meth:`close` stops it).
 
     Also the ``create2`` backend of the ``odohil.robots`` entry-point group
-    (pyproject.toml; odohil/session/robots.py): :meth:`open` and
+    (pyproject.toml; odohil/session/robots/registry.py): :meth:`open` and
     :attr:`facts`.
 
     Args:

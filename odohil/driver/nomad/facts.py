@@ -1,6 +1,6 @@
 """The Nomad 150's facts (:class:`~odohil.science.robot_facts.RobotFacts`):
 what the rest of odohil may know about this robot, read through the registry
-(odohil/session/robots.py ``robot_facts``)."""
+(odohil/session/robots/registry.py ``robot_facts``)."""
 
 from __future__ import annotations
 

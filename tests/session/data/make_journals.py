@@ -23,7 +23,17 @@ import fakes  # noqa: F401  (registers fakerobot://)
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.floor_marks import marks_from_pose
 from odohil.science.robot_description import RobotDescription
-from odohil.session.engine import (
+from odohil.session.journal.file import Record
+from odohil.session.journal.state import SessionState
+from odohil.session.measure.sources import (
+    FakeTruthSource,
+    OperatorSource,
+    TrialContext,
+    TruthPoseSource,
+    relative_true_pose,
+)
+from odohil.session.plans.plan import parse_plan
+from odohil.session.run.engine import (
     CallbackObserver,
     IncrementalLiveEstimator,
     MotionSettings,
@@ -32,16 +42,6 @@ from odohil.session.engine import (
     resume_session,
     start_session,
 )
-from odohil.session.journal import Record
-from odohil.session.plan import parse_plan
-from odohil.session.sources import (
-    FakeTruthSource,
-    OperatorSource,
-    TrialContext,
-    TruthPoseSource,
-    relative_true_pose,
-)
-from odohil.session.state import SessionState
 from tests.report.session_factory import PortTruth
 from tests.session.helpers import ROBOT_TOML
 

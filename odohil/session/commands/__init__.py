@@ -1,0 +1,1 @@
+"""odohil/session/commands/ (issue 32: the map follows)."""

@@ -1,0 +1,1 @@
+"""odohil/session/journal/ (issue 32: the map follows)."""

@@ -1,0 +1,1 @@
+"""odohil/session/measure/ (issue 32: the map follows)."""

@@ -1,0 +1,1 @@
+"""odohil/session/measure/tape/ (issue 32: the map follows)."""

@@ -1,0 +1,1 @@
+"""odohil/session/plans/ (issue 32: the map follows)."""

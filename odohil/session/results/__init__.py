@@ -1,0 +1,1 @@
+"""odohil/session/results/ (issue 32: the map follows)."""

@@ -1,0 +1,1 @@
+"""odohil/session/robots/ (issue 32: the map follows)."""

@@ -1,0 +1,1 @@
+"""odohil/session/text/ (issue 32: the map follows)."""

@@ -1,0 +1,1 @@
+"""odohil/session/trials/ (issue 32: the map follows)."""

@@ -1,0 +1,190 @@
+"""odohil's own log format: one CSV file of odometry and ground truth.
+
+A header line names the columns (any order; blank lines and lines starting
+with ``#`` are skipped)::
+
+    t_s,odo_x_m,odo_y_m,odo_theta_rad,true_x_m,true_y_m,true_theta_rad[,trial]
+    t_s,ticks_left,ticks_right,true_x_m,true_y_m,true_theta_rad[,trial]
+
+- ``t_s``: time, s, strictly increasing;
+- the odometry, either as poses ``odo_x_m,odo_y_m,odo_theta_rad`` (m, m,
+  rad, the robot's own odometry frame) or as cumulative wheel encoder counts
+  ``ticks_left,ticks_right`` (turned into poses with the robot description's
+  ``[robot]`` ``counts_per_rev``, ``wheel_diameter_m`` (one number or
+  ``[left, right]``) and ``wheel_base_m``);
+- the ground truth ``true_x_m,true_y_m,true_theta_rad`` in any world frame
+  (a row may leave all three empty where the capture lost the robot; a gap
+  longer than ``--max-truth-gap`` inside a trial is an error);
+- ``trial`` (optional): a label per row; the rows of one label form one
+  trial, rows with an empty label lie between trials. Without it the log is
+  cut at rest (odohil/science/rest_cutting.py).
+
+Several files are read one after the other; their trials are numbered on.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+from odohil.errors import RecordingError
+from odohil.science.odometry_paths import integrate_ticks
+from odohil.science.path_trials import PathTrial
+from odohil.science.robot_description import RobotDescription
+from odohil.session.trials.logs.files import finite_number, read_text
+from odohil.session.trials.logs.recording import (
+    ImportOptions,
+    Recording,
+    check_increasing,
+    trials_of,
+)
+
+TIME_COLUMN = "t_s"
+POSE_COLUMNS = ("odo_x_m", "odo_y_m", "odo_theta_rad")
+TICK_COLUMNS = ("ticks_left", "ticks_right")
+TRUTH_COLUMNS = ("true_x_m", "true_y_m", "true_theta_rad")
+TRIAL_COLUMN = "trial"
+KNOWN_COLUMNS = (TIME_COLUMN, *POSE_COLUMNS, *TICK_COLUMNS, *TRUTH_COLUMNS, TRIAL_COLUMN)
+MAX_ROWS = 5_000_000
+"""Most rows of one log file."""
+MAX_TRIAL_LABEL = 200
+"""Longest ``trial`` label, characters."""
+
+
+def _header(path: Path, fields: list[str], line: int) -> tuple[str, ...]:
+    names = tuple(name.strip() for name in fields)
+    unknown = [name for name in names if name not in KNOWN_COLUMNS]
+    if unknown:
+        raise RecordingError(
+            f"{path} line {line}: unknown column(s) {', '.join(map(repr, unknown))}; "
+            f"known: {', '.join(KNOWN_COLUMNS)}"
+        )
+    if len(set(names)) != len(names):
+        raise RecordingError(f"{path} line {line}: a column is named twice: {list(names)}")
+    has_pose = [name in names for name in POSE_COLUMNS]
+    has_ticks = [name in names for name in TICK_COLUMNS]
+    if TIME_COLUMN not in names:
+        raise RecordingError(f"{path} line {line}: the column t_s is missing")
+    if all(has_pose) == all(has_ticks) or (any(has_pose) and any(has_ticks)):
+        raise RecordingError(
+            f"{path} line {line}: the odometry must be given either as "
+            f"{','.join(POSE_COLUMNS)} or as {','.join(TICK_COLUMNS)}, got {list(names)}"
+        )
+    missing = [name for name in TRUTH_COLUMNS if name not in names]
+    if missing:
+        raise RecordingError(
+            f"{path} line {line}: the ground-truth column(s) {', '.join(missing)} are missing"
+        )
+    return names
+
+
+def read_csv_log(path: Path, description: RobotDescription) -> Recording:
+    """One odohil log CSV as a recording (module docstring).
+
+    Raises:
+        RecordingError: unreadable file, bad header, a bad value (the message
+            names the line and the column), time not increasing.
+    """
+    text = read_text(path)
+    names: tuple[str, ...] | None = None
+    times: list[float] = []
+    odometry: list[list[float]] = []
+    truth: list[list[float]] = []
+    labels: list[str] = []
+    where: list[int] = []
+    for number, line in enumerate(text.splitlines(), start=1):
+        if not line.strip() or line.lstrip().startswith("#"):
+            continue
+        fields = next(csv.reader([line]))
+        if names is None:
+            names = _header(path, fields, number)
+            continue
+        if len(fields) != len(names):
+            raise RecordingError(
+                f"{path} line {number}: {len(fields)} fields; the header names {len(names)}"
+            )
+        row = dict(zip(names, (field.strip() for field in fields), strict=True))
+        times.append(finite_number(path, number, TIME_COLUMN, row[TIME_COLUMN]))
+        odo_names = POSE_COLUMNS if POSE_COLUMNS[0] in row else TICK_COLUMNS
+        odometry.append([finite_number(path, number, name, row[name]) for name in odo_names])
+        given = [row[name] for name in TRUTH_COLUMNS]
+        if all(value == "" for value in given):
+            truth.append([math.nan] * 3)
+        else:
+            truth.append(
+                [
+                    finite_number(path, number, name, value)
+                    for name, value in zip(TRUTH_COLUMNS, given, strict=True)
+                ]
+            )
+        label = row.get(TRIAL_COLUMN, "")
+        if len(label) > MAX_TRIAL_LABEL:
+            raise RecordingError(
+                f"{path} line {number}: trial: a label of at most {MAX_TRIAL_LABEL} characters"
+            )
+        labels.append(label)
+        where.append(number)
+        if len(times) > MAX_ROWS:
+            raise RecordingError(f"{path}: more than {MAX_ROWS} rows")
+    if names is None:
+        raise RecordingError(f"{path}: no header line; no trial in the log")
+    if not times:
+        raise RecordingError(f"{path}: a header but no rows; no trial in the log")
+    t = np.array(times, dtype=np.float64)
+    lines = np.array(where, dtype=np.int64)
+    check_increasing(t, lines, str(path), TIME_COLUMN, "line")
+    odo = np.array(odometry, dtype=np.float64)
+    if odo.shape[1] == 2:
+        drive = description.robot.drive
+        if drive is None:
+            raise RecordingError(
+                f"{path}: wheel counts need the robot's counts_per_rev, wheel_diameter_m and "
+                "wheel_base_m in the robot description's [robot] table"
+            )
+        left, right = drive.wheel_metres_per_count
+        odo = integrate_ticks(odo[:, 0], odo[:, 1], left, right, drive.wheel_base_m)
+    return Recording(
+        source=str(path),
+        t_s=t,
+        odometry=odo,
+        truth=np.array(truth, dtype=np.float64),
+        where=lines,
+        unit="line",
+        trial=tuple(labels) if TRIAL_COLUMN in names else None,
+    )
+
+
+def read_csv_logs(
+    paths: list[Path], description: RobotDescription, options: ImportOptions
+) -> list[PathTrial]:
+    """The trials of odohil log CSV files, numbered from 1 in file order."""
+    trials: list[PathTrial] = []
+    for path in paths:
+        recording = read_csv_log(path, description)
+        trials.extend(trials_of(recording, description, options, len(trials) + 1))
+    return trials
+
+
+def write_csv_log(path: Path, recording: Recording) -> None:
+    """Write a recording as an odohil log CSV (odometry as poses; floats as
+    ``repr`` so that reading gives back the same numbers): a converter's and
+    the tests' writer."""
+    columns = [TIME_COLUMN, *POSE_COLUMNS, *TRUTH_COLUMNS]
+    if recording.trial is not None:
+        columns.append(TRIAL_COLUMN)
+    with open(path, "w", encoding="utf-8", newline="") as stream:
+        writer = csv.writer(stream, lineterminator="\n")
+        writer.writerow(columns)
+        for index in range(len(recording.t_s)):
+            truth = recording.truth[index]
+            row = [repr(float(recording.t_s[index]))]
+            row += [repr(float(v)) for v in recording.odometry[index]]
+            row += (
+                ["", "", ""] if not np.all(np.isfinite(truth)) else [repr(float(v)) for v in truth]
+            )
+            if recording.trial is not None:
+                row.append(recording.trial[index])
+            writer.writerow(row)

@@ -1,0 +1,1 @@
+"""odohil/session/wizard/ (issue 32: the map follows)."""
