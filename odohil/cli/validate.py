@@ -30,10 +30,10 @@ from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.commands.validate import (
     chi_square_table,
     held_out,
+    validation_document,
     validation_setup,
     verdict_lines,
 )
-from odohil.session.commands.validate_steps import validation_document
 from odohil.session.results.validation import (
     PATH_SYNTAX,
     ValidationTrials,

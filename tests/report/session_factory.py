@@ -11,8 +11,10 @@ import fakes  # noqa: F401  (registers fakerobot://)
 from odohil.driver.nomad.backend import NomadBackend
 from odohil.science.robot_description import RobotDescription
 from odohil.session.journal.state import SessionState
-from odohil.session.measure.sources import FakeTruthSource, TapeSource, TrialContext
+from odohil.session.measure.protocol import TrialContext
+from odohil.session.measure.tape.distances import FakeTruthSource
 from odohil.session.measure.tape.records import TapeContext
+from odohil.session.measure.tape.source import TapeSource
 from odohil.session.plans.plan import parse_plan
 from odohil.session.run.engine import (
     IncrementalLiveEstimator,

@@ -37,8 +37,12 @@ from odohil.session.commands.design import (
 from odohil.session.commands.plan import PlannedExperiment, PlanRequest, trial_minutes
 from odohil.session.commands.plan_paths import plan_outcome
 from odohil.session.commands.report import session_report, write_any_report
-from odohil.session.commands.validate import check_file_options, journaled_trials, validation_spec
-from odohil.session.commands.validate_steps import CalibrationRobot
+from odohil.session.commands.validate import (
+    CalibrationRobot,
+    check_file_options,
+    journaled_trials,
+    validation_spec,
+)
 from odohil.session.plans.plan import Plan, PlanItem
 from odohil.session.results.outcome import Selection, estimate_source
 from odohil.session.results.validation import parse_validation_path

@@ -17,17 +17,16 @@ from odohil.science.floor_marks import marks_from_pose
 from odohil.session.journal import events as ev
 from odohil.session.journal.file import Record, read_journal
 from odohil.session.journal.state import Phase, SessionState, load_session_trials, replay
-from odohil.session.measure.sources import (
+from odohil.session.measure.protocol import TrialContext
+from odohil.session.measure.tape.distances import (
     FakeTruthSource,
     MeasurementSource,
     OperatorSource,
-    TapeSource,
-    TrialContext,
-    check_distance,
     recorded_source_from_file,
-    relative_true_pose,
 )
 from odohil.session.measure.tape.records import Measurement, MeasurementsRejected, TapeContext
+from odohil.session.measure.tape.source import TapeSource, check_distance
+from odohil.session.measure.truth import relative_true_pose
 from odohil.session.plans.plan import parse_plan
 from odohil.session.run.engine import (
     CallbackObserver,
@@ -273,7 +272,7 @@ def test_a_typed_distance_reaches_the_journal_as_the_same_float(tmp_path: Path) 
 
 
 def test_a_distance_that_is_no_distance_is_refused_once_by_name(tmp_path: Path) -> None:
-    """The one check (odohil.session.measure.sources.check_distance) stands where every
+    """The one check (odohil.session.measure.tape.source.check_distance) stands where every
     source's distances enter the session: nothing unchecked reaches the journal."""
     with fake_robot(QUERY) as (robot, truth):
         journal, state = _start(tmp_path, "k=1,l=1,n=1")

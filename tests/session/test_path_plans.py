@@ -20,7 +20,7 @@ from odohil.science.paths import Design
 from odohil.session.journal.state import load_session, session_path_trials
 from odohil.session.measure.plausibility import judge
 from odohil.session.measure.protocol import MeasuredPose
-from odohil.session.plans.floor_space import check_floor
+from odohil.session.plans.checks import check_floor
 from odohil.session.plans.plan import Plan, parse_plan, path_floor_m
 from odohil.session.results.outcome import estimate_state
 from odohil.session.robots.registry import parse_description

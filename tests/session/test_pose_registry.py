@@ -40,7 +40,7 @@ from dataclasses import dataclass
 from odohil.errors import ParameterError
 from odohil.session.measure.kinds import SnapshotTruth
 from odohil.session.measure.registry import OpenedSource
-from odohil.session.measure.sources import TruthPoseSource
+from odohil.session.measure.truth import TruthPoseSource
 
 OPENED = []
 

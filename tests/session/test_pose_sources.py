@@ -13,14 +13,11 @@ import numpy as np
 from odohil.science.floor_marks import marks_from_pose, pose_covariance
 from odohil.session.journal.file import read_journal
 from odohil.session.journal.state import SessionState, session_trials
+from odohil.session.measure.files import PoseFileSource, pose_source_from_file
 from odohil.session.measure.protocol import PoseSource, TrialContext
-from odohil.session.measure.sources import (
-    PoseFileSource,
-    TapeSource,
-    TruthPoseSource,
-    pose_source_from_file,
-)
 from odohil.session.measure.tape.records import Measurement
+from odohil.session.measure.tape.source import TapeSource
+from odohil.session.measure.truth import TruthPoseSource
 from odohil.session.plans.plan import parse_plan
 from odohil.session.run.engine import SessionEngine, start_session
 from tests.session.helpers import FAST, ROBOT_TOML, description, fake_robot, readings_of

@@ -28,13 +28,11 @@ from odohil.session.journal.state import (
     session_observations,
     session_trials,
 )
-from odohil.session.measure.sources import (
+from odohil.session.measure.protocol import TrialContext
+from odohil.session.measure.tape.distances import (
     FakeTruthSource,
     MeasurementSource,
     OperatorSource,
-    TapeSource,
-    TrialContext,
-    relative_true_pose,
 )
 from odohil.session.measure.tape.records import (
     ExtraDistance,
@@ -42,6 +40,8 @@ from odohil.session.measure.tape.records import (
     Remeasured,
     TapeContext,
 )
+from odohil.session.measure.tape.source import TapeSource
+from odohil.session.measure.truth import relative_true_pose
 from odohil.session.plans.plan import parse_plan
 from odohil.session.run.engine import (
     IncrementalLiveEstimator,

@@ -26,7 +26,7 @@ import odohil.session.measure.protocol
 import odohil.session.run.engine
 from odohil.session.journal.events import SourceEvent, SourceReadings
 from odohil.session.measure.protocol import MeasuredPose, MeasurementLog, TrialContext
-from odohil.session.measure.sources import TruthPoseSource
+from odohil.session.measure.truth import TruthPoseSource
 from odohil.session.plans.plan import parse_plan
 from odohil.session.run.engine import SessionEngine, start_session
 from tests.session.helpers import FAST, ROBOT_TOML, Heard, fake_robot

@@ -20,8 +20,10 @@ from odohil.science.floor_marks import (
     solve_marks,
 )
 from odohil.science.robot_description import parse_robot_description
-from odohil.session.measure.sources import OperatorSource, TapeSource, relative_true_pose
+from odohil.session.measure.tape.distances import OperatorSource
 from odohil.session.measure.tape.records import TapeContext, TapeReadings
+from odohil.session.measure.tape.source import TapeSource
+from odohil.session.measure.truth import relative_true_pose
 from odohil.session.plans.plan import parse_plan
 from odohil.session.run.engine import IncrementalLiveEstimator, SessionEngine, start_session
 from odohil.session.wizard.tape_entry import (

@@ -21,8 +21,8 @@ from odohil.science.pose_selection import ParameterBelief, predictive_pose
 from odohil.session.journal.file import read_journal
 from odohil.session.journal.state import load_session
 from odohil.session.measure.protocol import MeasuredPose, MeasurementLog, TrialContext
-from odohil.session.measure.sources import TruthPoseSource
 from odohil.session.measure.tape.records import Remeasured
+from odohil.session.measure.truth import TruthPoseSource
 from odohil.session.plans.plan import parse_plan
 from odohil.session.results.validation import load_calibration
 from odohil.session.run.engine import SessionEngine, start_session

@@ -13,7 +13,8 @@ from rich.console import Console
 
 from odohil.cli.render import drawn
 from odohil.cli.wizard import WizardScreen
-from odohil.session.measure.sources import FakeTruthSource, TapeSource
+from odohil.session.measure.tape.distances import FakeTruthSource
+from odohil.session.measure.tape.source import TapeSource
 from odohil.session.plans.plan import parse_plan
 from odohil.session.run import final_estimate
 from odohil.session.run.engine import IncrementalLiveEstimator, SessionEngine, start_session

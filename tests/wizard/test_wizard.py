@@ -36,8 +36,8 @@ from odohil.science.robot_description import parse_robot_description
 from odohil.session.journal import events as ev
 from odohil.session.journal.file import journal_path, read_journal
 from odohil.session.journal.state import replay
-from odohil.session.measure.sources import relative_true_pose
 from odohil.session.measure.tape.records import Measurement, Remeasured
+from odohil.session.measure.truth import relative_true_pose
 from tests import forked
 from tests.session.helpers import FINE_TAPE_ROBOT_TOML as ROBOT_TOML
 

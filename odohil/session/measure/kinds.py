@@ -15,6 +15,7 @@ from typing import Any
 
 from odohil.errors import InitError, MeasurementError, ParameterError
 from odohil.session.addresses import parse_tcp_url
+from odohil.session.measure.files import pose_source_from_file
 from odohil.session.measure.mocap import (
     MotionCaptureSource,
     PoseStream,
@@ -30,7 +31,8 @@ from odohil.session.measure.registry import (
     OpenedSource,
     Preflight,
 )
-from odohil.session.measure.sources import FakeTruthSource, TapeSource, pose_source_from_file
+from odohil.session.measure.tape.distances import FakeTruthSource
+from odohil.session.measure.tape.source import TapeSource
 from odohil.session.trials.pose_file import check_trial_file
 
 MOCAP_SCHEME = "tcp://"

@@ -28,9 +28,11 @@ flagged, an implausible one voids the attempt and stops the session), then
 journals it as the trial's ``solved`` record; an ``ambiguous`` pose is
 journaled and left out of every estimate.
 
-Sources: the tape with the floor-marks solver, the fake robot's truth
-channel, a trial file of poses (odohil/session/measure/sources.py); motion capture
-over tcp (odohil/session/measure/mocap/). ``--measure`` names one through the
+Sources: the tape with the floor-marks solver
+(odohil/session/measure/tape/source.py), the fake robot's truth channel
+(odohil/session/measure/truth.py), a trial file of poses
+(odohil/session/measure/files.py); motion capture over tcp
+(odohil/session/measure/mocap/). ``--measure`` names one through the
 registry of pose sources (odohil/session/measure/registry.py, the
 ``odohil.pose_sources`` entry-point group; docs/pose-sources.md), which
 parses, checks and opens it.
@@ -159,3 +161,19 @@ class PoseSource(Protocol):
 
         Raises MeasurementError when it cannot be had at all."""
         ...
+
+
+def as_pose(values: Any) -> Pose:
+    """Three numbers (x m, y m, theta rad) as a :data:`Pose` of floats."""
+    x, y, theta = (float(v) for v in values)
+    return (x, y, theta)
+
+
+def as_covariance(matrix: Any) -> Covariance3:
+    """A 3x3 array-like of (x m, y m, theta rad) as a :data:`Covariance3` of floats."""
+    rows = [tuple(float(v) for v in row) for row in matrix]
+    return (
+        (rows[0][0], rows[0][1], rows[0][2]),
+        (rows[1][0], rows[1][1], rows[1][2]),
+        (rows[2][0], rows[2][1], rows[2][2]),
+    )

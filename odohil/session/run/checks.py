@@ -6,7 +6,7 @@ first failure: a later check needs what the earlier ones found.
 Order: session folder, robot description, session (a resumed one's plan),
 plan feasible, plan estimable, trials per design, exclusions, cross
 distances, floor space, port, measurement. The checks themselves are those
-of odohil/session/plans/checks.py, plan.py, floor_space.py and line.py.
+of odohil/session/plans/ (checks.py, plan.py) and odohil/session/robots/line.py.
 """
 
 from __future__ import annotations
@@ -26,12 +26,12 @@ from odohil.session.journal.file import Journal, journal_path
 from odohil.session.journal.state import SessionState, description_of_header, load_session
 from odohil.session.plans.checks import (
     check_estimable,
+    check_floor,
     check_trials_per_design,
     check_turns,
     default_variant,
     turn_warning,
 )
-from odohil.session.plans.floor_space import check_floor
 from odohil.session.plans.plan import Plan, check_session_plan, parse_plan
 from odohil.session.results.outcome import check_exclude
 from odohil.session.robots.description import read_robot_toml

@@ -2,7 +2,8 @@
 asked when, decided here and shown by an :class:`OperatorScreen` (the wizard's
 console, odohil/cli/wizard.py), which only renders lines and reads replies.
 
-:class:`OperatorDialogue` is the tape's :class:`~odohil.session.measure.sources.OperatorPrompts`:
+:class:`OperatorDialogue` is the tape's
+:class:`~odohil.session.measure.tape.distances.OperatorPrompts`:
 a trial's header once per attempt (on a resumed one also what was entered),
 the marks to make, each distance (checked and re-asked with the reason by
 odohil/session/wizard/tape_entry.py), which distances a rejection names for measuring
@@ -31,8 +32,9 @@ from odohil.science.robot_description import RobotDescription
 from odohil.session.journal.events import OPERATOR, Finished, MotionStart, Solved, Void
 from odohil.session.journal.file import Record
 from odohil.session.journal.state import CompletedTrial, SessionState
-from odohil.session.measure.sources import OperatorSource, TapeSource
+from odohil.session.measure.tape.distances import OperatorSource
 from odohil.session.measure.tape.records import TapeContext
+from odohil.session.measure.tape.source import TapeSource
 from odohil.session.robots.protocol import Robot
 from odohil.session.run import (
     Opened,
@@ -113,7 +115,7 @@ def _reply_said(reply: Reply) -> Said:
 
 @dataclass
 class OperatorDialogue:
-    """The wizard's :class:`~odohil.session.measure.sources.OperatorPrompts`: what the
+    """The wizard's :class:`~odohil.session.measure.tape.distances.OperatorPrompts`: what the
     operator is asked, on ``screen``; ``interrupts`` learns when a motion is over."""
 
     screen: OperatorScreen

@@ -5,7 +5,7 @@ reads lines and renders): :func:`parse_metres` turns ``0.012``, ``12 mm`` or
 ``1.2 cm`` into metres; :func:`expected_ranges` says what the model expects of
 each distance, from the engine's prediction of the pose change (at the live
 estimate, else the robot description's ``[priors]``: one place,
-:func:`~odohil.session.measure.sources.prediction`); :class:`TapeEntry` is the state
+:func:`~odohil.session.measure.tape.source.prediction`); :class:`TapeEntry` is the state
 machine of one attempt's distances (which distance is asked next, ``back``
 to correct the value typed just before, the range checks, the values a
 rejection did not name kept); :func:`kept_after` is the re-measure
@@ -27,8 +27,8 @@ from odohil.science.floor_marks import PosePrior, marks_from_pose
 from odohil.science.path_designs import PathDesign
 from odohil.science.paths import Design
 from odohil.science.robot_description import RobotDescription
-from odohil.session.measure.sources import check_distance, prediction
 from odohil.session.measure.tape.records import TapeContext
+from odohil.session.measure.tape.source import check_distance, prediction
 
 BACK_WORDS = ("back", "-")
 """What the operator types at a distance prompt to correct the value typed just before."""
@@ -52,7 +52,7 @@ def parse_metres(text: str, label: str) -> float:
 
     Raises:
         MeasurementError: not a number (with an optional unit), or not a
-            distance (:func:`~odohil.session.measure.sources.check_distance`).
+            distance (:func:`~odohil.session.measure.tape.source.check_distance`).
     """
     match = _NUMBER.match(text.strip().lower())
     refusal = f"{text.strip()!r} is not a number of metres (e.g. 0.012, 12 mm or 1.2 cm)"
@@ -112,7 +112,7 @@ def expected_ranges(
 
 def attempt_ranges(ctx: TapeContext, description: RobotDescription) -> tuple[ExpectedRange, ...]:
     """The expected ranges of a trial attempt's distances, from the engine's
-    prediction (:func:`~odohil.session.measure.sources.prediction`)."""
+    prediction (:func:`~odohil.session.measure.tape.source.prediction`)."""
     return expected_ranges(description, ctx.design, prediction(ctx, description), ctx.trial)
 
 

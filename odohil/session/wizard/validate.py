@@ -26,7 +26,7 @@ from typing import Any
 from odohil import units
 from odohil.errors import JournalError, MeasurementError, ParameterError
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
-from odohil.session.commands.validate_steps import calibration_robot, drive_folder
+from odohil.session.commands.validate import calibration_robot, drive_folder
 from odohil.session.journal.events import OPERATOR
 from odohil.session.journal.state import SessionState, load_session
 from odohil.session.plans.plan import Plan

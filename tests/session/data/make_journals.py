@@ -25,13 +25,9 @@ from odohil.science.floor_marks import marks_from_pose
 from odohil.science.robot_description import RobotDescription
 from odohil.session.journal.file import Record
 from odohil.session.journal.state import SessionState
-from odohil.session.measure.sources import (
-    FakeTruthSource,
-    OperatorSource,
-    TrialContext,
-    TruthPoseSource,
-    relative_true_pose,
-)
+from odohil.session.measure.protocol import TrialContext
+from odohil.session.measure.tape.distances import FakeTruthSource, OperatorSource
+from odohil.session.measure.truth import TruthPoseSource, relative_true_pose
 from odohil.session.plans.plan import parse_plan
 from odohil.session.run.engine import (
     CallbackObserver,

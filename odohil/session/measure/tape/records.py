@@ -1,7 +1,7 @@
 """The tape's own journal records: its events, the readings they fold into,
 and the context its distance sources see.
 
-The tape source (:class:`~odohil.session.measure.sources.TapeSource`) journals each
+The tape source (:class:`~odohil.session.measure.tape.source.TapeSource`) journals each
 reading as it is taken; the session state keeps them, per attempt, as an
 opaque :class:`~odohil.session.journal.events.SourceReadings` (a
 :class:`TapeReadings` here) and hands them back to the source in its context
