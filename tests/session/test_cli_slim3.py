@@ -311,7 +311,7 @@ def test_a_driven_validation_is_driven_once_then_tested_again(tmp_path: Path) ->
     with open_session(require(preflight(spec))) as opened:
         ran = run_session(opened, start_check=_anywhere)
     assert ran.status == "finished"
-    shown = observables_rows(ran.state.completed)  # design_observables.py: the wizard's table
+    shown = observables_rows(ran.state.completed)  # wizard/observables.py: the wizard's table
     assert shown[0][:2] == ("k=1 l=0.5 m turn", "3")
     assert all(shown[0])
     assert len(shown[0]) == len(OBSERVABLE_COLUMNS)
@@ -436,8 +436,8 @@ def test_an_imported_recording_is_written_and_summed_up(tmp_path: Path) -> None:
 
 def test_the_tables_commands_print_are_the_sessions_words(tmp_path: Path) -> None:
     """odohil/session/table_text.py: predict's and covariance's tables
-    (design_tables.py), plan's (planning.py, path_planning.py) and the
-    parameters table (outcome_text.py ``parameters_text``): title, column heads
+    (commands/design_tables.py), plan's (commands/plan.py, commands/plan_paths.py) and the
+    parameters table (text/outcome.py ``parameters_text``): title, column heads
     as wide as every row, the columns of words."""
     design = Design(1, 2.0)
     means = forth_and_back_means(design, NOMAD150)

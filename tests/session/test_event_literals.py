@@ -76,7 +76,7 @@ def event_literals(source: str, where: str = "<source>") -> list[str]:
     return found
 
 
-# what odohil wrote before the events were typed (engine.py, sources.py)
+# what odohil wrote before the events were typed (engine.py, sources.py, since moved)
 TODAYS = [
     'self._log(ev.FINISHED, {"n_trials": len(self.state.completed)})',
     'ctx = log(ev.MEASUREMENTS_REJECTED, {**ids, "reason": str(exc)})',

@@ -17,6 +17,10 @@ from odohil.session.robots.registry import backend_names, robot_facts
 from odohil.session.run import SessionSpec
 from odohil.session.text.outcome import parameters_line
 
+__all__ = [
+    "demo_session",
+]
+
 DEMO_TRUTH = ErrorParameters.from_paper_units(-1.0, -0.05, 0.3, 9e-4)
 """The fake robot's true parameters: the paper's robot's (-0.202 deg/m, -0.02,
 0.012 deg^2/m, 3.6e-5 m) scaled by about 5, 2.5, 25 and 25, so that the

@@ -22,6 +22,16 @@ from odohil.science.moments import PoseMoments
 from odohil.science.parameters import SI_UNITS, ErrorParameters
 from odohil.science.paths import Design, EncoderPath, FloatArray, Variant, square
 
+__all__ = [
+    "check_simulation",
+    "covariance_document",
+    "fresh_seed",
+    "named_path",
+    "path_moments",
+    "predict_document",
+    "write_simulated_trials",
+]
+
 COMPONENTS = ("x", "y", "Delta")
 COMPONENT_UNITS = ("m", "m", "rad")
 OBSERVABLES = {  # name: (SI unit, meaning)

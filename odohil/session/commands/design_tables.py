@@ -14,6 +14,11 @@ from odohil.session.commands.design import covariance_rows, predict_rows
 from odohil.session.table_text import TableText
 from odohil.session.text.outcome import parameters_line
 
+__all__ = [
+    "covariance_table",
+    "predict_table",
+]
+
 
 def predict_table(
     design: Design, params: ErrorParameters, means: ObservableMeans, system: units.UnitSystem

@@ -14,6 +14,10 @@ from odohil.session.table_text import TableText
 from odohil.session.trials.logs import ImportOptions, guess_format, read_recording
 from odohil.session.trials.path_trial_file import summary_rows, write_path_trials
 
+__all__ = [
+    "import_recording",
+]
+
 
 @dataclass(frozen=True)
 class ImportSummary:

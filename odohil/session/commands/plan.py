@@ -30,6 +30,13 @@ from odohil.session.plans.plan import parse_plan
 from odohil.session.robots.description import load_robot_description
 from odohil.session.table_text import TableText
 
+__all__ = [
+    "DEFAULT_SIGMA_M",
+    "PlanRequest",
+    "PlannedExperiment",
+    "plan_document",
+]
+
 DEFAULT_SIGMA_M = 0.001
 """Tape sigma of one floor-mark distance without a robot description, m."""
 DEFAULT_TARGETS_TEXT = (

@@ -14,6 +14,11 @@ from odohil.session.results.report import SessionReport, load_report, write_repo
 from odohil.session.results.report.path_page import write_path_report
 from odohil.session.trials.logs import ImportOptions
 
+__all__ = [
+    "session_report",
+    "write_any_report",
+]
+
 
 def session_report(
     sources: Sequence[Path],

@@ -50,6 +50,16 @@ from odohil.session.run import SessionSpec
 from odohil.session.table_text import TableText
 from odohil.session.trials.logs import ImportOptions
 
+__all__ = [
+    "calibration_robot",
+    "chi_square_table",
+    "drive_folder",
+    "held_out",
+    "validation_document",
+    "validation_setup",
+    "verdict_lines",
+]
+
 
 def check_alpha(alpha: float) -> float:
     """``--alpha``, checked before anything moves.

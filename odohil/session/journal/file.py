@@ -45,6 +45,14 @@ from odohil.session.bounded_io import MIB, read_fd_bytes, read_file_bytes
 from odohil.session.journal.events import Event, decode, encode
 from odohil.session.signals import HELD_SIGNALS
 
+__all__ = [
+    "Journal",
+    "Record",
+    "TornRecord",
+    "journal_path",
+    "read_journal",
+]
+
 JOURNAL_NAME = "journal.jsonl"
 """File name of the journal inside a session folder."""
 TORN_PREFIX = "journal.torn-"

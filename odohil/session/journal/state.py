@@ -61,6 +61,19 @@ from odohil.session.robots.registry import parse_description as parse_robot_desc
 from odohil.session.trials.trial_file import Trial, TrialSet
 from odohil.units import wrap_angle
 
+__all__ = [
+    "CompletedTrial",
+    "OpenTrial",
+    "Phase",
+    "SessionState",
+    "apply",
+    "description_of_header",
+    "load_session",
+    "replay",
+    "session_path_trials",
+    "session_trials",
+]
+
 
 class Phase(Enum):
     """Where an open (not yet solved) trial attempt stands."""

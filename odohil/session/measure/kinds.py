@@ -35,6 +35,10 @@ from odohil.session.measure.tape.distances import FakeTruthSource
 from odohil.session.measure.tape.source import TapeSource
 from odohil.session.trials.pose_file import check_trial_file
 
+__all__ = [
+    "TrialFileSettings",
+]
+
 MOCAP_SCHEME = "tcp://"
 """``--measure`` values starting so name a motion-capture stream."""
 MOCAP_FIRST_POSE_S = 3.0

@@ -43,6 +43,11 @@ from odohil.science.pose_selection import (
 )
 from odohil.session.measure.protocol import MeasuredPose, Pose
 
+__all__ = [
+    "far_window",
+    "judge",
+]
+
 UNIT_RATIOS = (
     (1000.0, "millimetres"),
     (100.0, "centimetres"),

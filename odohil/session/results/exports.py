@@ -47,6 +47,11 @@ from odohil.science.exports import (
 )
 from odohil.session.results.report.exports import ExportFile
 
+__all__ = [
+    "export_files",
+    "export_text",
+]
+
 FORMATS: tuple[str, ...] = ("ros2-diff-drive", "odometry-msg", "robot-localization", "amcl", "json")
 FILE_NAMES: dict[str, str] = {
     "ros2-diff-drive": "ros2_diff_drive.yaml",

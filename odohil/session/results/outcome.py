@@ -60,6 +60,16 @@ from odohil.session.trials.logs.csv_log import TIME_COLUMN
 from odohil.session.trials.path_trial_file import is_path_trial_file, read_path_trials, summary_rows
 from odohil.session.trials.trial_file import Trial, TrialSet, read_trials
 
+__all__ = [
+    "EstimateOutcome",
+    "Selection",
+    "check_exclude",
+    "estimate_source",
+    "estimate_state",
+    "parse_exclude",
+    "source_kind",
+]
+
 Status = Literal["trusted", "doubtful", "failed", "no estimate"]
 SourceKind = Literal["session", "trials", "path-trials", "recording"]
 """A session folder, a forth-and-back trial file, a general-path trial file,

@@ -82,6 +82,25 @@ from odohil.session.trials.pose_file import (
 from odohil.session.trials.trial_file import TrialSet, read_trials
 from odohil.units import paper_text
 
+__all__ = [
+    "PATH_SYNTAX",
+    "Calibration",
+    "ValidationPath",
+    "ValidationTrials",
+    "check_not_fitted",
+    "check_trials",
+    "default_folder",
+    "detectable_by_name",
+    "held_out_trials",
+    "load_calibration",
+    "parameter_covariance",
+    "parse_validation_path",
+    "predictions_of",
+    "read_path_poses",
+    "sensitivity_text",
+    "trials_of_session",
+]
+
 VALIDATION_FOLDER = "validation"
 """Sub-folder of a calibration session that holds its validation sessions."""
 PATH_SYNTAX = (

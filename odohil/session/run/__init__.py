@@ -21,7 +21,8 @@ from odohil.session.run.checks import (
     preflight,
     require,
 )
-from odohil.session.run.opening import Opened, connect, open_session
+from odohil.session.run.engine import SessionEngine, StartCheck
+from odohil.session.run.opening import CheckSeen, Opened, connect, open_session
 from odohil.session.run.running import (
     RunOutcome,
     final_estimate,
@@ -31,15 +32,30 @@ from odohil.session.run.running import (
     run_session,
 )
 from odohil.session.run.spec import SessionSpec, default_session_folder
+from odohil.session.run.start_pose import (
+    HEADING_TOLERANCE_DEG,
+    HERE,
+    POSITION_TOLERANCE_M,
+    StartPose,
+    put_back,
+    refuse_off_start,
+)
 
 __all__ = [
+    "HEADING_TOLERANCE_DEG",
+    "HERE",
+    "POSITION_TOLERANCE_M",
+    "CheckSeen",
     "Opened",
     "Preflight",
     "PreflightCheck",
     "PreflightFailed",
     "Prepared",
     "RunOutcome",
+    "SessionEngine",
     "SessionSpec",
+    "StartCheck",
+    "StartPose",
     "connect",
     "default_session_folder",
     "final_estimate",
@@ -48,6 +64,8 @@ __all__ = [
     "open_session",
     "preflight",
     "progress_estimator",
+    "put_back",
+    "refuse_off_start",
     "require",
     "run_session",
 ]

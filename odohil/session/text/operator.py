@@ -18,6 +18,19 @@ from odohil.session.measure.protocol import TrialContext
 from odohil.session.measure.tape.records import TapeContext
 from odohil.session.run.start_pose import HERE
 
+__all__ = [
+    "END_MARKS",
+    "encoders_at_end",
+    "entered_so_far",
+    "extra_distance_prompt",
+    "measure_again",
+    "put_back_prompt",
+    "remeasure_prompt",
+    "solved",
+    "start_marks",
+    "trial_header",
+]
+
 END_MARKS = "Mark the floor at the screws again (end marks), then press Enter: "
 
 

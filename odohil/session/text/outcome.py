@@ -15,6 +15,17 @@ from odohil.science.parameters import PARAMETER_NAMES
 from odohil.session.results.outcome import EstimateOutcome
 from odohil.session.table_text import TableText
 
+__all__ = [
+    "export_refusal_lines",
+    "more_trials_lines",
+    "outcome_line",
+    "outcome_notes",
+    "parameters_line",
+    "parameters_text",
+    "refusal_line",
+    "verdict_line",
+]
+
 
 def verdict_line(verdict: Verdict) -> str:
     """``verdict: TRUSTED`` or ``verdict: DOUBTFUL (reason; reason)``."""

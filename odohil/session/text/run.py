@@ -23,6 +23,16 @@ from odohil.session.run.start_pose import StartPose
 from odohil.session.text.operator import measured_again, remeasured
 from odohil.session.text.outcome import live_e_r
 
+__all__ = [
+    "MAY_STILL_MOVE",
+    "RunWatch",
+    "Said",
+    "Tone",
+    "error_said",
+    "resuming",
+    "run_ended",
+]
+
 MAY_STILL_MOVE = "the robot may still be moving: use its emergency stop"
 """What odohil says, prominently, when it could not confirm the robot's stop."""
 

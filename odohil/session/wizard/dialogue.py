@@ -67,6 +67,13 @@ from odohil.session.wizard.validate import (
     validation_target,
 )
 
+__all__ = [
+    "WIZARD_PLAN",
+    "continue_with",
+    "guided_run",
+    "wizard_spec",
+]
+
 WIZARD_PLAN = "k=1,l=6,n=30;k=20,l=0.5,n=30"
 """The plan of a new wizard session given no ``--plan``."""
 

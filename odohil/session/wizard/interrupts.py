@@ -22,6 +22,11 @@ from typing import TextIO
 from odohil.errors import StopUnconfirmedError
 from odohil.session.robots.protocol import Robot
 
+__all__ = [
+    "Interrupts",
+    "wait_readable",
+]
+
 SECOND_CTRL_C_STOP_S = 0.5
 """How long a second Ctrl-C waits for the robot to confirm its stop, s."""
 

@@ -10,6 +10,11 @@ from odohil import units
 from odohil.driver.odometry import OdometrySample
 from odohil.science.paths import Drivable, Leg, Turn
 
+__all__ = [
+    "MotionSteps",
+    "pose_text",
+]
+
 
 def step_fraction(item: Leg | Turn, start: OdometrySample, sample: OdometrySample) -> float:
     """How much of the step ``item`` that began at ``start`` is covered at

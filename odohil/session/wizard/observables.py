@@ -13,6 +13,10 @@ from odohil.science.observables import Observables, observables
 from odohil.session.journal.state import CompletedTrial
 from odohil.session.table_text import TableText
 
+__all__ = [
+    "observables_table",
+]
+
 
 def observables_by_design(
     trials: Sequence[CompletedTrial],

@@ -43,6 +43,10 @@ from odohil.session.results.validation import (
 )
 from odohil.session.run import SessionSpec
 
+__all__ = [
+    "GuidedValidation",
+]
+
 
 @dataclass(frozen=True)
 class GuidedValidation:

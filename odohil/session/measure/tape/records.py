@@ -32,6 +32,12 @@ from odohil.science.robot_description import RobotDescription
 from odohil.session.journal.events import SourceEvent, SourceReadings
 from odohil.session.measure.protocol import TrialContext
 
+__all__ = [
+    "MeasurementsRejected",
+    "Remeasured",
+    "TapeContext",
+]
+
 
 @dataclass(frozen=True)
 class TapeReadings:

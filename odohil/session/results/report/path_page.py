@@ -20,6 +20,10 @@ from odohil.science.estimators.paths import predict
 from odohil.session.results.outcome import EstimateOutcome
 from odohil.session.results.report.exports import ExportFile
 
+__all__ = [
+    "write_path_report",
+]
+
 
 def path_exports(outcome: EstimateOutcome) -> tuple[ExportFile, ...]:
     """``parameters.json``: the estimate as ``odohil estimate --json`` prints it."""

@@ -49,7 +49,14 @@ READERS: dict[str, str] = {
 """Each format's reader, by name (imported when used: ``rosbags`` only for bags)."""
 FORMATS: tuple[str, ...] = tuple(READERS)
 
-__all__ = ["FORMATS", "READERS", "ImportOptions", "guess_format", "read_recording", "reader"]
+__all__ = [
+    "FORMATS",
+    "READERS",
+    "ImportOptions",
+    "guess_format",
+    "read_recording",
+    "reader",
+]
 
 
 def reader(name: str) -> Reader:

@@ -42,6 +42,10 @@ from odohil.session.trials.logs.recording import (
     trials_of,
 )
 
+__all__ = [
+    "TIME_COLUMN",
+]
+
 TIME_COLUMN = "t_s"
 POSE_COLUMNS = ("odo_x_m", "odo_y_m", "odo_theta_rad")
 TICK_COLUMNS = ("ticks_left", "ticks_right")
