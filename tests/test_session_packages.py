@@ -8,7 +8,7 @@ subpackage takes from another is in that subpackage's face (its
 from __future__ import annotations
 
 import ast
-from collections.abc import Iterator
+import functools
 from pathlib import Path
 
 import pytest
@@ -49,17 +49,19 @@ MODULES = {
 }
 
 
-def _imports(path: Path) -> Iterator[tuple[str, str | None]]:
+@functools.cache
+def _imports(path: Path) -> tuple[tuple[str, str | None], ...]:
     """Every (module, name) ``path`` imports, anywhere in it (name None for
     ``import module``; a submodule imported by name is the module)."""
+    found: list[tuple[str, str | None]] = []
     for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
         if isinstance(node, ast.Import):
-            for alias in node.names:
-                yield alias.name, None
+            found += [(alias.name, None) for alias in node.names]
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             for alias in node.names:
                 sub = f"{node.module}.{alias.name}"
-                yield (sub, None) if sub in MODULES else (node.module, alias.name)
+                found.append((sub, None) if sub in MODULES else (node.module, alias.name))
+    return tuple(found)
 
 
 def _package(module: str) -> str | None:
@@ -136,14 +138,15 @@ def test_no_module_of_odohil_is_in_an_import_circle() -> None:
     assert _cycles(graph) == []
 
 
-def _face(module: str) -> set[str]:
+@functools.cache
+def _face(module: str) -> frozenset[str]:
     """The ``__all__`` of ``module`` (empty without one)."""
     for node in ast.parse(MODULES[module].read_text()).body:
         if isinstance(node, ast.Assign) and any(
             isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets
         ):
-            return set(ast.literal_eval(node.value))
-    return set()
+            return frozenset(ast.literal_eval(node.value))
+    return frozenset()
 
 
 @pytest.mark.parametrize("package", sorted(FLOOR))
