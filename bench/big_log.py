@@ -1,0 +1,162 @@
+"""How long ``odohil estimate`` takes on a big log, and how much memory (issue 30).
+
+Builds, in a temporary folder, a log of the optiodom June data written seven
+times over, each copy's trials with their own labels (``c1/<session>_run-NN``
+...), as an odohil log CSV with a ``trial`` column
+(odohil/session/logs/optiodom.py joined_runs, csv_log.py write_csv_log) and,
+with ``--optiodom``, as an optiodom folder of seven copies of the sessions.
+Per copy: all 32 circles (the long encoder paths: two or three laps, 43-64
+legs) and the first 30 ivanjko runs (15 straight, 15 spins), so 62 trials:
+434 trials and 547k rows in all (the issue's log: 434 trials, 476k rows; these
+rows are more, and the circles the most expensive paths of the data).
+
+Then runs the real command, a child process of the CLI as a user starts it
+(the process is the point: its start-up, its reading, its memory)::
+
+    odohil estimate LOG --robot docs/examples/optiodom.toml --json
+
+and prints its wall time, its CPU time (user + system: the machine is shared,
+wall time counts the others' load) and its peak resident memory (the child's
+``ru_maxrss``), with the machine's load (``uptime``) before and after.
+
+    python bench/big_log.py [--data ../shared/data/optiodom-june] [--repeat 3]
+        [--copies 7] [--optiodom] [--keep DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from odohil.session.logs.csv_log import write_csv_log
+from odohil.session.logs.optiodom import joined_runs, run_files
+from odohil.session.logs.recording import Recording
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_DATA = Path(os.environ.get("ODOHIL_OPTIODOM", ROOT.parent / "shared/data/optiodom-june"))
+ROBOT = ROOT / "docs/examples/optiodom.toml"
+IVANJKO_RUNS = 30
+"""The ivanjko runs of each copy (the first in file order: straight runs and spins)."""
+
+
+def one_copy(data: Path) -> list[Path]:
+    """The run files of one copy: every circle, the first ivanjko runs."""
+    return run_files([data / "circular"]) + run_files([data / "ivanjko"])[:IVANJKO_RUNS]
+
+
+def big_recording(data: Path, copies: int) -> Recording:
+    """``copies`` copies of :func:`one_copy` as one recording, the labels of
+    copy c prefixed ``cC/``, times running on."""
+    base = joined_runs(one_copy(data))
+    assert base.trial is not None
+    span = float(base.t_s[-1] - base.t_s[0]) + 0.05
+    times, labels = [], []
+    for c in range(copies):
+        times.append(base.t_s + c * span)
+        labels.extend(f"c{c + 1}/{label}" if label else "" for label in base.trial)
+    t = np.concatenate(times)
+    return Recording(
+        source="big.csv",
+        t_s=t,
+        odometry=np.tile(base.odometry, (copies, 1)),
+        truth=np.tile(base.truth, (copies, 1)),
+        where=np.arange(2, 2 + len(t), dtype=np.int64),
+        trial=tuple(labels),
+    )
+
+
+def optiodom_copies(data: Path, copies: int, folder: Path) -> Path:
+    """``copies`` copies of :func:`one_copy`'s sessions as an optiodom folder
+    (session names given a copy digit, the metadata's run count fixed)."""
+    runs = one_copy(data)
+    sessions: dict[Path, list[Path]] = {}
+    for run in runs:
+        sessions.setdefault(run.parent, []).append(run)
+    for c in range(copies):
+        for session, files in sessions.items():
+            name = f"{session.name}{c + 1}"
+            target = folder / f"copy{c + 1}" / name
+            target.mkdir(parents=True)
+            meta = (session / f"{session.name}_metadata.csv").read_text(encoding="utf-8")
+            lines = [
+                f"N,{len(files)}" if line.split(",")[0].strip() == "N" else line
+                for line in meta.splitlines()
+            ]
+            (target / f"{name}_metadata.csv").write_text("\n".join(lines) + "\n", "utf-8")
+            for i, run in enumerate(files, start=1):
+                shutil.copyfile(run, target / f"{name}_run-{i:02d}.csv")
+    return folder
+
+
+def uptime() -> str:
+    """The machine's load."""
+    return subprocess.run(["uptime"], capture_output=True, text=True, check=False).stdout.strip()
+
+
+def measure(arguments: list[str]) -> tuple[float, float, float, int]:
+    """(wall s, CPU s, peak RSS MB, exit status) of one run of the CLI."""
+    odohil = Path(sys.executable).with_name("odohil")
+    command = [str(odohil), *arguments]
+    start = time.perf_counter()
+    child = subprocess.Popen(command, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _, status, usage = os.wait4(child.pid, 0)
+    wall = time.perf_counter() - start
+    child.returncode = os.waitstatus_to_exitcode(status)
+    error = child.stderr.read().decode() if child.stderr else ""
+    if child.stderr:
+        child.stderr.close()
+    if child.returncode not in (0, 3):
+        print(error, file=sys.stderr)
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024.0, child.returncode
+
+
+def report(label: str, arguments: list[str], repeat: int) -> None:
+    """Run the command ``repeat`` times and print each run's figures."""
+    print(f"{label}: odohil {' '.join(arguments)}")
+    for _ in range(repeat):
+        wall, cpu, rss, status = measure(arguments)
+        print(f"    wall {wall:6.2f} s  CPU {cpu:6.2f} s  peak RSS {rss:6.1f} MB  exit {status}")
+
+
+def main() -> None:
+    """Build the log, run the command, print the figures."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--data", type=Path, default=DEFAULT_DATA)
+    parser.add_argument("--copies", type=int, default=7)
+    parser.add_argument("--repeat", type=int, default=1)
+    parser.add_argument("--optiodom", action="store_true", help="also as an optiodom folder")
+    parser.add_argument("--keep", type=Path, help="build the log here and keep it")
+    args = parser.parse_args()
+    print(f"load before: {uptime()}")
+    folder = Path(tempfile.mkdtemp(prefix="odohil-big-")) if args.keep is None else args.keep
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        log = folder / "big.csv"
+        recording = big_recording(args.data, args.copies)
+        write_csv_log(log, recording)
+        assert recording.trial is not None
+        trials = len(set(recording.trial) - {""})
+        megabytes = log.stat().st_size / 1e6
+        print(f"log: {len(recording.t_s)} rows, {trials} trials, {megabytes:.1f} MB")
+        del recording
+        common = ["--robot", str(ROBOT), "--json"]
+        report("CSV log", ["estimate", str(log), *common], args.repeat)
+        if args.optiodom:
+            runs = optiodom_copies(args.data, args.copies, folder / "optiodom")
+            report("optiodom folder", ["estimate", str(runs), *common], args.repeat)
+    finally:
+        if args.keep is None:
+            shutil.rmtree(folder)
+    print(f"load after: {uptime()}")
+
+
+if __name__ == "__main__":
+    main()
