@@ -3,7 +3,7 @@
 Builds, in a temporary folder, a log of the optiodom June data written seven
 times over, each copy's trials with their own labels (``c1/<session>_run-NN``
 ...), as an odohil log CSV with a ``trial`` column
-(odohil/session/logs/optiodom.py joined_runs, csv_log.py write_csv_log) and,
+(odohil/session/trials/logs/optiodom.py joined_runs, csv_log.py write_csv_log) and,
 with ``--optiodom``, as an optiodom folder of seven copies of the sessions.
 Per copy: all 32 circles (the long encoder paths: two or three laps, 43-64
 legs) and the first 30 ivanjko runs (15 straight, 15 spins), so 62 trials:
@@ -36,9 +36,9 @@ from pathlib import Path
 
 import numpy as np
 
-from odohil.session.logs.csv_log import write_csv_log
-from odohil.session.logs.optiodom import joined_runs, run_files
-from odohil.session.logs.recording import Recording
+from odohil.session.trials.logs.csv_log import write_csv_log
+from odohil.session.trials.logs.optiodom import joined_runs, run_files
+from odohil.session.trials.logs.recording import Recording
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = Path(os.environ.get("ODOHIL_OPTIODOM", ROOT.parent / "shared/data/optiodom-june"))
@@ -58,7 +58,8 @@ def big_recording(data: Path, copies: int) -> Recording:
     base = joined_runs(one_copy(data))
     assert base.trial is not None
     span = float(base.t_s[-1] - base.t_s[0]) + 0.05
-    times, labels = [], []
+    times: list[np.ndarray] = []
+    labels: list[str] = []
     for c in range(copies):
         times.append(base.t_s + c * span)
         labels.extend(f"c{c + 1}/{label}" if label else "" for label in base.trial)

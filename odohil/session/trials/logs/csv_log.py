@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -33,10 +34,12 @@ import numpy as np
 from odohil.errors import RecordingError
 from odohil.science.odometry_paths import integrate_ticks
 from odohil.science.path_trials import PathTrial
+from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
 from odohil.session.trials.logs.files import finite_number, read_text
 from odohil.session.trials.logs.recording import (
     ImportOptions,
+    IntArray,
     Recording,
     check_increasing,
     trials_of,
@@ -85,14 +88,123 @@ def _header(path: Path, fields: list[str], line: int) -> tuple[str, ...]:
     return names
 
 
-def read_csv_log(path: Path, description: RobotDescription) -> Recording:
-    """One odohil log CSV as a recording (module docstring).
+_CHUNK_CHARS = 4 * 1024 * 1024
+"""Characters of text split into rows at once by the fast reader (bounds its
+lists of fields to a few tens of MB whatever the log's size)."""
 
-    Raises:
-        RecordingError: unreadable file, bad header, a bad value (the message
-            names the line and the column), time not increasing.
-    """
-    text = read_text(path)
+
+@dataclass(frozen=True)
+class _Rows:
+    """A log's rows as arrays (what :class:`Recording` is made of)."""
+
+    names: tuple[str, ...]
+    t_s: FloatArray
+    odometry: FloatArray
+    truth: FloatArray
+    where: IntArray
+    labels: list[str]
+
+
+class _SlowPath(Exception):
+    """The fast reader met something it does not check itself."""
+
+
+def _first_line(text: str) -> tuple[int, int, str] | None:
+    """(line number, offset after it, the line) of the first line that is
+    neither blank nor a comment, or None (also when a line before it ends
+    otherwise than with a newline: the slow reader counts such lines)."""
+    offset = 0
+    number = 0
+    while offset < len(text):
+        end = text.find("\n", offset)
+        end = len(text) if end < 0 else end + 1
+        line = text[offset:end]
+        offset = end
+        number += 1
+        if len(line.splitlines()) > 1:
+            return None
+        if line.strip() and not line.lstrip().startswith("#"):
+            return number, offset, line.rstrip("\r\n")
+    return None
+
+
+def _fast_rows(path: Path, text: str, chunk_chars: int = _CHUNK_CHARS) -> _Rows | None:
+    """The rows of ``text`` parsed column by column, a few MB at a time
+    (``float`` over each column: the numbers ``finite_number`` gives), or
+    None when anything needs a check the slow reader makes (quotes, a line
+    that is blank, a comment or has the wrong number of fields, a field that
+    is not a finite number, a truth pose partly empty, a long label): the
+    slow reader then names the line and the field."""
+    if '"' in text:
+        return None
+    found = _first_line(text)
+    if found is None:
+        return None
+    header_line, offset, header = found
+    names = _header(path, next(csv.reader([header])), header_line)
+    columns = len(names)
+    odo_names = POSE_COLUMNS if POSE_COLUMNS[0] in names else TICK_COLUMNS
+    numeric = [TIME_COLUMN, *odo_names, *TRUTH_COLUMNS]
+    index = {name: names.index(name) for name in names}
+    parts: dict[str, list[FloatArray]] = {name: [] for name in numeric}
+    labels: list[str] = []
+    rows = 0
+    while offset < len(text):
+        end = text.find("\n", offset + chunk_chars)
+        end = len(text) if end < 0 else end + 1
+        lines = text[offset:end].splitlines()
+        offset = end
+        if not all(map(str.strip, lines)) or any(line.lstrip().startswith("#") for line in lines):
+            return None
+        fields = ",".join(lines).split(",")
+        if len(fields) != columns * len(lines) or {line.count(",") for line in lines} != {
+            columns - 1
+        }:
+            return None
+        rows += len(lines)
+        if rows > MAX_ROWS:
+            return None
+        try:
+            for name in numeric:
+                column = fields[index[name] :: columns]
+                if name in TRUTH_COLUMNS:
+                    column = [value if value.strip() else "nan" for value in column]
+                parts[name].append(np.fromiter(map(float, column), np.float64, len(lines)))
+        except ValueError:
+            return None
+        if TRIAL_COLUMN in index:
+            chunk = list(map(str.strip, fields[index[TRIAL_COLUMN] :: columns]))
+            if chunk and max(map(len, chunk)) > MAX_TRIAL_LABEL:
+                return None
+            labels.extend(chunk)
+        del fields, lines
+    if rows == 0:
+        return None
+    values = {name: np.concatenate(parts.pop(name)) for name in numeric}
+    truth = np.stack([values.pop(name) for name in TRUTH_COLUMNS], axis=1)
+    missing = ~np.isfinite(truth)
+    # a truth pose is all numbers or all empty (NaN only where the text was empty)
+    if not (np.all(missing.all(axis=1) | ~missing.any(axis=1))):
+        return None
+    odometry = np.stack([values.pop(name) for name in odo_names], axis=1)
+    t = values.pop(TIME_COLUMN)
+    if not (np.isfinite(t).all() and np.isfinite(odometry).all()):
+        return None
+    if missing.any() and _nan_written(text):
+        return None
+    where = np.arange(header_line + 1, header_line + 1 + rows, dtype=np.int64)
+    return _Rows(names, t, odometry, truth, where, labels)
+
+
+def _nan_written(text: str) -> bool:
+    """Whether the text spells a non-finite number (``nan``, ``inf``), which
+    the fast reader cannot tell from an empty field after parsing."""
+    lowered = text.lower()
+    return "nan" in lowered or "inf" in lowered
+
+
+def _checked_rows(path: Path, text: str) -> _Rows:
+    """The rows of ``text`` line by line, each field checked (the first bad one raises)."""
     names: tuple[str, ...] | None = None
     times: list[float] = []
     odometry: list[list[float]] = []
@@ -137,10 +249,33 @@ def read_csv_log(path: Path, description: RobotDescription) -> Recording:
         raise RecordingError(f"{path}: no header line; no trial in the log")
     if not times:
         raise RecordingError(f"{path}: a header but no rows; no trial in the log")
-    t = np.array(times, dtype=np.float64)
-    lines = np.array(where, dtype=np.int64)
+    return _Rows(
+        names,
+        np.array(times, dtype=np.float64),
+        np.array(odometry, dtype=np.float64),
+        np.array(truth, dtype=np.float64),
+        np.array(where, dtype=np.int64),
+        labels,
+    )
+
+
+def read_csv_log(path: Path, description: RobotDescription) -> Recording:
+    """One odohil log CSV as a recording (module docstring).
+
+    The usual log (no quotes, comments or blank lines among the rows, every
+    field a finite number or an empty truth pose) is parsed column by column
+    with numpy; anything else, line by line, so that the first bad line and
+    field are named.
+
+    Raises:
+        RecordingError: unreadable file, bad header, a bad value (the message
+            names the line and the column), time not increasing.
+    """
+    text = read_text(path)
+    parsed = _fast_rows(path, text) or _checked_rows(path, text)
+    del text
+    names, t, lines, odo = parsed.names, parsed.t_s, parsed.where, parsed.odometry
     check_increasing(t, lines, str(path), TIME_COLUMN, "line")
-    odo = np.array(odometry, dtype=np.float64)
     if odo.shape[1] == 2:
         drive = description.robot.drive
         if drive is None:
@@ -154,10 +289,10 @@ def read_csv_log(path: Path, description: RobotDescription) -> Recording:
         source=str(path),
         t_s=t,
         odometry=odo,
-        truth=np.array(truth, dtype=np.float64),
+        truth=parsed.truth,
         where=lines,
         unit="line",
-        trial=tuple(labels) if TRIAL_COLUMN in names else None,
+        trial=tuple(parsed.labels) if TRIAL_COLUMN in names else None,
     )
 
 
