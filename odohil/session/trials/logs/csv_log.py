@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import csv
 import math
+import operator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -88,6 +89,7 @@ def _header(path: Path, fields: list[str], line: int) -> tuple[str, ...]:
     return names
 
 
+_COMMAS = operator.methodcaller("count", ",")
 _CHUNK_CHARS = 4 * 1024 * 1024
 """Characters of text split into rows at once by the fast reader (bounds its
 lists of fields to a few tens of MB whatever the log's size)."""
@@ -152,32 +154,30 @@ def _fast_rows(path: Path, text: str, chunk_chars: int = _CHUNK_CHARS) -> _Rows 
     while offset < len(text):
         end = text.find("\n", offset + chunk_chars)
         end = len(text) if end < 0 else end + 1
-        lines = text[offset:end].splitlines()
+        chunk = text[offset:end]
+        lines = chunk.splitlines()
         offset = end
-        if not all(map(str.strip, lines)) or any(line.lstrip().startswith("#") for line in lines):
+        if not all(map(str.strip, lines)):
+            return None
+        if "#" in chunk and any(line.lstrip().startswith("#") for line in lines):
+            return None
+        if set(map(_COMMAS, lines)) != {columns - 1}:
             return None
         fields = ",".join(lines).split(",")
-        if len(fields) != columns * len(lines) or {line.count(",") for line in lines} != {
-            columns - 1
-        }:
-            return None
         rows += len(lines)
         if rows > MAX_ROWS:
             return None
         try:
             for name in numeric:
-                column = fields[index[name] :: columns]
-                if name in TRUTH_COLUMNS:
-                    column = [value if value.strip() else "nan" for value in column]
-                parts[name].append(np.fromiter(map(float, column), np.float64, len(lines)))
+                parts[name].append(_floats(fields[index[name] :: columns], name in TRUTH_COLUMNS))
         except ValueError:
             return None
         if TRIAL_COLUMN in index:
-            chunk = list(map(str.strip, fields[index[TRIAL_COLUMN] :: columns]))
-            if chunk and max(map(len, chunk)) > MAX_TRIAL_LABEL:
+            given = list(map(str.strip, fields[index[TRIAL_COLUMN] :: columns]))
+            if given and max(map(len, given)) > MAX_TRIAL_LABEL:
                 return None
-            labels.extend(chunk)
-        del fields, lines
+            labels.extend(given)
+        del fields, lines, chunk
     if rows == 0:
         return None
     values = {name: np.concatenate(parts.pop(name)) for name in numeric}
@@ -194,6 +194,21 @@ def _fast_rows(path: Path, text: str, chunk_chars: int = _CHUNK_CHARS) -> _Rows 
         return None
     where = np.arange(header_line + 1, header_line + 1 + rows, dtype=np.int64)
     return _Rows(names, t, odometry, truth, where, labels)
+
+
+def _floats(column: list[str], may_be_empty: bool) -> FloatArray:
+    """``float`` of every field (NaN for an empty one where ``may_be_empty``).
+
+    Raises:
+        ValueError: a field that is not a number.
+    """
+    try:
+        return np.fromiter(map(float, column), np.float64, len(column))
+    except ValueError:
+        if not may_be_empty:
+            raise
+    filled = [value if value.strip() else "nan" for value in column]
+    return np.fromiter(map(float, filled), np.float64, len(filled))
 
 
 def _nan_written(text: str) -> bool:
