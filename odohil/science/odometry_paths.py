@@ -42,6 +42,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from odohil.errors import MeasurementError
 from odohil.science.frames import rotate_points
@@ -149,7 +150,7 @@ def integrate_ticks(
     return np.stack([x, y, theta], axis=1)
 
 
-def _sample_kinds(rel: FloatArray, spin_radius_m: float) -> list[int]:
+def _sample_kinds(rel: FloatArray, spin_radius_m: float) -> npt.NDArray[np.int64]:
     """Per sample step: 0 still, 2 in place, +1 forwards, -1 backwards.
 
     A step is judged with its neighbours: over the steps within
@@ -169,30 +170,26 @@ def _sample_kinds(rel: FloatArray, spin_radius_m: float) -> list[int]:
     hi = np.searchsorted(motion, motion[1:] + JUDGE_M, side="right") - 1
     window_ds = sum_ds[hi] - sum_ds[lo]
     window_dtheta = sum_dtheta[hi] - sum_dtheta[lo]
-    kinds: list[int] = []
-    for step_ds, step_dtheta, w_ds, w_dtheta in zip(
-        ds.tolist(), dtheta.tolist(), window_ds.tolist(), window_dtheta.tolist(), strict=True
-    ):
-        if abs(step_ds) <= _TINY_M and abs(step_dtheta) <= _TINY_M:
-            kinds.append(0)
-        elif abs(w_ds) < spin_radius_m * abs(w_dtheta):
-            kinds.append(2)
-        else:
-            kinds.append(1 if w_ds > 0 else -1)
+    # the same comparisons of the same floats as a loop over the steps would make
+    still = (np.abs(ds) <= _TINY_M) & (np.abs(dtheta) <= _TINY_M)
+    spin = np.abs(window_ds) < spin_radius_m * np.abs(window_dtheta)
+    kinds: npt.NDArray[np.int64] = np.where(
+        still, 0, np.where(spin, 2, np.where(window_ds > 0, 1, -1))
+    ).astype(np.int64)
     return kinds
 
 
 def _segments(rel: FloatArray, bounds: CompressionBounds) -> list[tuple[int, int, int]]:
     """(first sample, last sample, kind) of each segment."""
-    kinds = _sample_kinds(rel, bounds.spin_radius_m)
+    kind_array = _sample_kinds(rel, bounds.spin_radius_m)
+    kinds: list[int] = kind_array.tolist()
     step_length = np.hypot(np.diff(rel[:, 0]), np.diff(rel[:, 1])).tolist()
     theta = rel[:, 2].tolist()
     segments: list[tuple[int, int, int]] = []
     start, kind, driven = 0, 0, 0.0
-    for index, step_kind in enumerate(kinds):
+    for index in np.flatnonzero(kind_array).tolist():  # still steps change nothing
+        step_kind = kinds[index]
         end = index + 1
-        if step_kind == 0:
-            continue
         if kind == 0:
             kind = step_kind
         else:
