@@ -158,6 +158,21 @@ def _sample_kinds(rel: FloatArray, spin_radius_m: float) -> npt.NDArray[np.int64
     :data:`JUDGE_RADIUS_M` x heading change), so that the counts of one
     sample (a spin whose wheels differ by a count, a twitch at a start) do
     not make a leg of their own."""
+    ds, dtheta, window_ds, window_dtheta = step_windows(rel)
+    # the same comparisons of the same floats as a loop over the steps would make
+    still = (np.abs(ds) <= _TINY_M) & (np.abs(dtheta) <= _TINY_M)
+    spin = np.abs(window_ds) < spin_radius_m * np.abs(window_dtheta)
+    kinds: npt.NDArray[np.int64] = np.where(
+        still, 0, np.where(spin, 2, np.where(window_ds > 0, 1, -1))
+    ).astype(np.int64)
+    return kinds
+
+
+def step_windows(rel: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Per odometry step of ``rel`` (n, 3, in the start frame): its signed
+    distance along the mean heading (m) and heading change (rad), and their
+    sums over the steps within :data:`JUDGE_M` of motion either side of it
+    (what :func:`_sample_kinds` judges the step by)."""
     dx = np.diff(rel[:, 0])
     dy = np.diff(rel[:, 1])
     dtheta = np.diff(rel[:, 2])
@@ -170,13 +185,7 @@ def _sample_kinds(rel: FloatArray, spin_radius_m: float) -> npt.NDArray[np.int64
     hi = np.searchsorted(motion, motion[1:] + JUDGE_M, side="right") - 1
     window_ds = sum_ds[hi] - sum_ds[lo]
     window_dtheta = sum_dtheta[hi] - sum_dtheta[lo]
-    # the same comparisons of the same floats as a loop over the steps would make
-    still = (np.abs(ds) <= _TINY_M) & (np.abs(dtheta) <= _TINY_M)
-    spin = np.abs(window_ds) < spin_radius_m * np.abs(window_dtheta)
-    kinds: npt.NDArray[np.int64] = np.where(
-        still, 0, np.where(spin, 2, np.where(window_ds > 0, 1, -1))
-    ).astype(np.int64)
-    return kinds
+    return ds, dtheta, window_ds, window_dtheta
 
 
 def _segments(rel: FloatArray, bounds: CompressionBounds) -> list[tuple[int, int, int]]:

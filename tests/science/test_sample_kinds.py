@@ -7,31 +7,18 @@ from __future__ import annotations
 import numpy as np
 
 from odohil.science.odometry_paths import (
-    JUDGE_M,
-    JUDGE_RADIUS_M,
     SPIN_RADIUS_M,
     _sample_kinds,
     in_start_frame,
+    step_windows,
 )
 
 
 def _loop_kinds(rel: np.ndarray, spin_radius_m: float) -> list[int]:
     """The step kinds as the former loop made them (0 still, 2 in place, +-1)."""
-    dx, dy, dtheta = (np.diff(rel[:, i]) for i in range(3))
-    mid = rel[:-1, 2] + 0.5 * dtheta
-    ds = np.cos(mid) * dx + np.sin(mid) * dy
-    motion = np.concatenate([[0.0], np.cumsum(np.abs(ds) + JUDGE_RADIUS_M * np.abs(dtheta))])
-    sum_ds = np.concatenate([[0.0], np.cumsum(ds)])
-    sum_dtheta = np.concatenate([[0.0], np.cumsum(dtheta)])
-    lo = np.searchsorted(motion, motion[:-1] - JUDGE_M, side="left")
-    hi = np.searchsorted(motion, motion[1:] + JUDGE_M, side="right") - 1
     kinds = []
     for step_ds, step_dtheta, w_ds, w_dtheta in zip(
-        ds.tolist(),
-        dtheta.tolist(),
-        (sum_ds[hi] - sum_ds[lo]).tolist(),
-        (sum_dtheta[hi] - sum_dtheta[lo]).tolist(),
-        strict=True,
+        *(values.tolist() for values in step_windows(rel)), strict=True
     ):
         if abs(step_ds) <= 1e-12 and abs(step_dtheta) <= 1e-12:
             kinds.append(0)
