@@ -38,10 +38,10 @@ from pathlib import Path
 
 import numpy as np
 
+from odohil.session.robots.description import load_robot_description
 from odohil.session.trials.logs.csv_log import write_csv_log
 from odohil.session.trials.logs.optiodom import joined_runs, read_run, run_files
 from odohil.session.trials.logs.recording import ImportOptions, Recording, trials_of
-from odohil.session.robots.description import load_robot_description
 
 ROOT = Path(__file__).resolve().parents[1]
 DEFAULT_DATA = Path(os.environ.get("ODOHIL_OPTIODOM", ROOT.parent / "shared/data/optiodom-june"))

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from odohil.errors import RecordingError
-from odohil.session.trials.logs.csv_log import _checked_rows, _fast_rows, read_csv_log
 from odohil.session.robots.description import load_robot_description
+from odohil.session.trials.logs.csv_log import _checked_rows, _fast_rows, read_csv_log
 
 HEADER = "t_s,odo_x_m,odo_y_m,odo_theta_rad,true_x_m,true_y_m,true_theta_rad,trial"
 
