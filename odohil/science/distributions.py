@@ -100,6 +100,13 @@ def ncx2_noncentrality(x: float, dof: float, cdf: float) -> float:
     return float(_special().chndtrinc(x, dof, cdf))
 
 
+def ncx2_sf(x: float, dof: float, nc: float) -> float:
+    """P(X > x) for X ~ noncentral chi^2(dof, nc) (``scipy.special.chndtr``)."""
+    if not dof > 0:
+        return math.nan
+    return float(1.0 - _special().chndtr(max(x, 0.0), dof, max(nc, 0.0)))
+
+
 def f_sf(x: float, dof_num: float, dof_den: float) -> float:
     """P(X > x) for X ~ F(dof_num, dof_den)."""
     if not (dof_num > 0 and dof_den > 0):
