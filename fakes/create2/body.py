@@ -86,7 +86,7 @@ class Create2Body:
         """Total encoder distance driven (mean of the wheels' |travel|), m."""
         self.distance_mm = 0.0
         self.angle_deg = 0.0
-        """Motion since packets 19/20 were last read (C11), nominal."""
+        """Motion since packet 19 (distance) and 20 (angle) were each last read (C11), nominal."""
 
     # ---- commands -------------------------------------------------------------
     def set_wheels(self, right_mm_s: float, left_mm_s: float) -> None:
@@ -178,14 +178,18 @@ class Create2Body:
             out.append(value - COUNTS_MODULUS if value > 0x7FFF else value)
         return out[0], out[1]
 
-    def take_distance_angle(self, angle_factor: float) -> tuple[int, int]:
-        """Packets 19 and 20 since their last read, the remainders carried (C11)."""
+    def take_distance(self) -> int:
+        """Packet 19 since it was last read, mm, the remainder carried (C11)."""
         distance = max(-32768, min(32767, math.trunc(self.distance_mm)))
-        angle_value = self.angle_deg * angle_factor
-        angle = max(-32768, min(32767, math.trunc(angle_value)))
         self.distance_mm -= distance
+        return distance
+
+    def take_angle(self, angle_factor: float) -> int:
+        """Packet 20 since it was last read, degrees times ``angle_factor``
+        (1, or the old firmware's bug), the remainder carried (C11)."""
+        angle = max(-32768, min(32767, math.trunc(self.angle_deg * angle_factor)))
         self.angle_deg -= angle / angle_factor
-        return distance, angle
+        return angle
 
     def true_pose(self) -> tuple[float, float, float]:
         """True pose: x m, y m, heading rad (unwrapped) in the start frame.

@@ -25,6 +25,7 @@ rate is cut short (corrupted), never queued without bound; Passive sleeps after
 from __future__ import annotations
 
 import logging
+import math
 import time
 from collections.abc import Callable
 
@@ -97,16 +98,32 @@ ACTUATORS = frozenset(
 
 
 def drive_wheels(velocity: int, radius: int) -> tuple[float, float]:
-    """Right and left wheel speeds (mm/s) of Drive ``velocity``, ``radius`` (C16)."""
+    """Right and left wheel speeds (mm/s) of Drive ``velocity``, ``radius`` (C16, C30).
+
+    The special radii drive straight (0x8000, 0x7FFF) or spin (-1, +1); radius 0,
+    which the specification leaves undefined, drives straight too (C30); any
+    other radius is clamped to +-2000 mm and turns about that radius, the wheel
+    speeds scaled down together (the radius kept) so the faster wheel is at
+    most 500 mm/s. Defined for every pair of s16 values.
+    """
     v = max(-MAX_SPEED_MM_S, min(MAX_SPEED_MM_S, velocity))
-    if radius in (0x7FFF, -0x8000):
+    if radius in (0x7FFF, -0x8000, 0):
         return float(v), float(v)
     if radius == -1:
         return float(-v), float(v)
     if radius == 1:
         return float(v), float(-v)
     r = max(-MAX_RADIUS_MM, min(MAX_RADIUS_MM, radius))
-    return v * (r + HALF_BASE_MM) / r, v * (r - HALF_BASE_MM) / r
+    right, left = v * (r + HALF_BASE_MM) / r, v * (r - HALF_BASE_MM) / r
+    if abs(right) > MAX_SPEED_MM_S or abs(left) > MAX_SPEED_MM_S:
+        ratio = (r - HALF_BASE_MM) / (r + HALF_BASE_MM)  # left / right
+        if abs(ratio) <= 1.0:
+            right = math.copysign(MAX_SPEED_MM_S, right)
+            left = right * ratio
+        else:
+            left = math.copysign(MAX_SPEED_MM_S, left)
+            right = left / ratio
+    return right, left
 
 
 class Create2Engine:
@@ -314,12 +331,14 @@ class Create2Engine:
 
     def _read_values(self, ids: tuple[int, ...]) -> dict[int, int]:
         """The values for a reply of ``ids``; 19 and 20, when asked, are the
-        motion since they were last read (C11)."""
+        motion since each was itself last read (C11): reading one leaves the
+        other's count alone."""
         values = dict(self.values)
         asked = {m for pid in ids for m in members(pid)}
-        if asked & {19, 20}:
-            factor = ANGLE_BUG_FACTOR if self.config.angle_bug else 1.0
-            values[19], values[20] = self.body.take_distance_angle(factor)
+        if 19 in asked:
+            values[19] = self.body.take_distance()
+        if 20 in asked:
+            values[20] = self.body.take_angle(ANGLE_BUG_FACTOR if self.config.angle_bug else 1.0)
         return values
 
     # ---- commands --------------------------------------------------------------------
