@@ -19,6 +19,7 @@ circular mean), :func:`angle_near` moves them to within pi of it.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any, Literal, overload
 
 import numpy as np
@@ -172,6 +173,13 @@ def plural(count: int, noun: str, plural_form: str | None = None) -> str:
     """``"1 trial"``, ``"2 trials"``, ``"0 trials"``: the count with its noun
     agreed (``plural_form`` for nouns that do not take an s)."""
     return f"{count} {noun if count == 1 else (plural_form or noun + 's')}"
+
+
+def join_words(words: Sequence[str]) -> str:
+    """``"a"``, ``"a and b"``, ``"a, b and c"``: words joined for a sentence."""
+    if len(words) <= 1:
+        return "".join(words)
+    return ", ".join(words[:-1]) + " and " + words[-1]
 
 
 def plural_noun(count: int, noun: str, plural_form: str | None = None) -> str:

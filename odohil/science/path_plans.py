@@ -43,28 +43,23 @@ tests/estimation/test_path_plans.py holds these standard errors to the spread
 of maximum-likelihood estimates over data sets simulated with the discrete
 model (odohil/science/diff_drive.py :func:`~odohil.science.diff_drive.simulate_turn_errors`).
 
-**Plans in a time budget.** :func:`best_plan` searches mixtures of shapes
-within an operator time (:func:`path_seconds`: marking and measuring, driving,
-spinning); :func:`compare_with_paths` compares the best turn-free plan, the
-best forth-and-back plan and the best plan with the given general shapes of
-the same time, and says per parameter what the general shapes buy
-(:class:`PathComparison`). :func:`plan_estimability` is the pre-flight's
-statement of what a plan can and cannot estimate (odohil/session/plans/checks.py).
+**Beside this module.** odohil/science/path_plan_search.py finds the best
+plan in an operator time (:func:`~odohil.science.path_plan_search.best_plan`);
+odohil/science/path_comparison.py says what general shapes buy over the best
+forth-and-back plans of the same time; odohil/science/path_estimability.py is
+the pre-flight's statement of what a plan can and cannot estimate.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
-import numpy.typing as npt
 
 from odohil import units
 from odohil.errors import ParameterError
-from odohil.science import targets
 from odohil.science.fisher import (
     DEFAULT_POSE_SAMPLES,
     PARAMETER_SCALES,
@@ -74,8 +69,8 @@ from odohil.science.fisher import (
 )
 from odohil.science.moments import BATCH_COLUMNS, PathSet, TurnErrors, batch_moments
 from odohil.science.parameters import PARAMETER_NAMES, ErrorParameters
-from odohil.science.paths import TURN_CLASSES, Design, Drivable, EncoderPath, FloatArray, Turn
-from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN, OperatorTime
+from odohil.science.paths import TURN_CLASSES, Drivable, EncoderPath, FloatArray, Turn
+from odohil.science.planner import OperatorTime
 from odohil.science.robot_description import RobotDescription
 
 Shape = EncoderPath | Drivable
@@ -318,7 +313,7 @@ def plan_information(items: Sequence[tuple[Shape, int]], robot: RobotModel) -> F
     Raises:
         ParameterError: an empty plan or a negative count.
     """
-    checked = _checked(items)
+    checked = checked_items(items)
     paths = [shape_path(shape) for shape, _ in checked]
     per_trial = path_informations(paths, robot)
     counts = np.array([n for _, n in checked], dtype=np.float64)
@@ -326,13 +321,30 @@ def plan_information(items: Sequence[tuple[Shape, int]], robot: RobotModel) -> F
     return info
 
 
-def _checked(items: Sequence[tuple[Shape, int]]) -> list[tuple[Shape, int]]:
+def checked_items(items: Sequence[tuple[Shape, int]]) -> list[tuple[Shape, int]]:
+    """``items`` as a list, checked: at least one, no negative count.
+
+    Raises:
+        ParameterError: an empty plan or a negative count.
+    """
     if not items:
         raise ParameterError("a plan needs at least one shape")
     for shape, n in items:
         if n < 0:
             raise ParameterError(f"{shape_label(shape)}: n must be non-negative, got {n}")
     return list(items)
+
+
+def driven_items(items: Sequence[tuple[Shape, int]]) -> list[tuple[Shape, int]]:
+    """The items of a checked plan (:func:`checked_items`) with at least one trial.
+
+    Raises:
+        ParameterError: an empty plan, a negative count, or no trial at all.
+    """
+    driven = [(shape, n) for shape, n in checked_items(items) if n > 0]
+    if not driven:
+        raise ParameterError("a plan needs at least one trial")
+    return driven
 
 
 # --- what acts, what is identified --------------------------------------------
@@ -478,7 +490,7 @@ def identify(
             },
             key=names.index,
         )
-        with_whom = f" with {_join(partners)}" if partners else ""
+        with_whom = f" with {units.join_words(partners)}" if partners else ""
         reasons[a] = f"confounded{with_whom}: these trials identify only a combination"
     keep = ~null
     # covariance of the estimates: the pseudo-inverse on the identified subspace
@@ -506,15 +518,9 @@ def identify(
                 for b in identified
                 if b != a and abs(corr[a, b]) > CONFOUNDED
             ]
-            note = f"nearly confounded with {_join(close)}" if close else ""
+            note = f"nearly confounded with {units.join_words(close)}" if close else ""
             scores.append(ParameterScore(name, float(errors[a]), "", note))
     return tuple(scores), corr
-
-
-def _join(words: Sequence[str]) -> str:
-    if len(words) <= 1:
-        return "".join(words)
-    return ", ".join(words[:-1]) + " and " + words[-1]
 
 
 def path_seconds(path: EncoderPath, operator: OperatorTime) -> float:
@@ -541,9 +547,7 @@ def score_plan(
         ParameterError: an empty plan, a negative count, or a singular total
             covariance (K_theta = 0 with exact poses).
     """
-    checked = [(shape, n) for shape, n in _checked(items) if n > 0]
-    if not checked:
-        raise ParameterError("a plan needs at least one trial")
+    checked = driven_items(items)
     paths = [shape_path(shape) for shape, _ in checked]
     info = plan_information(checked, robot)
     scores, corr = identify(info, robot, acting(paths, robot))
@@ -563,547 +567,7 @@ def score_plan(
     )
 
 
-# --- the best plan in a time budget, and what general paths buy -----------------
-
-DEFAULT_K_VALUES: tuple[float, ...] = (0.5, 1.0, 2.0, 5.0, 10.0)
-DEFAULT_LEG_LENGTHS_M: tuple[float, ...] = (0.5, 1.0, 2.0, 4.0)
-"""The forth-and-back designs a comparison searches by default (both variants)."""
-E_TURN_TARGET = (0.25, 1e-3)
-"""Default target of a turn-scale error's standard error: max(25 % of
-|e_turn|, 0.1 %) (as odohil/science/targets.py for the four)."""
-K_SPIN_TARGET = (0.5, 1e-6)
-"""Default target of K_spin's standard error: max(50 % of K_spin, 1e-6 rad^2/rad)."""
-SHARE_STEPS = 12
-"""A mixture's time is shared among its items in steps of 1/SHARE_STEPS."""
-POOL_SIZE = 10
-"""Items mixed: the best this many alone, and the best two per parameter per second."""
-_TIE_BREAK = 1e-3
-
-
-def default_design_grid() -> list[Design]:
-    """Every design of :data:`DEFAULT_K_VALUES` x :data:`DEFAULT_LEG_LENGTHS_M`,
-    both variants."""
-    return [
-        Design(k, length, variant)
-        for k in DEFAULT_K_VALUES
-        for length in DEFAULT_LEG_LENGTHS_M
-        for variant in ("reverse", "turn")
-    ]
-
-
-def default_targets(robot: RobotModel) -> FloatArray:
-    """The target standard error (p,) of every parameter at the robot's values
-    (SI): odohil/science/targets.py for the four, :data:`E_TURN_TARGET` and
-    :data:`K_SPIN_TARGET` for the turn errors."""
-    four = targets.default_targets(robot.params)
-    out = []
-    for name, value in zip(robot.names, robot.values(), strict=True):
-        if name in four:
-            out.append(four[name])
-        elif name == "K_spin":
-            out.append(max(K_SPIN_TARGET[0] * abs(value), K_SPIN_TARGET[1]))
-        else:
-            out.append(max(E_TURN_TARGET[0] * abs(value), E_TURN_TARGET[1]))
-    return np.array(out)
-
-
-@dataclass(frozen=True)
-class _Item:
-    shape: Shape
-    info: FloatArray  # one trial, (p, p)
-    seconds: float
-
-
-def _batch_errors(info: FloatArray, scale: FloatArray) -> FloatArray:
-    """Standard errors (B, w) of informations (B, w, w); inf where singular
-    (in correlation form, :data:`SINGULAR`)."""
-    scaled = info * np.outer(scale, scale)
-    diag = np.einsum("bii->bi", scaled)
-    positive = np.all(diag > 0, axis=1)
-    root = np.sqrt(np.where(diag > 0, diag, 1.0))
-    corr = scaled / (root[:, :, None] * root[:, None, :])
-    eigen = np.linalg.eigvalsh(corr)
-    ok = positive & (eigen[:, 0] > SINGULAR * eigen[:, -1])
-    safe = np.where(ok[:, None, None], corr, np.eye(info.shape[1]))
-    variances = np.einsum("bii->bi", np.linalg.inv(safe)) / root**2
-    errors: FloatArray = np.sqrt(np.abs(variances)) * scale
-    errors[~ok] = math.inf
-    return errors
-
-
-def _shares(size: int) -> FloatArray:
-    """Every split of 1 into ``size`` positive multiples of 1/SHARE_STEPS."""
-    if size == 1:
-        return np.ones((1, 1))
-    rows = [
-        (*head, SHARE_STEPS - sum(head))
-        for head in _compositions(size - 1, SHARE_STEPS - 1)
-        if sum(head) < SHARE_STEPS
-    ]
-    return np.array(rows, dtype=np.float64) / SHARE_STEPS
-
-
-def _compositions(parts: int, most: int) -> list[tuple[int, ...]]:
-    if parts == 0:
-        return [()]
-    return [
-        (first, *rest)
-        for first in range(1, most + 1)
-        for rest in _compositions(parts - 1, most - first)
-    ]
-
-
-def best_plan(
-    shapes: Sequence[Shape],
-    robot: RobotModel,
-    budget_s: float,
-    *,
-    operator: OperatorTime | None = None,
-    target_errors: FloatArray | None = None,
-    min_trials: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
-    max_items: int = 3,
-    required: Sequence[Shape] = (),
-    max_required: int = 2,
-) -> PlanScore | None:
-    """The plan of at most ``max_items`` of ``shapes`` (with ``required``:
-    one to ``max_required`` of those, and at most ``max_items`` others), each
-    at least ``min_trials`` trials, within ``budget_s`` operator seconds, that
-    estimates as many as it can of the parameters the shapes together
-    identify (the others are reported not estimable), and among those the
-    one with the smallest largest ratio of standard error to target over the
-    parameters acting on its trials. A grid search: items are the best alone
-    and the best per parameter per second (:data:`POOL_SIZE`), the time is
-    shared in steps of 1/:data:`SHARE_STEPS`. None when no plan fits.
-
-    Raises:
-        ParameterError: no shape, a bad budget or bad counts.
-    """
-    if not shapes:
-        raise ParameterError("the search needs at least one shape")
-    if not (math.isfinite(budget_s) and budget_s > 0):
-        raise ParameterError(
-            f"the time budget must be a positive number of seconds, got {budget_s!r}"
-        )
-    if min_trials < 1 or not 1 <= max_items <= 3 or not 1 <= max_required <= 2:
-        raise ParameterError(
-            "min_trials >= 1, 1 <= max_items <= 3 and 1 <= max_required <= 2; got "
-            f"{min_trials}, {max_items}, {max_required}"
-        )
-    operator = operator or OperatorTime()
-    wanted_targets = default_targets(robot) if target_errors is None else target_errors
-    paths = [shape_path(s) for s in shapes]
-    infos = path_informations(paths, robot)
-    items = [
-        _Item(shape, info, path_seconds(path, operator))
-        for shape, info, path in zip(shapes, infos, paths, strict=True)
-    ]
-    items = [i for i in items if min_trials * i.seconds <= budget_s]
-    if not items:
-        return None
-    # the parameters these shapes can identify at all
-    whole = sum((i.info for i in items), np.zeros_like(infos[0]))
-    reach, _ = identify(whole, robot, acting([shape_path(i.shape) for i in items], robot))
-    wanted = np.array([k for k, s in enumerate(reach) if s.estimable])
-    if wanted.size == 0:
-        return None
-    scale = robot.scales()[wanted]
-    divisor = wanted_targets[wanted]
-    per_trial = np.array([i.info[np.ix_(wanted, wanted)] for i in items])
-    seconds = np.array([i.seconds for i in items])
-    wanted_names = [robot.names[k] for k in wanted]
-    acts = np.array(
-        [[n not in acting([shape_path(i.shape)], robot) for n in wanted_names] for i in items]
-    )
-    must = {id(s) for s in required}
-    needed = [k for k, i in enumerate(items) if id(i.shape) in must] if required else []
-    if required and not needed:
-        return None
-    search = _Search(per_trial, seconds, acts, scale, divisor)
-    pool = search.pool(budget_s, needed)
-    best: tuple[tuple[int, float], tuple[int, ...], FloatArray] | None = None
-    for group in _groups(pool, needed, max_items, max_required):
-        shares = _shares(len(group))
-        counts = np.floor(shares * budget_s / seconds[list(group)] + 1e-9)
-        counts = counts[np.all(counts >= min_trials, axis=1)]
-        if counts.size == 0:
-            continue
-        key, row = search.best(group, counts)
-        if math.isfinite(key[1]) and (best is None or key < best[0]):
-            best = (key, group, counts[row])
-    if best is None:
-        return None
-    _, group, counts = best
-    plan = [(items[k].shape, int(n)) for k, n in zip(group, counts, strict=True)]
-    return score_plan(plan, robot, operator)
-
-
-def _groups(
-    pool: Sequence[int], needed: Sequence[int], max_items: int, max_required: int
-) -> list[tuple[int, ...]]:
-    """The groups of candidates :func:`best_plan` tries."""
-    if not needed:
-        return [g for size in range(1, max_items + 1) for g in itertools.combinations(pool, size)]
-    others = [k for k in pool if k not in set(needed)]
-    return [
-        (*head, *tail)
-        for size in range(1, max_required + 1)
-        for head in itertools.combinations(needed, size)
-        for extra in range(max_items + 1)
-        for tail in itertools.combinations(others, extra)
-    ]
-
-
-@dataclass(frozen=True)
-class _Search:
-    """The candidates of :func:`best_plan` restricted to the wanted parameters.
-
-    Attributes:
-        per_trial: (K, w, w) one trial's information; seconds: (K,) its time.
-        acts: (K, w) which wanted parameters act on each candidate's trials.
-        scale: (w,) typical magnitudes; divisor: (w,) target standard errors.
-    """
-
-    per_trial: FloatArray
-    seconds: FloatArray
-    acts: npt.NDArray[np.bool_]
-    scale: FloatArray
-    divisor: FloatArray
-
-    def values(self, total: FloatArray, mask: npt.NDArray[np.bool_]) -> FloatArray:
-        """The criterion (B,) of informations (B, w, w) over the parameters
-        ``mask`` (those acting): the largest standard error / target ratio
-        plus a small tie-break (the RMS ratio); inf where singular."""
-        sub = total[:, mask][:, :, mask]
-        ratios = _batch_errors(sub, self.scale[mask]) / self.divisor[mask]
-        value: FloatArray = ratios.max(axis=1) + _TIE_BREAK * np.sqrt((ratios**2).mean(axis=1))
-        return value
-
-    def best(self, group: Sequence[int], counts: FloatArray) -> tuple[tuple[int, float], int]:
-        """((wanted parameters not acting, criterion), row) of the best row of
-        ``counts`` (B, len(group)): as many wanted parameters as possible, then precision."""
-        mask: npt.NDArray[np.bool_] = np.asarray(self.acts[list(group)].any(axis=0), dtype=bool)
-        total = np.einsum("bd,dij->bij", counts, self.per_trial[list(group)])
-        values = self.values(total, mask)
-        row = int(np.argmin(values))
-        return (int((~mask).sum()), float(values[row])), row
-
-    def pool(self, budget_s: float, needed: Sequence[int]) -> list[int]:
-        """The candidates worth mixing: the best :data:`POOL_SIZE` alone
-        (each over the parameters acting on it), the best two per parameter
-        per second, and ``needed``."""
-        alone = np.floor(budget_s / self.seconds)
-        keys = []
-        for k in range(len(self.seconds)):
-            total = self.per_trial[k][None] * alone[k]
-            value = float(self.values(total, self.acts[k])[0])
-            keys.append((int((~self.acts[k]).sum()), value))
-        chosen = set(sorted(range(len(keys)), key=keys.__getitem__)[:POOL_SIZE])
-        per_second = np.einsum("bii->bi", self.per_trial) / self.seconds[:, None]
-        for a in range(self.per_trial.shape[1]):
-            chosen.update(np.argsort(-per_second[:, a], kind="stable")[:2].tolist())
-        chosen.update(needed)
-        return sorted(chosen)
-
-
-@dataclass(frozen=True)
-class Gain:
-    """What general paths change for one parameter.
-
-    Attributes:
-        name: the parameter.
-        turn_free, forth_and_back, with_paths: its standard error (SI) in
-            each plan of the comparison (math.inf: not estimable).
-        newly_estimable: the plan with general paths estimates it and no
-            forth-and-back plan of the search does.
-        ratio: forth-and-back's standard error over the general paths'
-            (> 1: the general paths buy precision; nan when either is not estimable).
-    """
-
-    name: str
-    turn_free: float
-    forth_and_back: float
-    with_paths: float
-
-    @property
-    def newly_estimable(self) -> bool:
-        """Estimable only with the general paths."""
-        return math.isinf(self.forth_and_back) and math.isfinite(self.with_paths)
-
-    @property
-    def ratio(self) -> float:
-        """forth_and_back / with_paths (nan when either is not estimable)."""
-        if math.isinf(self.forth_and_back) or math.isinf(self.with_paths):
-            return math.nan
-        return self.forth_and_back / self.with_paths
-
-
-MIXED_DESIGNS = 2
-"""Most forth-and-back designs beside the general shapes in a comparison's plan."""
-BUYS_RATIO = 1.2
-"""General paths buy precision in a parameter when they shrink its standard
-error by at least this factor at the same time."""
-
-
-@dataclass(frozen=True)
-class PathComparison:
-    """What adding general paths (squares, circles) buys over the best
-    forth-and-back plans of the same operator time.
-
-    Attributes:
-        budget_s: the operator time of every plan, s.
-        turn_free: the best plan of turn-free designs (``reverse``; what the
-            planner recommends for a robot whose turns carry error).
-        forth_and_back: the best forth-and-back plan, turn designs allowed
-            (the turn errors estimated, not folded into E_R and K_theta).
-        with_paths: the best plan with one or two of the general shapes and
-            up to :data:`MIXED_DESIGNS` forth-and-back designs beside them.
-        gains: per parameter, what the general paths change.
-        findings: the comparison in sentences, paper units.
-    """
-
-    budget_s: float
-    turn_free: PlanScore | None
-    forth_and_back: PlanScore | None
-    with_paths: PlanScore | None
-    gains: tuple[Gain, ...]
-    findings: tuple[str, ...]
-
-    @property
-    def buys(self) -> tuple[str, ...]:
-        """The parameters the general paths make estimable, or estimate at
-        least :data:`BUYS_RATIO` times more precisely."""
-        return tuple(g.name for g in self.gains if g.newly_estimable or g.ratio >= BUYS_RATIO)
-
-
-def compare_with_paths(
-    robot: RobotModel,
-    general: Sequence[Shape],
-    budget_s: float,
-    *,
-    operator: OperatorTime | None = None,
-    designs: Sequence[Design] | None = None,
-    target_errors: FloatArray | None = None,
-    min_trials: int = DEFAULT_MIN_TRIALS_PER_DESIGN,
-    max_items: int = 3,
-) -> PathComparison:
-    """Compare, at the same operator time, the best turn-free plan, the best
-    forth-and-back plan and the best plan that adds ``general`` shapes
-    (:func:`best_plan` each), and say per parameter what the general shapes
-    buy (module docstring; :class:`PathComparison`).
-
-    Raises:
-        ParameterError: no general shape or a bad budget.
-    """
-    if not general:
-        raise ParameterError("the comparison needs at least one general path")
-    grid = list(designs) if designs is not None else default_design_grid()
-
-    def search(shapes: Sequence[Shape], required: Sequence[Shape] = ()) -> PlanScore | None:
-        if not shapes:
-            return None
-        return best_plan(
-            shapes,
-            robot,
-            budget_s,
-            operator=operator,
-            target_errors=target_errors,
-            min_trials=min_trials,
-            max_items=min(max_items, MIXED_DESIGNS) if required else max_items,
-            required=required,
-        )
-
-    turn_free = search([d for d in grid if d.variant == "reverse"])
-    forth = search(grid)
-    mixed = search([*general, *grid], general)
-    gains = tuple(
-        Gain(
-            name,
-            _error_of(turn_free, name),
-            _error_of(forth, name),
-            _error_of(mixed, name),
-        )
-        for name in robot.names
-    )
-    return PathComparison(
-        budget_s, turn_free, forth, mixed, gains, _findings(robot, turn_free, forth, mixed, gains)
-    )
-
-
-def _error_of(score: PlanScore | None, name: str) -> float:
-    return math.inf if score is None else score.parameter(name).standard_error
-
-
-def _ratio_words(ratio: float) -> str:
-    if abs(ratio - 1.0) < 0.05:
-        return "about the same"
-    if ratio > 1.0:
-        return f"{ratio:.2g} times smaller"
-    return f"{1.0 / ratio:.2g} times larger"
-
-
 def describe_plan(score: PlanScore) -> str:
     """``n x label; ...`` and the time, minutes."""
     items = "; ".join(f"{n} x {label}" for label, n in zip(score.labels, score.counts, strict=True))
     return f"{items} ({score.seconds / 60.0:.0f} min)"
-
-
-def _findings(
-    robot: RobotModel,
-    turn_free: PlanScore | None,
-    forth: PlanScore | None,
-    mixed: PlanScore | None,
-    gains: Sequence[Gain],
-) -> tuple[str, ...]:
-    out: list[str] = []
-    for title, score in (
-        ("turn-free forth-and-back", turn_free),
-        ("forth-and-back with turns", forth),
-        ("with the general paths", mixed),
-    ):
-        out.append(f"Best {title}: " + ("none fits" if score is None else describe_plan(score)))
-    for gain in gains:
-        name = gain.name
-        parts: list[str] = []
-        if turn_free is not None and math.isinf(gain.turn_free):
-            reason = turn_free.parameter(name).reason
-            parts.append(f"turn-free designs cannot estimate it: {reason}")
-        if forth is not None:
-            entry = forth.parameter(name)
-            if entry.estimable:
-                text = f"forth-and-back SE {units.paper_text(name, gain.forth_and_back)}"
-                parts.append(text + (f", {entry.note}" if entry.note else ""))
-            else:
-                parts.append(f"no forth-and-back plan estimates it: {entry.reason}")
-        if mixed is not None:
-            entry = mixed.parameter(name)
-            if entry.estimable:
-                text = f"with the general paths SE {units.paper_text(name, gain.with_paths)}"
-                if gain.newly_estimable:
-                    text += ": estimable only with them"
-                elif math.isfinite(gain.ratio):
-                    text += f" ({_ratio_words(gain.ratio)})"
-                parts.append(text + (f", {entry.note}" if entry.note else ""))
-            else:
-                parts.append(f"nor do the general paths: {entry.reason}")
-        out.append(f"{name}: " + "; ".join(parts))
-    return tuple(out)
-
-
-# --- what a plan can estimate (the pre-flight statement) ----------------------
-
-
-@dataclass(frozen=True)
-class Estimability:
-    """What trials of a plan can and cannot estimate, before any is driven.
-
-    Attributes:
-        turns_exact: whether the model has the four parameters only.
-        estimable: the parameters the plan identifies.
-        standard_errors: their expected (Cramer-Rao) standard errors, SI.
-        not_estimable: (parameter, reason) of the others.
-        notes: what else to know (near-confoundings, the model).
-        problems: why no estimate could come of these trials (empty when one can).
-    """
-
-    turns_exact: bool
-    estimable: tuple[str, ...]
-    standard_errors: tuple[float, ...]
-    not_estimable: tuple[tuple[str, str], ...]
-    notes: tuple[str, ...] = ()
-    problems: tuple[str, ...] = ()
-
-    @property
-    def ok(self) -> bool:
-        """Whether an estimate can come of these trials."""
-        return not self.problems
-
-    def text(self, *, problems: bool = True) -> str:
-        """The statement (expected standard errors in paper units), with the
-        problems unless ``problems`` is False."""
-        found = [
-            f"{name} (SE {units.paper_text(name, se)})"
-            for name, se in zip(self.estimable, self.standard_errors, strict=True)
-        ]
-        sentences = [f"Estimates {_join(found) or 'nothing'}"]
-        if not self.turns_exact and any(n not in PARAMETER_NAMES for n in self.estimable):
-            sentences[0] += ", the turn errors with the four (not folded into E_R and K_theta)"
-        if self.not_estimable:
-            sentences.append(
-                "Cannot estimate "
-                + "; ".join(f"{name}: {reason}" for name, reason in self.not_estimable)
-            )
-        sentences += [*self.notes, *(self.problems if problems else ())]
-        return ". ".join(sentences) + "."
-
-
-def plan_estimability(items: Sequence[tuple[Shape, int]], robot: RobotModel) -> Estimability:
-    """What a plan can estimate on ``robot`` (module docstring): the
-    parameters it identifies with their expected standard errors, the others
-    with the reason, and the problems that leave no estimate at all: one of
-    the four not identified, a turn error that acts on the trials but is not
-    identified (the estimator fits every turn error whose turns the trials
-    make: odohil/science/estimators/paths.py), or no more trials than
-    parameters.
-
-    Raises:
-        ParameterError: an empty plan or a negative count.
-    """
-    checked = [(shape, n) for shape, n in _checked(items) if n > 0]
-    if not checked:
-        raise ParameterError("a plan needs at least one trial")
-    score = score_plan(checked, robot)
-    acts = acting([shape_path(shape) for shape, _ in checked], robot)
-    problems = [
-        f"{p.name} is not identified: {p.reason}"
-        for p in score.parameters
-        if not p.estimable and p.name not in acts
-    ]
-    fitted = len(robot.names) - len(acts)
-    n_trials = sum(n for _, n in checked)
-    if n_trials <= fitted:
-        problems.append(
-            f"{units.plural(n_trials, 'trial')} for {fitted} parameters: need at least {fitted + 1}"
-        )
-    names = score.names
-    corr = score.correlation
-    notes = [
-        f"{names[a]} and {names[b]} are nearly confounded (correlation {corr[a, b]:+.3f})"
-        for a in range(len(names))
-        for b in range(a + 1, len(names))
-        if abs(corr[a, b]) > CONFOUNDED
-    ]
-    notes += _split_note(checked, robot)
-    kept = [p for p in score.parameters if p.estimable]
-    return Estimability(
-        turns_exact=robot.turns_exact,
-        estimable=tuple(p.name for p in kept),
-        standard_errors=tuple(p.standard_error for p in kept),
-        not_estimable=tuple((p.name, p.reason) for p in score.parameters if not p.estimable),
-        notes=tuple(notes),
-        problems=tuple(problems),
-    )
-
-
-def _split_note(items: Sequence[tuple[Shape, int]], robot: RobotModel) -> list[str]:
-    """What one e_turn per direction would estimate, for a plan that turns
-    both ways with one kind of turn (the estimator splits e_turn by direction
-    when a likelihood-ratio test asks for it: odohil/science/estimators/paths.py)."""
-    if robot.turns_exact or robot.split_directions:
-        return []
-    turned = sum((shape_path(shape).turns.total_abs_rad for shape, _ in items), np.zeros(4))
-    if not ((turned[0] > 0 and turned[1] > 0) or (turned[2] > 0 and turned[3] > 0)):
-        return []
-    split = score_plan(items, replace(robot, split_directions=True))
-    both = [
-        p
-        for p in split.parameters
-        if p.name.startswith("e_turn") and not p.reason.startswith("the plan makes no")
-    ]
-    found = [
-        f"{p.name} (SE {units.paper_text(p.name, p.standard_error)})" for p in both if p.estimable
-    ]
-    lost = [f"{p.name}: {p.reason}" for p in both if not p.estimable]
-    text = "If the data ask for one e_turn per direction, the split fit estimates " + (
-        _join(found) or "none of them"
-    )
-    return [text + (f"; not {'; '.join(lost)}" if lost else "")]

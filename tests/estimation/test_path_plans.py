@@ -1,7 +1,8 @@
-"""Plans of general paths (odohil/science/path_plans.py, issue 19 deliverables 3
-and 4): the Fisher information with a differential drive's turn errors held
-to simulations of the discrete model (the score's covariance, and the spread
-of maximum-likelihood estimates over simulated data sets), what a plan can and
+"""Plans of general paths (odohil/science/path_plans.py, path_plan_search.py,
+path_comparison.py and path_estimability.py; issue 19 deliverables 3 and 4):
+the Fisher information with a differential drive's turn errors held to
+simulations of the discrete model (the score's covariance, and the spread of
+maximum-likelihood estimates over simulated data sets), what a plan can and
 cannot estimate, and what squares and circles buy over forth-and-back plans."""
 
 from __future__ import annotations
@@ -17,14 +18,14 @@ from odohil.science.estimators.paths import fit_paths, turn_model
 from odohil.science.fisher import default_description, fisher_information, pose_spread_measurement
 from odohil.science.moments import BATCH_COLUMNS, PathSet, TurnErrors, batch_moments
 from odohil.science.parameters import NOMAD150, ErrorParameters
+from odohil.science.path_comparison import compare_with_paths
 from odohil.science.path_designs import parse_path_design
+from odohil.science.path_estimability import plan_estimability
 from odohil.science.path_plans import (
     RobotModel,
     Shape,
     acting,
-    compare_with_paths,
     path_informations,
-    plan_estimability,
     plan_information,
     score_plan,
     shape_label,

@@ -118,12 +118,6 @@ def mahalanobis2(
     return out
 
 
-def _join(labels: Sequence[str]) -> str:
-    if len(labels) <= 1:
-        return "".join(labels)
-    return ", ".join(labels[:-1]) + " and " + labels[-1]
-
-
 def model_check(
     observations: Sequence[Observation],
     params: ErrorParameters,
@@ -175,7 +169,7 @@ def distance_check(
         named_labels = [o.label() for o in outliers]
         verb = "are outliers" if len(named_labels) > 1 else "is an outlier"
         verdict = (
-            f"{_join(named_labels)} {verb}: the model puts them beyond its "
+            f"{units.join_words(named_labels)} {verb}: the model puts them beyond its "
             f"{100 * (1 - OUTLIER_LEVEL):g} % range (check the marks, or the run)"
         )
     elif p_value < FIT_LEVEL:
@@ -418,7 +412,7 @@ def sufficiency(
             )
         else:
             advice.append(f"{PARAMETER_NAMES[p]}: more trials of these designs would not do")
-    verdict = f"not enough trials for {_join(list(names))} ({'; '.join(advice)})"
+    verdict = f"not enough trials for {units.join_words(list(names))} ({'; '.join(advice)})"
     return Sufficiency(False, verdict, names, tuple(reasons), tuple(suggestions))
 
 
@@ -449,7 +443,7 @@ def plan_problems(
             )
         return (
             "every estimate starts from the paper's method, which needs "
-            f"{START_NEEDS}; the plan has {_join(labels)} (signed distance "
+            f"{START_NEEDS}; the plan has {units.join_words(labels)} (signed distance "
             + ", ".join(f"{d.path().signed_distance_m:g} m" for d in counts)
             + f"). It becomes estimable with: {fix}",
         )
@@ -460,7 +454,7 @@ def plan_problems(
     missing = [PARAMETER_NAMES[p] for p in range(4) if not math.isfinite(variances[p])]
     if missing:
         return (
-            f"{_join(missing)} cannot be identified from {_join(labels)} (no Fisher "
-            "information); add a design of another k or l",
+            f"{units.join_words(missing)} cannot be identified from "
+            f"{units.join_words(labels)} (no Fisher information); add a design of another k or l",
         )
     return ()

@@ -3,7 +3,7 @@
 errors when the robot's turns carry error), and a request naming paths in the
 ``--path`` syntax (odohil/science/path_designs.py), a time budget and the
 robot, checked and turned into
-:func:`odohil.science.path_plans.compare_with_paths`'s comparison
+:func:`odohil.science.path_comparison.compare_with_paths`'s comparison
 (``--compare-paths``); each with its JSON document and its text.
 :func:`plan_outcome` is the plan command's one entry: it hands plans of
 forth-and-back designs and budgets to odohil/session/commands/plan.py. Errors
@@ -20,18 +20,11 @@ from odohil import units
 from odohil.errors import OdohilError, ParameterError
 from odohil.science.fisher import default_description
 from odohil.science.parameters import ErrorParameters
+from odohil.science.path_comparison import BUYS_RATIO, PathComparison, compare_with_paths
 from odohil.science.path_designs import parse_path_design
-from odohil.science.path_plans import (
-    BUYS_RATIO,
-    PathComparison,
-    PlanScore,
-    RobotModel,
-    compare_with_paths,
-    default_targets,
-    describe_plan,
-    plan_estimability,
-    score_plan,
-)
+from odohil.science.path_estimability import plan_estimability
+from odohil.science.path_plan_search import default_targets
+from odohil.science.path_plans import PlanScore, RobotModel, describe_plan, score_plan
 from odohil.science.planner import (
     DEFAULT_MIN_TRIALS_PER_DESIGN,
     DEFAULT_SECONDS_PER_TRIAL,

@@ -26,16 +26,8 @@ from dataclasses import replace
 from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.estimators.checks import plan_problems
-from odohil.science.path_designs import PathDesign
-from odohil.science.path_plans import (
-    Estimability,
-    RobotModel,
-    Shape,
-    acting,
-    plan_estimability,
-    shape_label,
-    shape_path,
-)
+from odohil.science.path_estimability import Estimability, plan_estimability
+from odohil.science.path_plans import RobotModel, Shape, acting, shape_label, shape_path
 from odohil.science.paths import Design
 from odohil.science.planner import DEFAULT_MIN_TRIALS_PER_DESIGN
 from odohil.science.robot_description import RobotDescription
@@ -140,7 +132,7 @@ def designs_only(items: Sequence[tuple[Shape, int]]) -> bool:
 
 def estimability(items: Sequence[tuple[Shape, int]], description: RobotDescription) -> Estimability:
     """What trials of ``items`` can and cannot estimate on the described robot
-    (:func:`odohil.science.path_plans.plan_estimability` at its ``[priors]``,
+    (:func:`odohil.science.path_estimability.plan_estimability` at its ``[priors]``,
     with its floor marks), as the session will estimate them: a plan naming a
     path is estimated from general paths, with the turn errors unless the
     robot's turns are exact (odohil/session/results/outcome.py ``estimate_paths``), a

@@ -19,7 +19,7 @@ from typing import Any, Literal, TypeVar
 
 from odohil import units
 from odohil.errors import InitError, JournalError, OdohilError, ParameterError
-from odohil.science.path_plans import Estimability
+from odohil.science.path_estimability import Estimability
 from odohil.science.pose_selection import check_redundancy
 from odohil.science.robot_description import RobotDescription
 from odohil.session.journal.file import Journal, journal_path
