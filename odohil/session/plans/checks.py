@@ -26,6 +26,7 @@ from dataclasses import replace
 from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.estimators.checks import plan_problems
+from odohil.science.path_designs import PathDesign
 from odohil.science.path_estimability import Estimability, plan_estimability
 from odohil.science.path_plans import RobotModel, Shape, acting, shape_label, shape_path
 from odohil.science.paths import Design
