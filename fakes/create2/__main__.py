@@ -10,6 +10,7 @@ from fakes.create2.config import (
     DEFAULT_SPIN_K,
     DEFAULT_TURN_SCALE,
     FAULT_NAMES,
+    HOST_BOUND_S,
     PASSIVE_SLEEP_S,
     build_config,
 )
@@ -45,6 +46,12 @@ def main(argv: list[str] | None = None) -> None:
         default=PASSIVE_SLEEP_S,
         help="simulated s in Passive without a command before it sleeps (0: never)",
     )
+    parser.add_argument(
+        "--host-bound-ms",
+        type=float,
+        default=HOST_BOUND_S * 1000.0,
+        help="wall ms the motion runs past what the host has read (0: no bound)",
+    )
     add_serving_options(parser)
     args = parse_and_log(parser, argv)
     config = build_config(
@@ -61,7 +68,12 @@ def main(argv: list[str] | None = None) -> None:
         mode_change_s=args.mode_change_ms / 1000.0,
         passive_sleep_s=args.passive_sleep_s or None,
     )
-    run_emulator(config, pacing=not args.no_pacing, truth_socket=args.truth_socket)
+    run_emulator(
+        config,
+        pacing=not args.no_pacing,
+        truth_socket=args.truth_socket,
+        host_bound_s=args.host_bound_ms / 1000.0 or None,
+    )
 
 
 if __name__ == "__main__":

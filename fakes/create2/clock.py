@@ -1,4 +1,4 @@
-"""A wall clock for a fake in process that skips the time its host was away.
+"""Clocks that keep a fake's motion from running ahead of a host that is away.
 
 An in-process fake runs only when the host calls it (fakes/protocol_fakerobot.py).
 When a busy machine deschedules the host for 50 ms, a wall clock lets the fake's
@@ -14,6 +14,11 @@ whose host waits for the fake's next write (``skip_waits=1`` on a
 sleeping, so the fake runs as fast as its host computes. What the host sees is
 the same frames at the same simulated times; only the wall time between them
 is gone.
+
+On a pty the fake runs on its own and cannot tell a host that is away from
+one that is waiting, except by what the host has left unread:
+:class:`ReadBoundClock` holds the motion once the host is ``bound_s`` behind
+in reading (fakes/create2/server.py measures it).
 """
 
 from __future__ import annotations
@@ -56,3 +61,50 @@ class LagAbsorbingClock:
         had slept that long (and no gap bound had cut it)."""
         if seconds > 0:
             self.skipped_s += seconds
+
+
+class ReadBoundClock:
+    """Motion seconds that run at most ``bound_s`` past what the host has read.
+
+    The pty fake's host reads what the fake wrote (stream frames, replies)
+    in its own time; a host that a busy machine starves reads nothing while
+    the wheels, on a wall clock, drive on. This clock runs at wall rate until
+    ``bound_s`` after the newest wall instant up to which the host has read
+    everything (:meth:`host_read`), then holds: a starved host wakes to find
+    the wheels at most ``bound_s`` (times the time scale) of driving past
+    where its last reading showed them, and the leg ends late instead of
+    long. A host with nothing left to read is up to date, whatever it does.
+
+    Args:
+        bound_s: how far the motion runs past the host's reading, wall s (> 0).
+        start: wall time of motion second 0, s.
+
+    Attributes:
+        bound_s: as given.
+    """
+
+    def __init__(self, bound_s: float, start: float) -> None:
+        if not bound_s > 0:
+            raise ValueError(f"bound_s must be positive, got {bound_s!r}")
+        self.bound_s = bound_s
+        self._start = start
+        self._at = start
+        self._value = 0.0
+        self._until = start + bound_s
+
+    def __call__(self, wall: float) -> float:
+        """Motion seconds at wall time ``wall`` (s; not before the last :meth:`host_read`)."""
+        return self._value + max(0.0, min(wall, self._until) - self._at)
+
+    def host_read(self, seen: float, now: float) -> None:
+        """At wall time ``now`` the host has read everything written up to wall
+        time ``seen`` (``now`` when nothing is left unread): the motion may run
+        until ``seen + bound_s``."""
+        if now > self._at:
+            self._value = self(now)
+            self._at = now
+        self._until = max(self._until, seen + self.bound_s)
+
+    def lost_s(self, wall: float) -> float:
+        """Wall seconds the motion has been held so far, at wall time ``wall``."""
+        return (wall - self._start) - self(wall)

@@ -25,6 +25,13 @@ source gives it; libcreate waits 100 ms after a mode command, pycreate2 0.5 s
 ("so the bot has time to change modes")."""
 PASSIVE_SLEEP_S = 300.0
 """Passive mode sleeps after 5 minutes without a command (p.7), simulated s."""
+HOST_BOUND_S = 0.045
+"""How far (wall s) the pty fake's motion runs past the newest instant up to
+which the host has read everything the fake wrote
+(``Create2Engine(host_bound_s=...)``, fakes/create2/clock.py
+``ReadBoundClock``): three stream periods, so a host that reads each frame
+within 30 ms never meets it, and a host starved for longer finds its wheels at
+most 45 ms (times the time scale) of driving past its last reading."""
 
 EVENTS = (
     "wheel_drop",

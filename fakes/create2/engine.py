@@ -30,6 +30,7 @@ import time
 from collections.abc import Callable
 
 from fakes.create2.body import Create2Body
+from fakes.create2.clock import ReadBoundClock
 from fakes.create2.config import DRAG_FACTOR, EVENTS, Create2Config
 from fakes.create2.line import accepted, carried
 from fakes.create2.truth import CommandRecord, Create2Truth
@@ -132,12 +133,27 @@ class Create2Engine:
     Args:
         config: its settings.
         clock: wall clock in seconds (monotonic); injectable for tests.
+        host_bound_s: when set (wall s, positive), the motion runs at most this
+            long past the newest instant up to which the host has read all the
+            fake wrote (the transport reports it: :meth:`host_read`;
+            fakes/create2/clock.py :class:`ReadBoundClock`), so a starved host
+            finds its wheels at most this far past its last reading, never a
+            leg driven on. Stream ticks, mode changes and Passive's sleep stay
+            on the wall clock. None: the motion follows the wall clock.
     """
 
-    def __init__(self, config: Create2Config, clock: Callable[[], float] = time.monotonic) -> None:
+    def __init__(
+        self,
+        config: Create2Config,
+        clock: Callable[[], float] = time.monotonic,
+        host_bound_s: float | None = None,
+    ) -> None:
+        if host_bound_s is not None and not host_bound_s > 0.0:
+            raise ParameterError(f"host_bound_s must be positive, got {host_bound_s!r}")
         self.config = config
         self.clock = clock
         self.wall0 = clock()
+        self._motion = None if host_bound_s is None else ReadBoundClock(host_bound_s, self.wall0)
         self.body = Create2Body(
             config.errors,
             config.geometry,
@@ -176,8 +192,28 @@ class Create2Engine:
 
     # ---- clocks ---------------------------------------------------------------
     def sim_time(self, wall: float) -> float:
-        """Simulated seconds at wall time ``wall``."""
-        return (wall - self.wall0) * self.config.time_scale
+        """Simulated (motion) seconds at wall time ``wall``: held while the host
+        is more than ``host_bound_s`` behind in reading (class docstring)."""
+        if self._motion is None:
+            return (wall - self.wall0) * self.config.time_scale
+        return self._motion(wall) * self.config.time_scale
+
+    def host_read(self, seen: float, now: float | None = None) -> None:
+        """At wall time ``now`` the host has read everything the fake wrote up
+        to wall time ``seen`` (s; ``now`` when nothing is left unread): the
+        motion may run until ``seen + host_bound_s``. Nothing without a bound."""
+        if self._motion is None:
+            return
+        if now is None:
+            now = self.clock()
+        self.poll(now)  # the ticks up to now, on the clock as it was
+        self._motion.host_read(seen, now)
+
+    def motion_lost_s(self, now: float | None = None) -> float:
+        """Wall seconds the motion has been held so far (0 without a bound)."""
+        if self._motion is None:
+            return 0.0
+        return self._motion.lost_s(self.clock() if now is None else now)
 
     def _tick_wall(self, index: int) -> float:
         return self.wall0 + index * STREAM_PERIOD_S
@@ -289,6 +325,7 @@ class Create2Engine:
             framing_errors=self.framing_errors,
             dropped_out_bytes=self.dropped_out_bytes,
             baud=self.baud,
+            motion_lost_s=self.motion_lost_s(now),
         )
 
     def event(self, name: str) -> None:

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import TextIO
 
-from fakes.create2.config import Create2Config, build_config
+from fakes.create2.config import HOST_BOUND_S, Create2Config, build_config
 from fakes.create2.engine import Create2Engine
 from fakes.create2.server import serve
 from fakes.launch import EmulateOptions, OnReady, run_announced
@@ -19,15 +19,17 @@ def run_emulator(
     *,
     pacing: bool,
     truth_socket: str | None,
+    host_bound_s: float | None = HOST_BOUND_S,
     out: TextIO = sys.stdout,
 ) -> None:
     """Serve until SIGINT/SIGTERM, printing the pty device path and the truth
-    socket path as the first two lines of ``out`` (as the fake Nomad does)."""
+    socket path as the first two lines of ``out`` (as the fake Nomad does).
+    ``host_bound_s``: how far the motion runs past what the host has read,
+    wall s (None: unbounded; :data:`~fakes.create2.config.HOST_BOUND_S`)."""
 
     def serve_create2(path: Path, ready: OnReady) -> None:
-        serve(
-            Create2Engine(config), baud=config.baud, pacing=pacing, truth_path=path, on_ready=ready
-        )
+        engine = Create2Engine(config, host_bound_s=host_bound_s)
+        serve(engine, baud=config.baud, pacing=pacing, truth_path=path, on_ready=ready)
 
     run_announced(serve_create2, truth_socket=truth_socket, tmp_prefix="odohil-create2-", out=out)
 

@@ -56,6 +56,9 @@ class Create2Truth:
         dropped_out_bytes: bytes the robot could not send (its send buffer
             full: a stream beyond the line rate).
         baud: the robot's line rate now, baud.
+        motion_lost_s: wall seconds the motion has been held because the host
+            was behind in reading (the pty fake's bound,
+            fakes/create2/clock.py ``ReadBoundClock``), s.
     """
 
     sim_time_s: float
@@ -77,6 +80,7 @@ class Create2Truth:
     framing_errors: int = 0
     dropped_out_bytes: int = 0
     baud: int = 115200
+    motion_lost_s: float = 0.0
 
     def to_json(self) -> str:
         """One JSON line (no newline)."""
