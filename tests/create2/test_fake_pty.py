@@ -242,13 +242,25 @@ def test_reset_banner_and_partial_command_resync(robot: Callable[..., Robot]) ->
     assert [(c.opcode, c.data) for c in last] == [(0x91, (0, 0, 0, 0)), (START, ())]
 
 
-def test_odohil_emulate_robot_create2_prints_two_lines(robot: Callable[..., Robot]) -> None:
+def test_odohil_emulate_robot_create2_prints_two_lines_and_survives_radius_0(
+    robot: Callable[..., Robot],
+) -> None:
     r = robot(use_cli=True)
     assert r.process.device.startswith("/dev/")
     assert r.process.truth_socket.endswith(".sock")
     r.host.send(bytes((START,)))
     assert r.host.mode() == 1
     assert r.process.truth().mode == 1
+    # issue 31: the two Drives with radius 0 that once ended the process (C30)
+    mode_command(r.host, SAFE)
+    r.host.send(bytes.fromhex("89 00 00 00 00") + bytes.fromhex("89 00 C8 00 00"))
+    assert r.host.mode() == 2  # the same process, still answering on its pty
+    truth = r.process.truth()
+    assert (truth.right_mm_s, truth.left_mm_s) == (200.0, 200.0)
+    r.host.send(bytes.fromhex("89 00 00 00 00"))
+    assert r.host.mode() == 2
+    assert not r.process.truth().moving
+    assert r.process.returncode is None
 
 
 def test_python_m_fakes_create2_refuses_an_unknown_fault() -> None:
