@@ -104,7 +104,8 @@ command("Pause", [150, 0], "pause_resume", [0], "§11")
 command("Resume", [150, 1], "pause_resume", [1], "§11")
 
 # ---- command sequences ----
-sequence("Resync: Start x 16", [128] * 16, "RESYNC", [128] * 16, "§9 (S6), C10")
+# 130 Starts: a Stream or Query List cut after its opcode takes 1 + 128 of them
+sequence("Resync: Start x 130", [128] * 130, "RESYNC", [128] * 130, "§9 (S6), C10")
 
 # ---- raw replies ----
 reply("Mode Safe", [35], [2], {35: 2}, "§11")

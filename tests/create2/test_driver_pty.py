@@ -21,6 +21,7 @@ from odohil.errors import (
     SafetyError,
     SafetyStopError,
 )
+from odohil.protocol.create2 import commands
 from odohil.protocol.create2.opcodes import Opcode
 from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.paths import Design
@@ -87,11 +88,16 @@ def test_reverse_trial_ends_where_it_started_and_close_leaves_the_oi_off(
     assert abs(truth.left_counts) < 5
     assert truth.left_counts == truth.right_counts
     sent = opcodes(process)
-    # 16 Starts (resync), 150 0 (pause an old stream), Safe, 148 n ids (the
+    # 130 Starts (resync), 150 0 (pause an old stream), Safe, 148 n ids (the
     # driver's stream), then Drive Direct only
-    assert sent[:19] == [Opcode.START] * 16 + [Opcode.PAUSE_RESUME, Opcode.SAFE, Opcode.STREAM]
+    n = commands.RESYNC_STARTS
+    assert sent[: n + 3] == [Opcode.START] * n + [
+        Opcode.PAUSE_RESUME,
+        Opcode.SAFE,
+        Opcode.STREAM,
+    ]
     assert Opcode.FULL not in sent
-    assert set(sent[19:]) == {Opcode.DRIVE_DIRECT}
+    assert set(sent[n + 3 :]) == {Opcode.DRIVE_DIRECT}
     robot.close()
     time.sleep(0.05)
     truth = process.truth()

@@ -10,6 +10,9 @@ from typing import Any
 
 import pytest
 
+from fakes.create2.config import build_config
+from fakes.create2.engine import Create2Engine
+from odohil.driver.create2.link import SAMPLE_IDS
 from odohil.protocol.create2 import commands
 from odohil.protocol.create2.commands import Command, CommandSplitter
 from odohil.protocol.create2.numbers import encoder_delta, to_signed16
@@ -124,3 +127,42 @@ def test_unknown_opcode_is_skipped_and_partial_command_waits() -> None:
     assert out[0] == Command(0x91, bytes((0x00, 0x80, 0x80, 0x80)))
     assert out[1:] == [Command(0x80, b"")] * (commands.RESYNC_STARTS - 3)
     assert splitter.pending == b""
+
+
+def _cut_short() -> list[tuple[str, bytes]]:
+    """Every command vector, and the driver's own list commands, cut after each
+    of its bytes but the last: what a host that died mid-command leaves."""
+    whole = [(str(v["name"]), bytes.fromhex(v["hex"])) for v in COMMANDS]
+    whole += [
+        ("driver's Query List", commands.query_list(SAMPLE_IDS)),
+        ("driver's Stream", commands.stream(SAMPLE_IDS)),
+    ]
+    return [(f"{name}[:{cut}]", data[:cut]) for name, data in whole for cut in range(1, len(data))]
+
+
+def test_resync_completes_any_command_cut_short_with_defined_opcodes() -> None:
+    # C10 (protocols/create2/README.md): whatever command the host left
+    # pending, lists included, the Starts complete it and at least one Start
+    # then acts; nothing stays pending and no undefined opcode is sent
+    assert set(commands.RESYNC) == {0x80}
+    for name, partial in _cut_short():
+        splitter = CommandSplitter()
+        assert splitter.feed(partial) == [], name
+        out = splitter.feed(commands.RESYNC)
+        assert splitter.pending == b"", name
+        assert all(c.known for c in out), name
+        assert (bytes((out[0].opcode,)) + out[0].data).startswith(partial), name
+        assert out[-1] == Command(0x80, b""), name
+
+
+def test_resync_leaves_the_fake_passive_and_stopped_at_its_rate() -> None:
+    # the same cut commands, each sent while the fake drives, then the resync
+    wall = [0.0]
+    for name, partial in _cut_short():
+        engine = Create2Engine(build_config(seed=1, mode_change_s=0.0), clock=lambda: wall[0])
+        engine.receive(bytes((0x80, 0x83)) + commands.drive_direct(200, 200))
+        assert engine.truth().moving
+        engine.receive(partial + commands.RESYNC)
+        truth = engine.truth()
+        assert (truth.mode, truth.moving, truth.baud) == (1, False, 115200), name
+        assert truth.unknown_opcodes == 0, name

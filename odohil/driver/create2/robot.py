@@ -3,7 +3,7 @@
 What it sends (facts §3-§9 and the CHOICEs in protocols/create2/README.md):
 
 - connect: wait after opening (1 s, C17), resynchronise the command parser
-  (16 x Start, facts §9 and C10), pause any stream a previous host left
+  (130 x Start, facts §9 and C10), pause any stream a previous host left
   (Pause/Resume ``150 0``, p.22), drop what is still arriving, then read the
   mode: it must be Passive; a robot that reports 2 there has the +1 mode bug
   (C7) and every later mode reading is corrected by it;

@@ -25,17 +25,21 @@ STRAIGHT = 0x7FFF
 SPIN_CW = -1
 SPIN_CCW = 1
 
-RESYNC_STARTS = 16
-"""Start bytes in :data:`RESYNC`: one more than the data bytes of the longest
-command without a list (Schedule, 15)."""
+RESYNC_STARTS = 1 + Opcode.START + 1
+"""Start bytes in :data:`RESYNC` (130): a list command (Stream, Query List)
+cut right after its opcode reads the first Start as its count (128) and the
+next 128 as packet ids (invalid, so no bytes); one Start more then acts. Any
+other command the host may have left pending (at most 15 data bytes: every
+one but Song) is completed by the first Starts."""
 RESYNC = bytes((Opcode.START,)) * RESYNC_STARTS
 """What the host sends to resynchronise the OI's command parser (facts §9, S6:
-send Start "enough times"; C10): a command cut short waits for its data bytes
-(p.8), so the first Starts complete it and the rest are Starts, which leave the
-OI in Passive with the wheels stopped. Only defined opcodes, unlike zero bytes
-(opcode 0 is not in the specification). A Drive left pending completes with
-0x8080 fields for the one byte time (87 us at 115200 baud) before the next
-Start stops it."""
+send Start "enough times"; C10 in protocols/create2/README.md, which says why
+not C10's 16 zero bytes and a Start): a command cut short waits for its data
+bytes (p.8), so the first Starts complete it and the rest are Starts, which
+leave the OI in Passive with the wheels stopped. Only defined opcodes, unlike
+zero bytes (opcode 0 is not in the specification). A Drive left pending
+completes with 0x8080 fields for the one byte time (87 us at 115200 baud)
+before the next Start stops it. 130 bytes: 11 ms at 115200 baud."""
 
 
 def _speed(value: int, what: str) -> bytes:
