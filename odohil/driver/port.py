@@ -59,6 +59,21 @@ def open_serial_url(url: str, baud: int, read_timeout_s: float = READ_SLICE_S) -
     return port
 
 
+def no_answer(robot: str, url: str, baud: int, detail: str, check: str) -> ConnectionFailedError:
+    """The one error of every backend for a port that opens but whose robot
+    does not answer at connect time (every command exits 1 on it,
+    odohil/cli/exit_codes.py): it names the robot, the port and its rate,
+    what went unanswered (``detail``), and what to check (``check``)."""
+    return ConnectionFailedError(
+        f"the {robot} on {url} does not answer at {baud} baud ({detail}); check {check}"
+    )
+
+
+def port_name(port: object, url: str = "") -> str:
+    """``url``, else what the open port says it was opened from."""
+    return url or str(getattr(port, "portstr", "") or getattr(port, "port", "") or "the port")
+
+
 def vouches_idle(port: object) -> bool:
     """Whether the port vouches that no byte is on its way to us now.
 

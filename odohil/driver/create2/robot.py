@@ -68,7 +68,7 @@ from odohil.driver.create2.link import (
 )
 from odohil.driver.guardian import Guardian, start_guardian
 from odohil.driver.odometry import DriveSettings, OdometrySample, TrialMotion
-from odohil.driver.port import listens_at_open
+from odohil.driver.port import listens_at_open, no_answer
 from odohil.driver.step_limit import StepLimit, step_limit
 from odohil.errors import (
     ConnectionFailedError,
@@ -90,6 +90,13 @@ from odohil.science.paths import Drivable, Leg, Turn, check_trial_length
 from odohil.science.robot_description import RobotSettings
 from odohil.units import wrap_angle
 
+NO_ANSWER_CHECK = (
+    "that it is awake (press Clean: Passive sleeps after 5 minutes without a command), "
+    "that the cable is in its mini-DIN port and on {port}, and that both ends run at the "
+    "same rate (--baud or robot.toml [serial] baud; 115200 unless a Baud command or the "
+    "Clean button changed it); see docs/create2.md, Wiring and Line rate"
+)
+"""What to check when the Create 2 does not answer at connect (``{port}``: its port)."""
 OPEN_WAIT_S = 1.0
 """Wait after opening the port before the first byte, s (C17; libcreate)."""
 MODE_WAIT_S = 0.02
@@ -244,10 +251,9 @@ class Create2Robot:
             link.close()
             if isinstance(exc, ConnectionFailedError):
                 raise
-            raise ConnectionFailedError(
-                f"the Create 2 on {url} does not answer after Start: {exc} "
-                "(is it awake? see docs/create2.md, wiring)"
-            ) from exc
+            check = NO_ANSWER_CHECK.format(port=url)
+            detail = f"Sensors 35 after Start: {exc}"
+            raise no_answer(CREATE2_FACTS.label, url, baud, detail, check) from exc
         return robot
 
     @classmethod

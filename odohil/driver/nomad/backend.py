@@ -103,7 +103,7 @@ class NomadBackend:
     def from_port(cls, raw: Port, url: str = "") -> NomadBackend:
         """Wrap an already open port and check that the robot answers ``gs``."""
         name = url or str(getattr(raw, "name", "") or getattr(raw, "port", "") or "")
-        return cls(NomadRobot.from_port(raw), name, raw)
+        return cls(NomadRobot.from_port(raw, name), name, raw)
 
     @property
     def port(self) -> str:

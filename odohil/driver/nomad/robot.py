@@ -21,6 +21,7 @@ from collections.abc import Callable, Iterator
 from types import TracebackType
 
 from odohil.driver import stopping
+from odohil.driver.nomad.facts import NOMAD150_FACTS
 from odohil.driver.nomad.link import (
     DEFAULT_BAUD,
     NORMAL_TIMEOUT_S,
@@ -29,9 +30,8 @@ from odohil.driver.nomad.link import (
     open_port,
 )
 from odohil.driver.nomad.sample import EncoderSample
-from odohil.driver.port import Port
+from odohil.driver.port import Port, no_answer, port_name
 from odohil.errors import (
-    ConnectionFailedError,
     DisconnectedError,
     OdohilError,
     OdohilTimeoutError,
@@ -84,6 +84,14 @@ def _rate(value: float, to_wire: Callable[[float], int], what: str) -> int:
     return wire
 
 
+NO_ANSWER_CHECK = (
+    "that the robot is switched on, that its serial cable is on {port}, and that "
+    "both ends run at the same rate (--baud or robot.toml [serial] baud; the Nomad "
+    "speaks " + NOMAD150_FACTS.rates_text() + "); see docs/robot-link.md"
+)
+"""What to check when the Nomad does not answer at connect (``{port}``: its port)."""
+
+
 class NomadRobot:
     """A connected Nomad 150 (context manager; :meth:`close` sends ``st``)."""
 
@@ -104,14 +112,18 @@ class NomadRobot:
         return cls.from_port(open_port(url, baud))
 
     @classmethod
-    def from_port(cls, port: Port) -> NomadRobot:
-        """Wrap an already open port and check that the robot answers ``gs``."""
+    def from_port(cls, port: Port, url: str = "") -> NomadRobot:
+        """Wrap an already open port (opened from ``url``, for messages) and
+        check that the robot answers ``gs``."""
         robot = cls(Link(port))
         try:
             robot.state()
         except OdohilError as exc:
             robot._link.close()
-            raise ConnectionFailedError(f"the robot does not answer gs: {exc}") from exc
+            baud = getattr(port, "baudrate", DEFAULT_BAUD)
+            where = port_name(port, url)
+            check = NO_ANSWER_CHECK.format(port=where)
+            raise no_answer(NOMAD150_FACTS.label, where, baud, f"gs: {exc}", check) from exc
         return robot
 
     def __enter__(self) -> NomadRobot:
