@@ -19,12 +19,16 @@ from fakes.create2.config import HOST_BOUND_S, build_config
 from fakes.create2.engine import Create2Engine
 from fakes.create2.server import Create2PtyServer
 from fakes.create2.truth import Create2TruthClient
+from odohil.driver.create2.robot import Create2Robot
+from odohil.driver.odometry import DriveSettings, OdometrySample
 from odohil.errors import ParameterError
+from odohil.science.paths import Design
 
 from .host import SAFE, START, STREAM, direct
 
 SPEED_MM_S = 100
 TICK_S = 0.015
+DRIVE = DriveSettings(speed_m_s=0.3, step_timeout_s=20.0)
 
 
 def test_the_clock_holds_at_the_bound_and_resumes_where_it_held() -> None:
@@ -80,11 +84,9 @@ def test_a_host_that_keeps_up_sees_wall_time() -> None:
         Create2Engine(build_config(seed=1), host_bound_s=0.0)
 
 
-@pytest.fixture
-def served(tmp_path: Path) -> Iterator[Create2PtyServer]:
-    """The pty server in a thread: a real pty, a truth socket, time scale 5."""
+def _serve(tmp_path: Path, bound_s: float | None) -> Iterator[Create2PtyServer]:
     engine = Create2Engine(
-        build_config(seed=3, mode_change_s=0.0, time_scale=5.0), host_bound_s=HOST_BOUND_S
+        build_config(seed=3, mode_change_s=0.0, time_scale=5.0), host_bound_s=bound_s
     )
     server = Create2PtyServer(engine, 115200, pacing=False, truth_path=tmp_path / "t.sock")
     server.start()
@@ -93,6 +95,36 @@ def served(tmp_path: Path) -> Iterator[Create2PtyServer]:
     yield server
     server.stop()
     thread.join(5.0)
+
+
+@pytest.fixture
+def served(tmp_path: Path) -> Iterator[Create2PtyServer]:
+    """The pty server in a thread: a real pty, a truth socket, time scale 5."""
+    yield from _serve(tmp_path, HOST_BOUND_S)
+
+
+def test_a_driver_starved_mid_leg_ends_it_late_not_long(served: Create2PtyServer) -> None:
+    # odohil's driver stops reading for 0.3 s halfway along a 0.4 m leg (at
+    # 0.3 m/s and time scale 5: 0.45 m of driving on a wall clock): the leg
+    # ends at its target, later
+    starved: list[float] = []
+
+    def starve(sample: OdometrySample) -> None:
+        if sample.x_m >= 0.2 and not starved:
+            starved.append(sample.x_m)
+            time.sleep(0.3)
+
+    with Create2Robot.connect(served.device, open_wait_s=0.05) as robot:
+        robot.arm(DRIVE)
+        robot.zero()
+        motion = robot.drive(Design(0.5, 0.4, "reverse"), DRIVE, starve)
+        robot.stop_and_confirm()
+    with Create2TruthClient(served.truth_path) as truth:
+        held = truth.snapshot()
+    assert starved
+    assert motion.end_pose[0] == pytest.approx(0.4, abs=0.01)
+    assert held.travel_m == pytest.approx(0.4, abs=0.015)
+    assert held.motion_lost_s > 0.2
 
 
 def test_the_pty_server_holds_the_wheels_while_frames_lie_unread(
