@@ -38,6 +38,8 @@ ROBOT_NUMBERS: dict[float, str] = {
     # a differential drive's counts per revolution (the Create 2, the optiodom robot)
     508.8: "counts per revolution",
     2796.8: "counts per revolution",
+    # the Create 2's wheel base (odohil/protocol/create2/geometry.py)
+    0.235: "a wheel base",
 }
 """Numeric literals that are a robot's constant, and what each is."""
 
@@ -58,6 +60,8 @@ ROBOT_NAMES = {
     "MIN_LEG_WIRE",
     "MAX_LEG_WIRE",
     "OPTIODOM_GEOMETRY",
+    "NOMINAL_WHEEL_BASE_M",
+    "WHEEL_BASE_M",
 }
 """Names of robot constants (defined or used) that only protocol/ and driver/ may hold."""
 
@@ -99,6 +103,8 @@ def test_the_scan_sees_the_robot_constants_where_they_belong() -> None:
     assert any("38400" in f for f in nomad)
     assert any("115200" in f for f in create2)
     assert any("BAUD_RATES" in f for f in create2)
+    geometry = _findings(ROOT / "odohil" / "protocol" / "create2" / "geometry.py")
+    assert any("a wheel base" in f for f in geometry)
 
 
 def test_no_robot_constant_outside_protocol_and_driver() -> None:

@@ -60,9 +60,6 @@ from odohil.science.simulator import (
 
 TURN_FREE_VARIANT: Variant = "reverse"
 """The design variant for robots whose in-place turns carry error."""
-NOMINAL_WHEEL_BASE_M = 0.235
-"""The wheel base :class:`DiffDriveErrors` assumes when given none, m (a
-small indoor robot's; simulations of a particular robot pass its own)."""
 
 
 @dataclass(frozen=True)
@@ -156,16 +153,18 @@ class DiffDriveErrors:
         k_theta: heading variance per metre driven straight, rad^2/m.
         k_rho: travel variance per metre driven straight, m.
         k_spin: heading variance per radian turned in place, rad^2/rad.
-        wheel_base_m: the nominal wheel base b, m.
+        wheel_base_m: the nominal wheel base b, m: the robot's own
+            (``DiffDriveGeometry.wheel_base_m``, e.g. odohil/protocol/create2/geometry.py);
+            no default, a robot's constants are not the science layer's.
     """
 
+    wheel_base_m: float
     left_scale: float = 0.0
     right_scale: float = 0.0
     base_scale: float = 0.0
     k_theta: float = 0.0
     k_rho: float = 0.0
     k_spin: float = 0.0
-    wheel_base_m: float = NOMINAL_WHEEL_BASE_M
 
     def __post_init__(self) -> None:
         for name in ("left_scale", "right_scale", "base_scale"):
@@ -205,7 +204,7 @@ class DiffDriveErrors:
         *,
         turn_scale: float = 0.0,
         k_spin: float = 0.0,
-        wheel_base_m: float = NOMINAL_WHEEL_BASE_M,
+        wheel_base_m: float,
     ) -> DiffDriveErrors:
         """The wheel errors that give ``params`` on straight legs and
         ``turn_scale`` (e_turn) on spins (the inverse of the mapping above)."""

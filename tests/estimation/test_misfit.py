@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from odohil.errors import ParameterError
+from odohil.protocol.create2.geometry import CREATE2_GEOMETRY
 from odohil.science.diff_drive import DiffDriveErrors, simulate_diff_drive
 from odohil.science.estimators import Observation, estimate
 from odohil.science.estimators.misfit import (
@@ -163,7 +164,9 @@ def _observations(
     """12 trials of each design; ``first_offset``: heading added to each
     design's first trial (in the sense of travel), in its predicted heading
     standard deviations."""
-    errors = DiffDriveErrors.from_parameters(TRUTH, turn_scale=turn_scale)
+    errors = DiffDriveErrors.from_parameters(
+        TRUTH, turn_scale=turn_scale, wheel_base_m=CREATE2_GEOMETRY.wheel_base_m
+    )
     out = []
     for design in DESIGNS:
         poses = simulate_diff_drive(design.path(), errors, N_PER_DESIGN, seed=rng).pose_change

@@ -20,7 +20,7 @@ from odohil.science.diff_drive import (
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import Design, EncoderPath, Leg, Turn
 
-B = 0.235
+B = CREATE2_GEOMETRY.wheel_base_m
 
 
 def wheels(
@@ -73,7 +73,10 @@ ERRORS = {"e_l": 0.012, "e_r": -0.008, "e_b": 0.03}
 )
 def test_noise_free_wheels_match_the_mapped_model(design: Design) -> None:
     errors = DiffDriveErrors(
-        left_scale=ERRORS["e_l"], right_scale=ERRORS["e_r"], base_scale=ERRORS["e_b"]
+        wheel_base_m=B,
+        left_scale=ERRORS["e_l"],
+        right_scale=ERRORS["e_r"],
+        base_scale=ERRORS["e_b"],
     )
     seg = 0.0005
     rng = np.random.default_rng(0)
@@ -85,12 +88,12 @@ def test_noise_free_wheels_match_the_mapped_model(design: Design) -> None:
 
 
 def test_mapping_formulas() -> None:
-    errors = DiffDriveErrors(left_scale=0.01, right_scale=0.03, base_scale=0.05)
+    errors = DiffDriveErrors(wheel_base_m=B, left_scale=0.01, right_scale=0.03, base_scale=0.05)
     params = errors.straight_parameters()
     assert params.e_t == pytest.approx(0.02)
     assert params.e_r == pytest.approx(0.02 / (B * 1.05))
     assert errors.turn_scale == pytest.approx(1.02 / 1.05 - 1)
-    back = DiffDriveErrors.from_parameters(params, turn_scale=errors.turn_scale)
+    back = DiffDriveErrors.from_parameters(params, turn_scale=errors.turn_scale, wheel_base_m=B)
     assert back.left_scale == pytest.approx(0.01)
     assert back.right_scale == pytest.approx(0.03)
     assert back.base_scale == pytest.approx(0.05)
@@ -104,6 +107,7 @@ def test_wheel_slip_maps_onto_k_theta_and_k_rho_monte_carlo(design: Design) -> N
     base = B * (1 + ERRORS["e_b"])
     n = 4000
     errors = DiffDriveErrors(
+        wheel_base_m=B,
         left_scale=ERRORS["e_l"],
         right_scale=ERRORS["e_r"],
         base_scale=ERRORS["e_b"],
@@ -138,7 +142,7 @@ def test_odometry_step_is_the_facts_documents_worked_example() -> None:
 
 
 def test_spin_error_scales_with_the_angle() -> None:
-    errors = DiffDriveErrors(base_scale=0.02)
+    errors = DiffDriveErrors(wheel_base_m=B, base_scale=0.02)
     for turns in (1, 4):
         path = EncoderPath((Leg(0.1), Turn(turns * math.pi), Leg(0.1)))
         pose = simulate_diff_drive(path, errors, 1, seed=0).pose_change[0]
@@ -148,9 +152,9 @@ def test_spin_error_scales_with_the_angle() -> None:
 
 def test_bad_values_are_refused() -> None:
     with pytest.raises(ParameterError, match="left_scale"):
-        DiffDriveErrors(left_scale=-1.5)
+        DiffDriveErrors(wheel_base_m=B, left_scale=-1.5)
     with pytest.raises(ParameterError, match="k_spin"):
-        DiffDriveErrors(k_spin=-1.0)
+        DiffDriveErrors(wheel_base_m=B, k_spin=-1.0)
     with pytest.raises(ParameterError, match="wheel_base_m"):
         DiffDriveGeometry(508.8, 0.072, wheel_base_m=0.0)
-    assert isinstance(DiffDriveErrors().straight_parameters(), ErrorParameters)
+    assert isinstance(DiffDriveErrors(wheel_base_m=B).straight_parameters(), ErrorParameters)
