@@ -31,10 +31,13 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from tests.cli.test_validate_paths import MAX_RESUMES, ROBOTS  # noqa: E402
+from tests.cli.test_validate_paths import ROBOTS  # noqa: E402
 from tests.session.test_trust_runs import readme_robot  # noqa: E402
 
 DIRECTIONS = ("cw", "ccw")
+MAX_RESUMES = 3
+"""How often a run a loaded machine cut off is resumed, as its user would (the
+Create 2's host may miss its stream for a second)."""
 
 
 def odohil(*args: str) -> tuple[int, str, str]:

@@ -14,9 +14,12 @@ import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TextIO
+from typing import TextIO, TypeVar
 
+from odohil.errors import ParameterError
 from odohil.science.parameters import ErrorParameters
+
+T = TypeVar("T")
 
 OnReady = Callable[[str, str], None]
 """Called once with (pty device path, truth socket path) when the fake is open."""
@@ -106,3 +109,13 @@ def parse_and_log(parser: argparse.ArgumentParser, argv: list[str] | None) -> ar
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO if args.verbose else logging.WARNING)
     return args
+
+
+def configured(parser: argparse.ArgumentParser, build: Callable[[], T]) -> T:
+    """The fake's configuration from parsed options: a value the fake refuses
+    (:class:`~odohil.errors.ParameterError`, e.g. an unknown fault) ends the
+    program as a bad option does (usage, the message, exit 2; no traceback)."""
+    try:
+        return build()
+    except ParameterError as exc:
+        parser.error(str(exc))

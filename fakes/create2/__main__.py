@@ -15,7 +15,7 @@ from fakes.create2.config import (
     build_config,
 )
 from fakes.create2.run import run_emulator
-from fakes.launch import add_serving_options, add_truth_options, parse_and_log
+from fakes.launch import add_serving_options, add_truth_options, configured, parse_and_log
 from odohil.protocol.create2.opcodes import DEFAULT_BAUD
 from odohil.science.parameters import ErrorParameters
 
@@ -54,19 +54,22 @@ def main(argv: list[str] | None = None) -> None:
     )
     add_serving_options(parser)
     args = parse_and_log(parser, argv)
-    config = build_config(
-        seed=args.seed,
-        params=ErrorParameters.from_paper_units(args.e_r, args.e_t, args.k_theta, args.k_rho),
-        turn_scale=args.turn_scale,
-        spin_k=args.spin_k,
-        time_scale=args.time_scale,
-        baud=args.baud,
-        faults=args.fault,
-        encoder_origin=args.encoder_origin,
-        mode_offset=args.mode_offset,
-        angle_bug=args.angle_bug,
-        mode_change_s=args.mode_change_ms / 1000.0,
-        passive_sleep_s=args.passive_sleep_s or None,
+    config = configured(
+        parser,
+        lambda: build_config(
+            seed=args.seed,
+            params=ErrorParameters.from_paper_units(args.e_r, args.e_t, args.k_theta, args.k_rho),
+            turn_scale=args.turn_scale,
+            spin_k=args.spin_k,
+            time_scale=args.time_scale,
+            baud=args.baud,
+            faults=args.fault,
+            encoder_origin=args.encoder_origin,
+            mode_offset=args.mode_offset,
+            angle_bug=args.angle_bug,
+            mode_change_s=args.mode_change_ms / 1000.0,
+            passive_sleep_s=args.passive_sleep_s or None,
+        ),
     )
     run_emulator(
         config,

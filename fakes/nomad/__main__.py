@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from fakes.launch import add_serving_options, add_truth_options, parse_and_log
+from fakes.launch import add_serving_options, add_truth_options, configured, parse_and_log
 from fakes.nomad.config import build_config
 from fakes.nomad.pacing import DEFAULT_BAUD
 from fakes.nomad.run import run_emulator
@@ -20,14 +20,17 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--fault", action="append", default=[], help="NAME[:CODE][@N]")
     add_serving_options(parser)
     args = parse_and_log(parser, argv)
-    config = build_config(
-        seed=args.seed,
-        e_r_deg_per_m=args.e_r,
-        e_t=args.e_t,
-        k_theta_deg2_per_m=args.k_theta,
-        k_rho_m=args.k_rho,
-        time_scale=args.time_scale,
-        faults=args.fault,
+    config = configured(
+        parser,
+        lambda: build_config(
+            seed=args.seed,
+            e_r_deg_per_m=args.e_r,
+            e_t=args.e_t,
+            k_theta_deg2_per_m=args.k_theta,
+            k_rho_m=args.k_rho,
+            time_scale=args.time_scale,
+            faults=args.fault,
+        ),
     )
     run_emulator(config, baud=args.baud, pacing=not args.no_pacing, truth_socket=args.truth_socket)
 

@@ -5,13 +5,12 @@ from __future__ import annotations
 
 import math
 import struct
-import subprocess
-import sys
 import time
 from collections.abc import Callable
 
 import pytest
 
+from fakes.create2.__main__ import main as fake_main
 from fakes.create2.config import CREATE2_TRUTH
 
 from .conftest import Robot
@@ -263,12 +262,15 @@ def test_odohil_emulate_robot_create2_prints_two_lines_and_survives_radius_0(
     assert r.process.returncode is None
 
 
-def test_python_m_fakes_create2_refuses_an_unknown_fault() -> None:
-    done = subprocess.run(
-        [sys.executable, "-m", "fakes.create2", "--fault", "explode"],
-        capture_output=True,
-        text=True,
-        timeout=20,
-    )
-    assert done.returncode != 0
-    assert "unknown fault 'explode'" in done.stderr
+def test_python_m_fakes_create2_refuses_an_unknown_fault(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """As a bad option: usage, the message and exit 2, no traceback (it exited 1
+    on an uncaught ParameterError). ``python -m fakes.create2``'s own main, in process."""
+    with pytest.raises(SystemExit) as ended:
+        fake_main(["--fault", "explode"])
+    assert ended.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith("usage: python -m fakes.create2"), err
+    assert "unknown fault 'explode'" in err
+    assert "Traceback" not in err

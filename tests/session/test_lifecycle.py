@@ -14,7 +14,7 @@ from typer.testing import CliRunner
 
 import fakes
 from odohil.cli.app import app
-from odohil.cli.exit_codes import EXIT_BAD_INPUT, exit_for_check, exit_for_run
+from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_UNTRUSTED, exit_for_check, exit_for_run
 from odohil.errors import JournalError
 from odohil.robots import __file__ as robots_init
 from odohil.science.estimators import EstimateResult
@@ -120,7 +120,9 @@ def test_spec_preflight_open_run_outcome(tmp_path: Path, backend: str) -> None:
     # the estimate and verdict are the one recipe's, on the journal
     assert outcome.estimate.status == final_estimate(state).status
     assert outcome.estimate.result is not None
-    assert exit_for_run(outcome) == (0 if outcome.estimate.trusted else 3)
+    # three trials: below the planner's minimum, so not trusted (3)
+    assert not outcome.estimate.trusted
+    assert exit_for_run(outcome) == EXIT_UNTRUSTED
 
 
 def failures(tmp_path: Path) -> list[tuple[dict[str, object], str, list[str]]]:
