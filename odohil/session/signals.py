@@ -9,7 +9,9 @@ real-time signals... as this platform has them) raise
 the robot's stop, waits for the robot to report that it stopped, journals,
 and the command exits with 128 + the signal number. While the robot is being
 stopped, :func:`signals_held` holds further signals back so that none of them
-skips the stop.
+skips the stop; while a journal record is written, :func:`signals_deferred`
+holds them until it is whole and counted (a thread signal mask, and odohil's
+handlers waiting for the signals another thread takes).
 
 The signals whose default action suspends the process (:data:`MOTION_SIGNALS`:
 SIGTSTP, Ctrl-Z; SIGTTIN and SIGTTOU, a background odohil reading or writing
@@ -39,9 +41,10 @@ start-up (SIGXFSZ, which it ignores too, stays so: see :data:`_PYTHON_IGNORES`).
 from __future__ import annotations
 
 import contextlib
+import importlib
 import signal
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from types import FrameType
 
 _NOT_ENDING = (
@@ -94,6 +97,20 @@ the session only during a motion (:func:`motion_signals_raise`)."""
 HELD_SIGNALS = (*HANDLED_SIGNALS, *MOTION_SIGNALS)
 """Held back while the robot is stopped and while a journal record is written:
 a suspension there would leave the stop or the record half done."""
+_HELD_SET = frozenset(HELD_SIGNALS)
+
+_c_signal = importlib.import_module("_signal")
+# The C functions under signal.pthread_sigmask, getsignal and signal: the
+# wrappers turn each signal of a returned mask (and each handler) into an enum
+# member, the 31 real-time signals (and each function) through a ValueError:
+# 60 us of a record's 66 us of masking, 50 us for a look at the 52 handlers.
+_sigmask: Callable[[int, Iterable[int]], set[int]] = _c_signal.pthread_sigmask
+_handler_of: Callable[[int], object] = _c_signal.getsignal
+_set_handler: Callable[[int, object], object] = _c_signal.signal
+
+_deferred: list[int] | None = None
+"""While :func:`signals_deferred` holds the main thread's signals: the
+signals odohil's own handlers took meanwhile, acted on right after; else None."""
 
 
 def signal_name(signum: int) -> str:
@@ -127,7 +144,20 @@ def signal_of(exc: BaseException) -> int:
 
 
 def _raise(signum: int, frame: FrameType | None) -> None:
+    if _deferred is not None:
+        _deferred.append(signum)
+        return
     raise SignalReceived(signum)
+
+
+class _Note:
+    """A handler that only notes each signal it gets (it never raises)."""
+
+    def __init__(self, received: list[int]) -> None:
+        self.received = received
+
+    def __call__(self, signum: int, frame: FrameType | None) -> None:
+        self.received.append(signum)
 
 
 def _ours_to_take(signum: int) -> bool:
@@ -188,10 +218,7 @@ def signals_held() -> Iterator[list[int]]:
         yield []
         return
     received: list[int] = []
-
-    def hold(signum: int, frame: FrameType | None) -> None:
-        received.append(signum)
-
+    hold = _Note(received)
     previous = {
         signum: signal.signal(signum, hold)
         for signum in HELD_SIGNALS
@@ -205,6 +232,9 @@ def signals_held() -> Iterator[list[int]]:
 
 
 def _ctrl_c(signum: int, frame: FrameType | None) -> None:
+    if _deferred is not None:
+        _deferred.append(signum)
+        return
     raise KeyboardInterrupt("Ctrl-C")
 
 
@@ -222,3 +252,57 @@ def ctrl_c_in_words() -> Iterator[None]:
         yield
     finally:
         signal.signal(signal.SIGINT, previous)
+
+
+def _defers(signum: int, handler: object) -> bool:
+    """Whether ``handler`` waits by itself while a record is written: odohil's
+    own (they note the signal), an ignored signal, one set outside Python, or
+    the default action of a signal that suspends the process (the write goes on
+    when it continues)."""
+    if handler in (_raise, _ctrl_c, signal.SIG_IGN, None) or isinstance(handler, _Note):
+        return True
+    return handler == signal.SIG_DFL and signum in MOTION_SIGNALS
+
+
+@contextlib.contextmanager
+def signals_deferred() -> Iterator[None]:
+    """Within (a journal record being written and counted): every signal of
+    :data:`HELD_SIGNALS` waits, and right after it meets the handler it would
+    have met (main thread only: Python runs no handler in another thread).
+
+    The signals are blocked in this thread (:func:`signal.pthread_sigmask`):
+    the kernel keeps one sent to the thread (``raise_signal``), or to the
+    process while no other thread takes it, until the block ends. But another
+    thread may take a signal sent to the process (numpy's BLAS threads, in
+    every odohil process, or the motion-capture reader), and Python then runs
+    its handler in the main thread at once, block or not. So odohil's own
+    handlers (:func:`signals_raise`, :func:`ctrl_c_in_words`,
+    :func:`signals_held`) only note a signal while one is deferred, and only
+    the other handlers (Python's Ctrl-C in the wizard, someone else's, a
+    default action that ends the process) are swapped for the duration: in a
+    session none or one, where every record swapped 52 before."""
+    global _deferred
+    if threading.current_thread() is not threading.main_thread() or _deferred is not None:
+        yield
+        return
+    deferred: list[int] = []
+    before = _sigmask(signal.SIG_BLOCK, _HELD_SET)
+    _deferred = deferred
+    swapped: dict[int, object] = {}
+    try:
+        for signum in HELD_SIGNALS:
+            handler = _handler_of(signum)
+            if not _defers(signum, handler):
+                swapped[signum] = _set_handler(signum, _Note(deferred))
+        yield
+    finally:
+        for signum, handler in swapped.items():
+            _set_handler(signum, handler)
+        _deferred = None
+        _sigmask(signal.SIG_SETMASK, before)  # what was blocked is delivered now
+        for signum in deferred:
+            handler = _handler_of(signum)
+            if callable(handler):
+                handler(signum, None)
+            elif handler == signal.SIG_DFL:
+                signal.raise_signal(signum)

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import signal
+import subprocess
+import threading
+import time
 import zlib
+from collections.abc import Callable
+from contextlib import AbstractContextManager
 from pathlib import Path
 
 import pytest
@@ -18,6 +24,7 @@ from odohil.session.journal.file import (
     parse_journal,
     read_journal,
 )
+from odohil.session.signals import SignalReceived, ctrl_c_in_words, signals_raise
 
 
 def _write_three(folder: Path) -> None:
@@ -189,6 +196,88 @@ def test_ctrl_c_during_an_append_waits_for_the_record(
         monkeypatch.undo()
         # the interrupted record is whole and counted; the journal goes on
         journal.append("stopped", {})
+    contents = read_journal(tmp_path)
+    assert contents.torn is None
+    assert [r.kind for r in contents.records] == ["session", "measurement", "stopped"]
+
+
+class _Sender:
+    """Sends a signal when told: from a thread started before the record (one
+    started within would inherit the block), to itself, so that Python's C
+    handler runs there before ``pthread_kill`` returns, as when the kernel hands
+    a signal sent to the process to a BLAS or reader thread while the main
+    thread blocks it (Python then runs the handler in the main thread); or as
+    ``kill -N`` of this process from a child, which the kernel gives to a thread
+    that does not block it, or keeps until the main thread takes it."""
+
+    def __init__(self, how: str, signum: int) -> None:
+        self.how, self.signum = how, signum
+        self._go, self._sent = threading.Event(), threading.Event()
+        self._thread = threading.Thread(target=self._in_thread, daemon=True)
+        if how == "thread":
+            self._thread.start()
+
+    def _in_thread(self) -> None:
+        self._go.wait(10)
+        signal.pthread_kill(threading.get_ident(), self.signum)
+        self._sent.set()
+
+    def send(self) -> None:
+        if self.how == "thread":
+            self._go.set()
+            assert self._sent.wait(10)
+        else:
+            subprocess.run(["kill", f"-{self.signum}", str(os.getpid())], check=True, timeout=10)
+
+
+HANDLERS: dict[str, Callable[[], AbstractContextManager[object]]] = {
+    "session": lambda: signals_raise(),  # run, resume, wizard: every signal but Ctrl-C raises
+    "ctrl-c in words": lambda: ctrl_c_in_words(),  # run, resume: Ctrl-C
+    "python's": lambda: contextlib.nullcontext(),  # the wizard's Ctrl-C
+}
+
+
+@pytest.mark.parametrize("sender", ["thread", "process"])
+@pytest.mark.parametrize(("signum", "handlers", "raised"), [
+    (signal.SIGTERM, "session", SignalReceived),
+    (signal.SIGINT, "ctrl-c in words", KeyboardInterrupt),
+    (signal.SIGINT, "python's", KeyboardInterrupt),
+])  # fmt: skip
+def test_a_signal_sent_during_a_record_is_delivered_right_after_it(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    sender: str,
+    signum: int,
+    handlers: str,
+    raised: type[BaseException],
+) -> None:
+    """The signal is sent while the record goes to disk, by another thread or
+    process; the record is whole and counted, and the signal raises in the
+    main thread as append returns (the engine then stops the robot)."""
+    real_fsync = os.fsync
+    synced: list[int] = []
+
+    sending = _Sender(sender, signum)
+
+    def fsync_under_a_signal(fd: int) -> None:
+        sending.send()
+        deadline = time.monotonic() + 0.05
+        while time.monotonic() < deadline:  # Python code: a handler would run here
+            time.sleep(0.005)
+        real_fsync(fd)
+        synced.append(fd)
+
+    with HANDLERS[handlers](), Journal.create(tmp_path) as journal:
+        journal.append("session", {"format": 1})
+        monkeypatch.setattr(os, "fsync", fsync_under_a_signal)
+        with pytest.raises(raised) as ended:
+            journal.append("measurement", {"value_m": 1.0})
+        monkeypatch.undo()
+        assert synced  # raised after the record was on disk, not during it
+        assert journal.next_seq == 3
+        journal.append("stopped", {})  # not broken: the record and the count agree
+    if isinstance(ended.value, SignalReceived):
+        assert ended.value.signum == signum
     contents = read_journal(tmp_path)
     assert contents.torn is None
     assert [r.kind for r in contents.records] == ["session", "measurement", "stopped"]

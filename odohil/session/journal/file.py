@@ -30,20 +30,18 @@ import fcntl
 import json
 import math
 import os
-import signal
-import threading
 import time
 import zlib
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from types import FrameType, TracebackType
+from types import TracebackType
 from typing import Any
 
 from odohil.errors import JournalError
 from odohil.session.bounded_io import MIB, read_fd_bytes, read_file_bytes
 from odohil.session.journal.events import Event, decode, encode
-from odohil.session.signals import HELD_SIGNALS
+from odohil.session.signals import signals_deferred
 
 __all__ = [
     "Journal",
@@ -413,7 +411,7 @@ class Journal:
         line = encode_record(self._next_seq, kind, data, when)
         # Ctrl-C (or any other signal that ends a session) is held back until the record
         # is whole and on disk, so that the record and the sequence count never disagree.
-        with _signals_deferred():
+        with signals_deferred():
             try:
                 view = memoryview(line)
                 while view:
@@ -448,35 +446,3 @@ class Journal:
         tb: TracebackType | None,
     ) -> None:
         self.close()
-
-
-@contextlib.contextmanager
-def _signals_deferred() -> Iterator[None]:
-    """Hold every signal that ends a session (odohil/session/signals.py) back
-    (main thread only); on exit the previous handlers get what arrived. A
-    thread signal mask would not do: the kernel may hand the signal to another
-    thread, and Python still raises it here."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    received: list[tuple[int, FrameType | None]] = []
-
-    def hold(signum: int, frame: FrameType | None) -> None:
-        received.append((signum, frame))
-
-    previous = {
-        signum: signal.signal(signum, hold)
-        for signum in HELD_SIGNALS
-        if signal.getsignal(signum) not in (signal.SIG_IGN, None)
-    }
-    try:
-        yield
-    finally:
-        for restored, handler in previous.items():
-            signal.signal(restored, handler)
-        for got, frame in received:
-            before = previous[got]
-            if callable(before):
-                before(got, frame)
-            elif before != signal.SIG_IGN:
-                signal.raise_signal(got)
