@@ -4,13 +4,13 @@ from __future__ import annotations
 
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 from rich.console import Console
 
 from odohil.cli.estimate import SOURCES_HELP, load_outcome
-from odohil.cli.options import option, robot_option
+from odohil.cli.options import choices, option, robot_option
 from odohil.cli.recording_options import source_options
 from odohil.cli.render import bad_inputs, verdict_or_refuse
 from odohil.science.exports import (
@@ -21,7 +21,7 @@ from odohil.science.exports import (
 )
 from odohil.science.limits import RANGES
 from odohil.science.planner import DEFAULT_SPEED_M_PER_S
-from odohil.session.results.exports import export_text
+from odohil.session.results.exports import FORMATS, export_text
 from odohil.session.results.outcome import Selection
 from odohil.session.trials.logs import ImportOptions
 
@@ -30,14 +30,11 @@ def _ranged(flag: str, name: str, text: str) -> object:
     return option(flag, bound=name, help=f"{text}, {RANGES[name].text()}.")
 
 
-class FormatChoice(StrEnum):
-    """The export formats (docs/exports.md)."""
-
-    ros2_diff_drive = "ros2-diff-drive"
-    odometry_msg = "odometry-msg"
-    robot_localization = "robot-localization"
-    amcl = "amcl"
-    json = "json"
+if TYPE_CHECKING:
+    FormatChoice = StrEnum
+else:
+    FormatChoice = choices("FormatChoice", FORMATS)
+"""The export formats (docs/exports.md), from the registry (results/exports.py)."""
 
 
 @source_options(format_flags=("--log-format",))
@@ -45,7 +42,7 @@ def export(
     sources: Annotated[list[Path], typer.Argument(help=SOURCES_HELP)],
     fmt: Annotated[
         FormatChoice,
-        option("--format", help="ros2-diff-drive, odometry-msg, robot-localization, amcl, json."),
+        option("--format", help=f"{', '.join(FORMATS)}."),
     ],
     speed: Annotated[
         float, _ranged("--speed", "speed", "Driving speed the constants are linearised at, m/s")

@@ -11,10 +11,10 @@ from __future__ import annotations
 import contextlib
 import functools
 import inspect
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from enum import StrEnum
 from pathlib import Path
-from typing import Annotated, Any, TypeVar
+from typing import Annotated, Any, TypeVar, cast
 
 import typer
 
@@ -112,6 +112,13 @@ _PARAMETER_OPTIONS = (  # (parameter, flag, help)
     ("e_r", "--E-R", "Systematic E_R, deg/m."), ("e_t", "--E-T", _E_T_HELP),
     ("k_theta", "--K-theta", "K_theta, deg^2/m."), ("k_rho", "--K-rho", "K_rho, m."),
 )  # fmt: skip
+
+
+def choices(name: str, values: Iterable[str]) -> type[StrEnum]:
+    """A :class:`~enum.StrEnum` of ``values`` (names and values) for typer's choices, from a
+    registry (log readers, export formats): a new format is its module and its entry."""
+    functional: Callable[..., object] = StrEnum  # mypy reads only literal names here
+    return cast("type[StrEnum]", functional(name, [(value, value) for value in values]))
 
 
 class VariantChoice(StrEnum):

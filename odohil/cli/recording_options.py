@@ -12,21 +12,18 @@ from __future__ import annotations
 import inspect
 from collections.abc import Callable
 from enum import StrEnum
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from odohil.cli.options import EXCLUDE_HELP, Command, add_options, keyword
+from odohil.cli.options import EXCLUDE_HELP, Command, add_options, choices, keyword
 from odohil.cli.render import bad_inputs
 from odohil.session.results.outcome import Selection, parse_exclude
-from odohil.session.trials.logs import ImportOptions
+from odohil.session.trials.logs import FORMATS, ImportOptions
 
-
-class FormatChoice(StrEnum):
-    """The log formats odohil reads (docs/recording.md)."""
-
-    csv = "csv"
-    tum = "tum"
-    rosbag = "rosbag"
-    optiodom = "optiodom"
+if TYPE_CHECKING:
+    FormatChoice = StrEnum
+else:
+    FormatChoice = choices("FormatChoice", FORMATS)
+"""The log formats odohil reads (docs/recording.md), from the registry READERS."""
 
 
 _DEFAULTS = ImportOptions()

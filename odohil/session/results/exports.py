@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -48,27 +49,13 @@ from odohil.science.exports import (
 from odohil.session.results.report.exports import ExportFile
 
 __all__ = [
+    "EXPORT_FORMATS",
+    "FORMATS",
+    "ExportFormat",
     "export_files",
     "export_text",
 ]
 
-FORMATS: tuple[str, ...] = ("ros2-diff-drive", "odometry-msg", "robot-localization", "amcl", "json")
-FILE_NAMES: dict[str, str] = {
-    "ros2-diff-drive": "ros2_diff_drive.yaml",
-    "odometry-msg": "odometry_msg.yaml",
-    "robot-localization": "robot_localization.yaml",
-    "amcl": "amcl.yaml",
-    "json": "odometry_model.json",
-}
-"""The file each format is written to by :func:`write_exports`."""
-DESCRIPTIONS: dict[str, str] = {
-    "ros2-diff-drive": "diff_drive_controller pose and twist covariance diagonals (ROS 2)",
-    "odometry-msg": "nav_msgs/Odometry pose covariance of one step, with its formula",
-    "robot-localization": "robot_localization process_noise_covariance (15x15, per second)",
-    "amcl": "Nav2 AMCL alpha1..alpha5 at its update distance",
-    "json": "the error model in SI: verdict, parameter covariance, corrections",
-}
-"""What each format is, for the report's list of exports."""
 DIFF_DRIVE_NODE = "diff_drive_controller"
 ROBOT_LOCALIZATION_NODE = "ekf_filter_node"
 AMCL_NODE = "amcl"
@@ -385,22 +372,71 @@ def json_text(result: EstimateResult, lin: Linearisation, source: str = "") -> s
     return json.dumps(json_document(result, lin, source), indent=2, allow_nan=False) + "\n"
 
 
-_WRITERS = {
-    "ros2-diff-drive": ros2_diff_drive_text,
-    "odometry-msg": odometry_msg_text,
-    "robot-localization": robot_localization_text,
-    "amcl": amcl_text,
-    "json": json_text,
+@dataclass(frozen=True)
+class ExportFormat:
+    """One export format: a new one is its writer and one entry here.
+
+    Attributes:
+        name: its ``--format`` name (``odohil export`` offers every one).
+        file_name: the file :func:`write_exports` writes it to.
+        description: what it is, for the report's list of exports.
+        write: its text from (estimate, linearisation, source).
+    """
+
+    name: str
+    file_name: str
+    description: str
+    write: Callable[[EstimateResult, Linearisation, str], str]
+
+
+EXPORT_FORMATS: dict[str, ExportFormat] = {
+    f.name: f
+    for f in (
+        ExportFormat(
+            "ros2-diff-drive",
+            "ros2_diff_drive.yaml",
+            "diff_drive_controller pose and twist covariance diagonals (ROS 2)",
+            ros2_diff_drive_text,
+        ),
+        ExportFormat(
+            "odometry-msg",
+            "odometry_msg.yaml",
+            "nav_msgs/Odometry pose covariance of one step, with its formula",
+            odometry_msg_text,
+        ),
+        ExportFormat(
+            "robot-localization",
+            "robot_localization.yaml",
+            "robot_localization process_noise_covariance (15x15, per second)",
+            robot_localization_text,
+        ),
+        ExportFormat(
+            "amcl",
+            "amcl.yaml",
+            "Nav2 AMCL alpha1..alpha5 at its update distance",
+            amcl_text,
+        ),
+        ExportFormat(
+            "json",
+            "odometry_model.json",
+            "the error model in SI: verdict, parameter covariance, corrections",
+            json_text,
+        ),
+    )
 }
+"""Every export format, by name, in the order the report lists them."""
+FORMATS: tuple[str, ...] = tuple(EXPORT_FORMATS)
+FILE_NAMES: dict[str, str] = {name: f.file_name for name, f in EXPORT_FORMATS.items()}
+"""The file each format is written to by :func:`write_exports`."""
 
 
 def export_text(
     fmt: str, result: EstimateResult, lin: Linearisation | None = None, source: str = ""
 ) -> str:
     """One format's text (``fmt`` among :data:`FORMATS`)."""
-    if fmt not in _WRITERS:
+    if fmt not in EXPORT_FORMATS:
         raise ParameterError(f"unknown export format {fmt!r}; choose from {', '.join(FORMATS)}")
-    return _WRITERS[fmt](result, lin or Linearisation(), source)
+    return EXPORT_FORMATS[fmt].write(result, lin or Linearisation(), source)
 
 
 def export_files(
@@ -412,7 +448,11 @@ def export_files(
     """Every format as the report's :class:`ExportFile` (name, text,
     description), for ``write_report(report, folder, extra_exports=...)``."""
     return tuple(
-        ExportFile(FILE_NAMES[fmt], export_text(fmt, result, lin, source), DESCRIPTIONS[fmt])
+        ExportFile(
+            EXPORT_FORMATS[fmt].file_name,
+            export_text(fmt, result, lin, source),
+            EXPORT_FORMATS[fmt].description,
+        )
         for fmt in formats
     )
 
