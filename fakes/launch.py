@@ -14,12 +14,10 @@ import tempfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TextIO, TypeVar
+from typing import TextIO
 
 from odohil.errors import ParameterError
 from odohil.science.parameters import ErrorParameters
-
-T = TypeVar("T")
 
 OnReady = Callable[[str, str], None]
 """Called once with (pty device path, truth socket path) when the fake is open."""
@@ -111,11 +109,17 @@ def parse_and_log(parser: argparse.ArgumentParser, argv: list[str] | None) -> ar
     return args
 
 
-def configured(parser: argparse.ArgumentParser, build: Callable[[], T]) -> T:
-    """The fake's configuration from parsed options: a value the fake refuses
-    (:class:`~odohil.errors.ParameterError`, e.g. an unknown fault) ends the
-    program as a bad option does (usage, the message, exit 2; no traceback)."""
-    try:
-        return build()
-    except ParameterError as exc:
-        parser.error(str(exc))
+def checked_by(parse: Callable[[str], object]) -> Callable[[str], str]:
+    """An argparse ``type`` that refuses a value ``parse`` refuses
+    (:class:`~odohil.errors.ParameterError`, e.g. an unknown fault) as a bad
+    option is refused (usage, the option and the message, exit 2; no
+    traceback), and passes the text on unchanged."""
+
+    def check(text: str) -> str:
+        try:
+            parse(text)
+        except ParameterError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        return text
+
+    return check

@@ -13,9 +13,10 @@ from fakes.create2.config import (
     HOST_BOUND_S,
     PASSIVE_SLEEP_S,
     build_config,
+    parse_fault,
 )
 from fakes.create2.run import run_emulator
-from fakes.launch import add_serving_options, add_truth_options, configured, parse_and_log
+from fakes.launch import add_serving_options, add_truth_options, checked_by, parse_and_log
 from odohil.protocol.create2.opcodes import DEFAULT_BAUD
 from odohil.science.parameters import ErrorParameters
 
@@ -29,7 +30,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--time-scale", type=float, default=1.0)
     parser.add_argument("--baud", type=int, default=DEFAULT_BAUD)
     parser.add_argument(
-        "--fault", action="append", default=[], help=f"NAME[@METRES], NAME one of {FAULT_NAMES}"
+        "--fault",
+        action="append",
+        default=[],
+        type=checked_by(parse_fault),
+        help=f"NAME[@METRES], NAME one of {FAULT_NAMES}",
     )
     parser.add_argument("--encoder-origin", type=int, default=0)
     parser.add_argument("--mode-offset", type=int, default=0)
@@ -54,22 +59,19 @@ def main(argv: list[str] | None = None) -> None:
     )
     add_serving_options(parser)
     args = parse_and_log(parser, argv)
-    config = configured(
-        parser,
-        lambda: build_config(
-            seed=args.seed,
-            params=ErrorParameters.from_paper_units(args.e_r, args.e_t, args.k_theta, args.k_rho),
-            turn_scale=args.turn_scale,
-            spin_k=args.spin_k,
-            time_scale=args.time_scale,
-            baud=args.baud,
-            faults=args.fault,
-            encoder_origin=args.encoder_origin,
-            mode_offset=args.mode_offset,
-            angle_bug=args.angle_bug,
-            mode_change_s=args.mode_change_ms / 1000.0,
-            passive_sleep_s=args.passive_sleep_s or None,
-        ),
+    config = build_config(
+        seed=args.seed,
+        params=ErrorParameters.from_paper_units(args.e_r, args.e_t, args.k_theta, args.k_rho),
+        turn_scale=args.turn_scale,
+        spin_k=args.spin_k,
+        time_scale=args.time_scale,
+        baud=args.baud,
+        faults=args.fault,
+        encoder_origin=args.encoder_origin,
+        mode_offset=args.mode_offset,
+        angle_bug=args.angle_bug,
+        mode_change_s=args.mode_change_ms / 1000.0,
+        passive_sleep_s=args.passive_sleep_s or None,
     )
     run_emulator(
         config,
