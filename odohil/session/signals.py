@@ -286,20 +286,28 @@ def signals_deferred() -> Iterator[None]:
         yield
         return
     deferred: list[int] = []
-    before = _sigmask(signal.SIG_BLOCK, _HELD_SET)
-    _deferred = deferred
+    note = _Note(deferred)
+    before = _sigmask(signal.SIG_BLOCK, ())  # the mask as it is (nothing changed yet)
     swapped: dict[int, object] = {}
     try:
+        _deferred = deferred  # from here odohil's handlers only note
+        _sigmask(signal.SIG_BLOCK, _HELD_SET)
         for signum in HELD_SIGNALS:
             handler = _handler_of(signum)
             if not _defers(signum, handler):
-                swapped[signum] = _set_handler(signum, _Note(deferred))
+                swapped[signum] = handler  # kept before the swap: restored whatever comes
+                _set_handler(signum, note)
         yield
     finally:
-        for signum, handler in swapped.items():
-            _set_handler(signum, handler)
-        _deferred = None
-        _sigmask(signal.SIG_SETMASK, before)  # what was blocked is delivered now
+        # Unblock first, while every handler only notes: what was held is
+        # noted now; then the handlers come back, and no exit leaves the
+        # thread blocked or odohil's handlers noting.
+        try:
+            _sigmask(signal.SIG_SETMASK, before)
+            for signum, handler in swapped.items():
+                _set_handler(signum, handler)
+        finally:
+            _deferred = None
         for signum in deferred:
             handler = _handler_of(signum)
             if callable(handler):

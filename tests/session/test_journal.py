@@ -270,10 +270,13 @@ def test_a_signal_sent_during_a_record_is_delivered_right_after_it(
     with HANDLERS[handlers](), Journal.create(tmp_path) as journal:
         journal.append("session", {"format": 1})
         monkeypatch.setattr(os, "fsync", fsync_under_a_signal)
+        handler = signal.getsignal(signum)
         with pytest.raises(raised) as ended:
             journal.append("measurement", {"value_m": 1.0})
         monkeypatch.undo()
         assert synced  # raised after the record was on disk, not during it
+        assert signal.pthread_sigmask(signal.SIG_BLOCK, ()) == set()  # nothing left blocked
+        assert signal.getsignal(signum) is handler  # nor swapped
         assert journal.next_seq == 3
         journal.append("stopped", {})  # not broken: the record and the count agree
     if isinstance(ended.value, SignalReceived):
