@@ -97,6 +97,18 @@ SCALE_FLOOR_M = 0.02
 """Distances from the start that differ by less than this are never
 implausible, m (the noise of a farthest point seen in a noisy stream)."""
 _LOG_AMBIGUOUS = math.log(CLEAR_CUT_LIKELIHOOD_RATIO)
+UNKNOWN_ROBOT_PAPER: tuple[tuple[float, float], ...] = (
+    (0.0, 2.0),
+    (0.0, 0.05),
+    (0.0, 1.0),
+    (0.0, 1e-3),
+)
+"""Mean and standard deviation (deg/m, 1, deg^2/m, m) of the belief that
+predicts a trial before there is an estimate when the robot description has
+no ``[priors]``: any robot with E_R within +-2 deg/m, E_T within +-5 %,
+K_theta up to 1 deg^2/m and K_rho up to 1e-3 m lies within one deviation
+(the rates are raised by theirs), so its first clean trials do not trip the
+slip check as a Nomad 150's prior made them (issue 31, bench/slip_check.py)."""
 
 
 @dataclass(frozen=True, eq=False)
@@ -124,8 +136,15 @@ class ParameterBelief:
 
     @classmethod
     def from_priors(cls, priors: ParameterPriors) -> ParameterBelief:
-        """The robot description's ``[priors]``."""
-        return cls(priors.mean, priors.cov(), "priors")
+        """The robot description's ``[priors]``; without them (``given`` False)
+        :data:`UNKNOWN_ROBOT_PAPER`."""
+        if priors.given:
+            return cls(priors.mean, priors.cov(), "priors")
+        mean = ErrorParameters.from_paper_units(*(m for m, _ in UNKNOWN_ROBOT_PAPER))
+        sd = np.array(
+            ErrorParameters.from_paper_units(*(s for _, s in UNKNOWN_ROBOT_PAPER)).as_tuple()
+        )  # deviations scale as the values do
+        return cls(mean, np.diag(sd**2), "priors")
 
     @classmethod
     def from_estimate(
@@ -138,21 +157,35 @@ class ParameterBelief:
         """An estimate's values, standard errors (None or inf when unknown) and
         correlation, SI. Standard errors are widened by
         :data:`ESTIMATE_INFLATION`; a parameter the estimate does not pin (or
-        pins less well than the priors) keeps its prior. Negative variance
-        rates are clipped to 0."""
+        pins less well than the priors) keeps its prior, except a variance rate
+        whose estimate plus its widened standard error lies above the prior's
+        mean plus one deviation: a robot far noisier than the priors (no
+        ``[priors]``: the paper's Nomad) would otherwise be predicted with the
+        priors' spread until the estimate's standard error beat the prior's, a
+        relative error of K_theta 0.39 deg^2/m needing some 500 trials, and
+        about one clean trial in ten would trip the slip check (issue 31).
+        Negative variance rates are clipped to 0."""
         mean = list(float(v) for v in values)
         mean[2], mean[3] = max(mean[2], 0.0), max(mean[3], 0.0)
         sd = np.empty(4)
         corr = np.eye(4)
         use = np.zeros(4, dtype=bool)
+        prior_mean = priors.mean.as_tuple()
         for a in range(4):
             s = stderrs[a]
-            if s is not None and math.isfinite(s) and ESTIMATE_INFLATION * s < priors.sd[a]:
+            if (
+                s is not None
+                and math.isfinite(s)
+                and (
+                    ESTIMATE_INFLATION * s < priors.sd[a]
+                    or (a >= 2 and mean[a] + ESTIMATE_INFLATION * s > prior_mean[a] + priors.sd[a])
+                )
+            ):  # a variance rate the data puts above the prior's reach is the data's
                 sd[a] = ESTIMATE_INFLATION * float(s)
                 use[a] = True
             else:
                 sd[a] = priors.sd[a]
-                mean[a] = priors.mean.as_tuple()[a]
+                mean[a] = prior_mean[a]
         if correlation is not None:
             for a in range(4):
                 for b in range(4):
@@ -625,6 +658,7 @@ __all__ = [
     "SCALE_FLOOR_M",
     "SCALE_RATIO",
     "SLIP_LEVEL",
+    "UNKNOWN_ROBOT_PAPER",
     "ParameterBelief",
     "PoseCheck",
     "PoseSelection",

@@ -185,10 +185,15 @@ class ParameterPriors:
     Attributes:
         mean: the believed values (default: the paper's Nomad 150).
         sd: one standard deviation each, (rad/m, 1, rad^2/m, m), all positive.
+        given: the description has a ``[priors]`` table (False: these are
+            the defaults, a guess, and the slip check predicts the first
+            trials, before there is an estimate, for any robot of
+            odohil/science/pose_selection.py's ``UNKNOWN_ROBOT`` instead).
     """
 
     mean: ErrorParameters = NOMAD150
     sd: tuple[float, float, float, float] = _paper_to_si(DEFAULT_PRIOR_SD_PAPER)
+    given: bool = False
 
     def __post_init__(self) -> None:
         for name, value in zip(_PRIOR_KEYS[1::2], self.sd, strict=True):
@@ -411,7 +416,9 @@ def _priors(table: dict[str, Any]) -> ParameterPriors:
         mean = ErrorParameters.from_paper_units(*means)
     except ParameterError as exc:
         raise RobotDescriptionError(f"priors: {exc}") from None
-    return ParameterPriors(mean=mean, sd=_paper_to_si((sds[0], sds[1], sds[2], sds[3])))
+    return ParameterPriors(
+        mean=mean, sd=_paper_to_si((sds[0], sds[1], sds[2], sds[3])), given=bool(table)
+    )
 
 
 def _reject_unknown(table: dict[str, Any], known: tuple[str, ...], prefix: str) -> None:

@@ -60,7 +60,7 @@ def test_example_parses_to_the_documented_values() -> None:
     assert description.cross_pairs == (("A", "B"), ("B", "C"))
     assert description.serial == SerialSettings(port="/dev/ttyUSB0", baud=38400, timeout_s=1.0)
     assert description.cross_indices() == ((0, 1), (1, 2))
-    assert description.priors == ParameterPriors()  # the documented defaults
+    assert description.priors == ParameterPriors(given=True)  # the documented defaults
     assert description.positions().shape == (3, 2)
 
 
