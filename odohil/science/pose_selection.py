@@ -8,7 +8,8 @@ Used the same way live (odohil/session/run/engine.py) and offline
 1. **Predictive distribution** of one trial's pose change (dx m, dy m,
    dtheta rad): the model's moments (odohil/science/moments.py) at a
    :class:`ParameterBelief` (the current estimate, or the robot description's
-   ``[priors]`` before there is one), widened by the belief's parameter
+   ``[priors]`` before there is one, or without them
+   :data:`UNKNOWN_ROBOT_PAPER`), widened by the belief's parameter
    uncertainty (mean derivatives J: J^T Sigma J) and with the variance rates
    raised by one of their standard deviations (and never below the priors'
    values: an estimate from a few trials often puts K_theta near 0, and a
