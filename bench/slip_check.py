@@ -70,7 +70,7 @@ def session(
     """(trials, clean trials tripped, slipped trials caught) of one session."""
     priors = ParameterPriors(mean=truth, given=True) if given else ParameterPriors()
     description = RobotDescription(SCREWS, 0.001, (("A", "B"), ("B", "C")), priors=priors)
-    choreography = floor_choreography([(Design(k, l, variant), n) for k, l, n in PLAN])  # type: ignore[arg-type]
+    choreography = floor_choreography([(Design(k, length, variant), n) for k, length, n in PLAN])  # type: ignore[arg-type]
     estimator = IncrementalEstimator()
     n = tripped = caught = 0
     for trial in range(1, choreography.n_trials + 1):
