@@ -123,9 +123,8 @@ def main() -> None:
     rng = np.random.default_rng(args.seed)
     start = time.process_time()
     total = [0, 0, 0]
-    print(
-        "| robot (E_R, E_T, K_theta, K_rho) | motion | [priors] | trials | false alarms % | 5 mm caught % |"
-    )
+    columns = ("robot (E_R, E_T, K_theta, K_rho)", "motion", "[priors]", "trials")
+    print("| " + " | ".join((*columns, "false alarms %", "5 mm caught %")) + " |")
     print("|---|---|---|---|---|---|")
     for name, paper in ROBOTS.items():
         truth = ErrorParameters.from_paper_units(*paper)
