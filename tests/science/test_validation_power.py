@@ -4,7 +4,8 @@ against the detectable errors validate prints (odohil/science/validation.py).
 The power is checked against a Monte Carlo of the discrete model
 (odohil/science/simulator.py): the planned count's, with the estimate's
 uncertainty, and a count far below it, each within 4 Monte Carlo SE of the
-rejection rate of N_SETS simulated validation sets.
+rejection rate of N_SETS simulated validation sets; the power of all eight
+tests (:func:`verdict_power`) likewise for a robot whose K_theta is off.
 """
 
 from __future__ import annotations
@@ -18,8 +19,8 @@ import pytest
 from odohil.science.parameters import ErrorParameters
 from odohil.science.paths import square
 from odohil.science.simulator import simulate
-from odohil.science.validation import N_TESTS, predict_path, validation_test
-from odohil.science.validation_power import bias_power, trials_for_power
+from odohil.science.validation import N_TESTS, PathPrediction, predict_path, validation_test
+from odohil.science.validation_power import bias_power, trials_for_power, verdict_power
 
 ALPHA = 0.01
 ESTIMATE = ErrorParameters.from_paper_units(-0.5, -0.02, 0.1, 1e-4)
@@ -109,3 +110,44 @@ def test_the_power_is_the_discrete_models_rejection_rate(planned: bool, uncertai
     rate = _caught(n, shift, expected.test, parameter_cov, seed=11 + n)
     mc_se = math.sqrt(expected.power * (1 - expected.power) / N_SETS)
     assert abs(rate - expected.power) < 4 * mc_se, (n, expected, rate)
+
+
+def test_the_spread_power_is_the_discrete_models_rejection_rate() -> None:
+    # a robot whose K_theta is three times the estimate's, 12 trials: the
+    # heading NEES catches it with probability about 0.5
+    parameter_cov = np.diag([2e-3, 0.01, 1e-7, 1e-7]) ** 2
+    truth = replace(ESTIMATE, k_theta=3 * ESTIMATE.k_theta)
+    n = 12
+    expected = verdict_power(
+        PREDICTION, predict_path(PATH, truth), n, measurement_cov=MEASUREMENT_COV,
+        parameter_cov=parameter_cov, level=ALPHA / N_TESTS,
+    )  # fmt: skip
+    assert expected.test == "theta"
+    rng = np.random.default_rng(5)
+    poses = simulate(PATH, truth, N_SETS * n, seed=rng, segment_m=0.004).pose_change
+    poses += rng.multivariate_normal(np.zeros(3), MEASUREMENT_COV, size=poses.shape[0])
+    covs = np.broadcast_to(MEASUREMENT_COV, (n, 3, 3))
+    caught = 0
+    for one in poses.reshape(N_SETS, n, 3):
+        result = validation_test(one, [PREDICTION] * n, covs, parameter_cov, alpha=ALPHA)
+        caught += not next(t for t in result.axes if t.name == "theta").passed
+    mc_se = math.sqrt(expected.power * (1 - expected.power) / N_SETS)
+    assert abs(caught / N_SETS - expected.power) < 4 * mc_se, (expected, caught / N_SETS)
+
+
+def test_the_verdicts_power_is_the_bias_power_when_only_the_mean_moves() -> None:
+    parameter_cov = np.diag([2e-3, 0.01, 1e-7, 1e-7]) ** 2
+    shift = np.radians(0.3)
+    truth = PathPrediction(PREDICTION.mean + PREDICTION.jacobian[:, 0] * shift,
+                           PREDICTION.cov, PREDICTION.jacobian)  # fmt: skip
+    for n in (1, 4):
+        bias = bias_power(
+            PREDICTION, n, 0, shift, measurement_cov=MEASUREMENT_COV,
+            parameter_cov=parameter_cov, level=ALPHA / N_TESTS,
+        )  # fmt: skip
+        verdict = verdict_power(
+            PREDICTION, truth, n, measurement_cov=MEASUREMENT_COV,
+            parameter_cov=parameter_cov, level=ALPHA / N_TESTS,
+        )  # fmt: skip
+        assert verdict.power == pytest.approx(bias.power, abs=1e-6)
+        assert verdict.power >= bias.power - 1e-6
