@@ -181,17 +181,17 @@ def _fewest(
     return TrialPlan(high, found.power, found.test, limit)
 
 
-def _form(
-    test: FloatArray, true_cov: FloatArray, mean: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Q = z^T test z for z ~ N(mean, true_cov) as sum_k w_k chi^2(1, nc_k):
-    (w, nc). With test = L L^T, y = L^T z ~ N(L^T mean, L^T true_cov L)."""
-    root = np.linalg.cholesky(test)
-    values, vectors = np.linalg.eigh(root.T @ true_cov @ root)
+def _form(cov: FloatArray, true_cov: FloatArray, mean: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Q = z^T cov^-1 z for z ~ N(mean, true_cov) as sum_k w_k chi^2(1, nc_k):
+    (w, nc). With cov = C C^T, y = C^-1 z ~ N(C^-1 mean, C^-1 true_cov C^-T)."""
+    root = np.linalg.cholesky(cov)
+    white = np.linalg.solve(root, np.linalg.solve(root, true_cov).T)
+    values, vectors = np.linalg.eigh(0.5 * (white + white.T))
     values = np.clip(values, 0.0, None)
-    shift = vectors.T @ (root.T @ mean)
+    shift = vectors.T @ np.linalg.solve(root, mean)
     safe = np.where(values > 0, values, 1.0)
-    return values, np.where(values > 0, shift**2 / safe, 0.0)
+    weights: FloatArray = values
+    return weights, np.where(values > 0, shift**2 / safe, 0.0)
 
 
 def verdict_power(
@@ -219,8 +219,8 @@ def verdict_power(
     out: list[tuple[str, float]] = []
     for name, axes in (("overall", [0, 1, 2]), *((a, [k]) for k, a in enumerate(AXES))):
         ix = np.ix_(axes, axes)
-        w0, _ = _form(np.linalg.inv(s[ix]), s_true[ix], np.zeros(len(axes)))
-        w1, nc1 = _form(np.linalg.inv(s[ix] + n * g[ix]), s_true[ix] + n * g[ix],
+        w0, _ = _form(s[ix], s_true[ix], np.zeros(len(axes)))
+        w1, nc1 = _form(s[ix] + n * g[ix], s_true[ix] + n * g[ix],
                         math.sqrt(n) * d[axes])  # fmt: skip
         k = len(axes)
         weights, dofs, ncs = w1, np.ones(k), nc1
@@ -230,7 +230,7 @@ def verdict_power(
             ncs = np.concatenate([np.zeros(k), nc1])
         threshold = distributions.chi2_isf(level, k * n)
         out.append((name, distributions.quadratic_form_sf(threshold, weights, dofs, ncs)))
-        wb, ncb = _form(np.linalg.inv(s[ix] / n + g[ix]), s_true[ix] / n + g[ix], d[axes])
+        wb, ncb = _form(s[ix] / n + g[ix], s_true[ix] / n + g[ix], d[axes])
         bias = "bias" if name == "overall" else f"bias {name}"
         out.append((bias, distributions.quadratic_form_sf(
             distributions.chi2_isf(level, len(axes)), wb, 1.0, ncb)))  # fmt: skip
