@@ -38,6 +38,7 @@ trials whose best test reaches the wanted power.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -166,12 +167,16 @@ def trials_for_power(
 def _fewest(
     at: Callable[[int], TestPower], power: float, max_trials: int, limit: float
 ) -> TrialPlan:
-    """The fewest n in 1..max_trials with at(n).power >= power (power rises with n)."""
-    top = at(max_trials)
-    if top.power < power:
-        return TrialPlan(None, top.power, top.test, limit)
-    low, high = 0, max_trials  # power(low) < power <= power(high)
-    while high - low > 1:
+    """The fewest n in 1..max_trials with at(n).power >= power (power rises
+    with n): doubling from 1, then halving the last gap."""
+    at = functools.cache(at)
+    low, high = 0, 1  # power(low) < power; high is the next count tried
+    while at(high).power < power:
+        if high >= max_trials:
+            top = at(max_trials)
+            return TrialPlan(None, top.power, top.test, limit)
+        low, high = high, min(2 * high, max_trials)
+    while high - low > 1:  # power(low) < power <= power(high)
         mid = (low + high) // 2
         if at(mid).power >= power:
             high = mid
@@ -266,5 +271,4 @@ def trials_to_catch(
             measurement_cov=measurement_cov, parameter_cov=parameter_cov, level=level,
         )  # fmt: skip
 
-    top = at(max_trials)
-    return _fewest(at, power, max_trials, top.power)
+    return _fewest(at, power, max_trials, at(max_trials).power)
