@@ -44,7 +44,9 @@ def calibration(tmp_path_factory: pytest.TempPathFactory) -> EstimateResult:
     for design in (Design(1, 3.0), Design(10, 0.5)):
         poses = simulate(design.path(), NOMAD150, 20, seed=rng, segment_m=0.01).pose_change
         poses = poses + rng.normal(0.0, [1e-3, 1e-3, 2e-3], poses.shape)
-        rows += [f"{design.k:g},{design.l_m:g},turn,{x!r},{y!r},{t!r}" for x, y, t in poses.tolist()]
+        rows += [
+            f"{design.k:g},{design.l_m:g},turn,{x!r},{y!r},{t!r}" for x, y, t in poses.tolist()
+        ]
     file = tmp_path_factory.mktemp("sizing") / "calibration.csv"
     file.write_text("\n".join(rows) + "\n", encoding="utf-8")
     result = estimate_source([file], DESCRIPTION).result
