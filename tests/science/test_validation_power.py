@@ -151,3 +151,32 @@ def test_the_verdicts_power_is_the_bias_power_when_only_the_mean_moves() -> None
         )  # fmt: skip
         assert verdict.power == pytest.approx(bias.power, abs=1e-6)
         assert verdict.power >= bias.power - 1e-6
+
+
+def test_the_spreads_own_uncertainty_keeps_the_nees_tests_at_their_level() -> None:
+    """The delta method of the spread (PathPrediction.cov_jacobian): a
+    calibration whose K_theta and K_rho are uncertain by 30 %, validated on 30
+    trials, each set with its own estimate drawn around the truth. The per-axis
+    NEES tests reject at their level (within 4 SE); without the spread's
+    uncertainty the heading test rejects far more often (issue 31)."""
+    truth = ESTIMATE
+    se = np.array([2e-3, 0.01, 0.3 * truth.k_theta, 0.3 * truth.k_rho])
+    n, sets, alpha = 30, 200, 0.5
+    level = alpha / N_TESTS
+    rng = np.random.default_rng(1)
+    poses = simulate(PATH, truth, sets * n, seed=rng, segment_m=0.004).pose_change
+    poses += rng.multivariate_normal(np.zeros(3), MEASUREMENT_COV, size=poses.shape[0])
+    covs = np.broadcast_to(MEASUREMENT_COV, (n, 3, 3))
+    with_it, without = np.zeros(3), 0
+    for one in poses.reshape(sets, n, 3):
+        values = np.array(truth.as_tuple()) + se * rng.standard_normal(4)
+        values[2:] = np.abs(values[2:])
+        prediction = predict_path(PATH, ErrorParameters(*values))
+        tested = validation_test(one, [prediction] * n, covs, np.diag(se**2), alpha=alpha)
+        with_it += [not t.passed for t in tested.axes]
+        plain = replace(prediction, cov_jacobian=None)
+        blind = validation_test(one, [plain] * n, covs, np.diag(se**2), alpha=alpha)
+        without += not blind.axes[2].passed
+    mc_se = math.sqrt(level * (1 - level) / sets)
+    assert np.all(np.abs(with_it / sets - level) < 4 * mc_se), with_it / sets
+    assert without / sets > level + 4 * mc_se, without / sets

@@ -179,7 +179,8 @@ def guided_validation(
             )
     elif trials is None and detect is None:
         raise ParameterError(
-            "--trials N (N in 1..10000) or --detect NAME=VALUE is needed to start a validation"
+            "--trials N is needed to start a validation (N in 1..10000), or --detect "
+            "NAME=VALUE to choose it"
         )
     calibration = load_calibration(session)
     drive_folder(vpath, calibration, session, target)  # a session, not fitted on the path
