@@ -63,16 +63,11 @@ ALPHA = 0.01
 SEGMENT_M = 0.01
 
 
-def _robots() -> dict[str, tuple[RobotDescription, ErrorParameters, str, bool]]:
-    """name -> (description, truth, calibration variant, turns exact)."""
+def _robots() -> dict[str, tuple[RobotDescription, ErrorParameters, bool]]:
+    """name -> (description, truth, turns exact)."""
     return {
-        "nomad150": (parse_description(readme_robot(), "robot.toml"), NOMAD150, "turn", True),
-        "create2": (
-            load_robot_description(builtin_path("create2")),
-            CREATE2_TRUTH,
-            "reverse",
-            False,
-        ),
+        "nomad150": (parse_description(readme_robot(), "robot.toml"), NOMAD150, True),
+        "create2": (load_robot_description(builtin_path("create2")), CREATE2_TRUTH, False),
     }
 
 
