@@ -16,14 +16,7 @@ from odohil import units
 from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED, exit_for_run
 from odohil.cli.options import JsonOption, option, robot_option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import (
-    bad_input,
-    bad_inputs,
-    drawn,
-    print_lines,
-    print_refusal,
-    print_said,
-)
+from odohil.cli.render import bad_input, bad_inputs, drawn, print_lines, print_refusal, print_said
 from odohil.cli.session_view import drive
 from odohil.errors import (
     JournalError,
@@ -41,7 +34,6 @@ from odohil.session.commands.validate import (
     validation_setup,
     verdict_lines,
 )
-from odohil.session.commands.validate_power import DETECT_SYNTAX, size_validation
 from odohil.session.results.validation import (
     PATH_SYNTAX,
     ValidationTrials,
@@ -49,7 +41,7 @@ from odohil.session.results.validation import (
     trials_of_session,
 )
 from odohil.session.run import Opened, SessionSpec
-from odohil.session.text.outcome import outcome_line
+from odohil.session.text.outcome import DETECT_HELP, outcome_line, sizing_lines
 from odohil.session.text.run import error_said
 from odohil.session.trials.logs import ImportOptions
 
@@ -74,9 +66,6 @@ _HELP = (
     "Each trial's predicted mean and covariance (the measurement covariance and, by the delta "
     "method, the estimate's own covariance included) are tested by a NEES and a bias "
     "chi-square test over all trials and per axis (x, y, theta), each at --alpha/8.\n\n"
-    "--detect E_R=0.4 (the paper's units) sizes a driven validation: the fewest trials whose "
-    "tests catch that error with probability 0.9, printed before anything moves; refused "
-    "(exit 2) when no count up to 10000 does, or with --trials N when N is too few.\n\n"
     "Exit 0 pass; 3 fail, or an untrusted calibration refused without --force; 2 bad input "
     "(nothing moved)."
 )
@@ -90,10 +79,7 @@ def validate(
     path_text: Annotated[str, option("--path", help=PATH_SYNTAX)],
     trials: Annotated[int | None, option("--trials", bound="plan_n", help="Trials to drive "
                       "(forth-back), or to use from a file (default: all rows).")] = None,
-    detect: Annotated[str | None, option("--detect", help="The calibration error the "
-                      f"validation must catch with probability 0.9: {DETECT_SYNTAX}. It chooses "
-                      "the trials to drive (with --trials, checks them), printed before "
-                      "anything moves; exit 2 when the path cannot.")] = None,
+    detect: Annotated[str | None, option("--detect", help=DETECT_HELP)] = None,
     measure: Annotated[str | None, option("--measure", help="`fake` (the fake robot's true "
                        "pose), `tcp://HOST:PORT` (motion capture) or a file: a trial file for a "
                        "driven path (as run), a pose file for a general path without "
@@ -119,22 +105,13 @@ def validate(
     console = Console(stderr=True)
     bad = (ParameterError, RobotDescriptionError, JournalError, MeasurementError, OSError)
     with bad_inputs(console):
-        setup = validation_setup(session, path_text, robot_file, exclude, recording, alpha)
+        setup = validation_setup(session, path_text, robot_file, exclude, recording, alpha, detect)
     outcome = setup.calibration.outcome
     result = outcome.result
     if result is None or not (result.verdict.trusted or force):
         print_refusal(console, outcome, None if result is None else "test it", "nothing tested")
         raise typer.Exit(EXIT_UNTRUSTED)
     console.print(outcome_line(outcome), highlight=False)  # the calibration's verdict
-    sizing = None
-    if detect is not None:
-        with bad_inputs(console):
-            sizing = size_validation(
-                detect, setup.vpath, result, setup.robot.description, measure=measure,
-                trials=trials, alpha=alpha,
-            )  # fmt: skip
-        print_lines(console, sizing.lines(setup.vpath.text))
-        trials = sizing.trials
 
     def drive(spec: SessionSpec) -> ValidationTrials:
         line = replace(spec, port=port, baud=baud, truth_socket=truth_socket, seed=seed)
@@ -153,10 +130,8 @@ def validate(
         print_said(console, error_said(str(exc)))
         raise typer.Exit(EXIT_ERROR) from None
     data = validation_document(
-        session, setup.vpath, held.folder, held.measured, setup.calibration, tested
+        session, setup.vpath, held.folder, held.measured, setup.calibration, tested, held.sizing
     )
-    if sizing is not None:
-        data["sizing"] = sizing.to_json_dict()
     if as_json:
         typer.echo(json.dumps(data))
     else:
@@ -167,8 +142,8 @@ def validate(
 def _drive(console: Console, spec: SessionSpec) -> ValidationTrials:
     """Drive the validation session ``spec`` (its exit status if it does not finish)."""
 
-    def say(opened: Opened) -> None:
-        console.print(f"validation session {spec.folder}")
+    def say(opened: Opened) -> None:  # --detect's count first, before anything moves
+        print_lines(console, [*sizing_lines(spec.settings), f"validation session {spec.folder}"])
         console.print(f"robot: {opened.prepared.line.describe()}", soft_wrap=True, markup=False)
 
     outcome = drive(console, spec, units.DEFAULT_UNIT_SYSTEM, False, say, verdict=False)

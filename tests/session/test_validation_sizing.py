@@ -108,7 +108,7 @@ def test_the_planned_count_is_the_fewest_that_catch_each_error(
         parameter_cov=parameter_covariance(calibration), level=0.01 / N_TESTS,
     )  # fmt: skip
     assert fewer.power < 0.9
-    lines = sizing.lines(PATH)
+    lines = sizing.lines()
     assert lines[0] == f"trials: {sizing.trials} of {PATH} (planned by --detect)"
     assert lines[2].startswith("  K_theta off by 0.096 deg^2/m: caught with probability 0.9")
     assert sizing.to_json_dict()["detect"]["K_theta"]["trials"] == sizing.trials

@@ -34,15 +34,12 @@ import math
 from dataclasses import dataclass, replace
 from typing import Any
 
-import numpy as np
-
 from odohil import units
 from odohil.errors import ParameterError
 from odohil.science.estimators import EstimateResult
-from odohil.science.floor_marks import pose_covariance
 from odohil.science.limits import RANGES
 from odohil.science.parameters import PARAMETER_NAMES
-from odohil.science.paths import EncoderPath, FloatArray
+from odohil.science.paths import EncoderPath
 from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import (
     DETECTION_POWER,
@@ -57,29 +54,24 @@ from odohil.science.validation_power import (
     trials_to_catch,
     verdict_power,
 )
-from odohil.session.measure.kinds import MotionCaptureSettings
-from odohil.session.measure.mocap.change import pose_change_with_covariance
-from odohil.session.measure.mocap.source import pose_sigma_of
-from odohil.session.measure.registry import parse_measure
+from odohil.session.measure.kinds import expected_pose_cov
 from odohil.session.results.validation import (
     VARIANCE_RATES,
     ValidationPath,
     parameter_covariance,
     predict_calibrated,
 )
+from odohil.session.text.outcome import DETECT_HELP, DETECT_SYNTAX, sizing_lines, test_words
 
 __all__ = [
+    "DETECT_HELP",
     "DETECT_SYNTAX",
     "Detect",
     "Sizing",
     "parse_detect",
     "size_validation",
+    "sizing_lines",
 ]
-
-DETECT_SYNTAX = (
-    "NAME=VALUE[,NAME=VALUE...], the error to catch in the paper's units: E_R deg/m, E_T "
-    "(0.02 or 2%), K_theta deg^2/m, K_rho m (e.g. E_R=0.4,K_theta=0.1)"
-)
 
 
 @dataclass(frozen=True)
@@ -161,30 +153,26 @@ class Sizing:
         trials: the count chosen (``--trials`` when given and enough).
         caught: per error, its plan and the power at ``trials``.
         given: whether ``--trials`` was given.
+        path: the ``--path`` text.
     """
 
     trials: int
     caught: tuple[Caught, ...]
     given: bool
+    path: str = ""
 
-    def lines(self, path: str) -> list[str]:
-        """What it prints before anything moves."""
-        how = "given by --trials" if self.given else "planned by --detect"
-        out = [f"trials: {self.trials} of {path} ({how})"]
-        for c in self.caught:
-            fewest = units.plural(c.plan.trials or 0, "trial")
-            out.append(
-                f"  {c.detect.text()}: caught with probability {c.power:.3f} "
-                f"({_test_words(c.test)}; {DETECTION_POWER:g} from {fewest} on)"
-            )
-        return out
+    def lines(self) -> list[str]:
+        """What it prints before anything moves (:func:`sizing_lines`)."""
+        return sizing_lines({"sizing": self.to_json_dict()})
 
     def to_json_dict(self) -> dict[str, Any]:
-        """{"trials", "given", "power": 0.9, "detect": {NAME: {"error", "trials",
-        "power", "test"}}} (SI)."""
+        """{"trials", "given", "path", "power": 0.9, "detect": {NAME: {"error",
+        "trials", "power", "test"}}} (SI); a driven validation journals it in
+        its header's ``settings`` as ``sizing``."""
         return {
             "trials": self.trials,
             "given": self.given,
+            "path": self.path,
             "power": DETECTION_POWER,
             "detect": {
                 c.detect.name: {
@@ -196,30 +184,6 @@ class Sizing:
                 for c in self.caught
             },
         }
-
-
-def _test_words(test: str) -> str:
-    if test.startswith("bias"):
-        return f"the {test} test"
-    return f"the {test} NEES test"
-
-
-def measurement_cov(
-    measure: str | None, description: RobotDescription, mean: FloatArray
-) -> FloatArray:
-    """The measurement covariance of one trial whose pose change is ``mean``
-    (module docstring).
-
-    Raises:
-        ParameterError: a malformed ``--measure``.
-        RobotDescriptionError: motion capture without ``pose_sigma``.
-    """
-    settings = None if measure is None else parse_measure(measure).settings
-    if isinstance(settings, MotionCaptureSettings):
-        cov = np.diag(np.square(pose_sigma_of(description, settings.url)))
-        _, change = pose_change_with_covariance((0.0, 0.0, 0.0), mean.tolist(), cov, cov)
-        return change
-    return pose_covariance(description, mean)
 
 
 def _truth(path: EncoderPath, calibration: EstimateResult, detect: Detect) -> PathPrediction:
@@ -267,7 +231,7 @@ def size_validation(
     if trials is not None:
         RANGES["plan_n"].check("--trials", trials)
     prediction = predict_calibrated(path, calibration)
-    r = measurement_cov(measure, description, prediction.mean)
+    r = expected_pose_cov(measure, description, prediction.mean)
     sigma = parameter_covariance(calibration)
     truths = [_truth(path, calibration, d) for d in found]
     plans = [
@@ -280,7 +244,7 @@ def size_validation(
             f"--detect: {vpath.text} cannot catch "
             + "; ".join(
                 f"{d.text()} with probability {DETECTION_POWER:g} in {MAX_TRIALS} trials "
-                f"(best {p.power:.3f}, {_test_words(p.test)})"
+                f"(best {p.power:.3f}, {test_words(p.test)})"
                 for d, p in cannot
             )
             + ". What would help: a longer path (its mean moves further with the error), a "
@@ -307,4 +271,4 @@ def size_validation(
             + f"; {needed} trials reach {DETECTION_POWER:g} (give --trials {needed}, or "
             "leave --trials out and --detect chooses)"
         )
-    return Sizing(chosen, tuple(caught), trials is not None)
+    return Sizing(chosen, tuple(caught), trials is not None, vpath.text)

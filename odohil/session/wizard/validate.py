@@ -43,8 +43,10 @@ from odohil.session.results.validation import (
     trials_of_session,
 )
 from odohil.session.run import SessionSpec
+from odohil.session.text.outcome import DETECT_HELP
 
 __all__ = [
+    "DETECT_HELP",
     "GuidedValidation",
 ]
 
@@ -70,6 +72,10 @@ class GuidedValidation:
     session: Path
     alpha: float = DEFAULT_ALPHA
     sizing: Sizing | None = None
+
+    def sizing_lines(self) -> list[str]:
+        """The trial count ``--detect`` chose and each error's power (none without it)."""
+        return [] if self.sizing is None else self.sizing.lines()
 
     @property
     def trusted(self) -> bool:
