@@ -131,6 +131,14 @@ class TrialPlan:
     limit: float
 
 
+def _level(alpha: float, power: float) -> float:
+    """Each test's level, alpha / 8, with ``power`` checked to lie above it."""
+    level = alpha / N_TESTS
+    if not (level < power < 1.0):
+        raise ParameterError(f"power must be in ({level:g}, 1), got {power!r}")
+    return level
+
+
 def trials_for_power(
     prediction: PathPrediction,
     index: int,
@@ -149,9 +157,7 @@ def trials_for_power(
     Raises:
         ParameterError: power outside (alpha / 8, 1), a shift not finite and > 0.
     """
-    level = alpha / N_TESTS
-    if not (level < power < 1.0):
-        raise ParameterError(f"power must be in ({level:g}, 1), got {power!r}")
+    level = _level(alpha, power)
     if not (math.isfinite(shift) and shift > 0):
         raise ParameterError(f"the error to detect must be finite and > 0, got {shift!r}")
 
@@ -261,9 +267,7 @@ def trials_to_catch(
     Raises:
         ParameterError: power outside (alpha / 8, 1).
     """
-    level = alpha / N_TESTS
-    if not (level < power < 1.0):
-        raise ParameterError(f"power must be in ({level:g}, 1), got {power!r}")
+    level = _level(alpha, power)
 
     def at(n: int) -> TestPower:
         return verdict_power(
