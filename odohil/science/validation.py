@@ -384,6 +384,8 @@ def _test(
 ) -> ChiSquareTest:
     """One test; a NEES whose predicted spread is itself uncertain by the
     relative ``scale_sd`` (:func:`_spread_scale_sds`) against the scale mixture."""
+    if scale_sd**2 * dof < 1e-4:  # adds under 1e-4 of the chi-square's own variance
+        scale_sd = 0.0
     threshold = distributions.chi2_scale_mixture_isf(level, dof, scale_sd)
     return ChiSquareTest(
         name=name,
