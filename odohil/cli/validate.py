@@ -16,7 +16,7 @@ from odohil import units
 from odohil.cli.exit_codes import EXIT_ERROR, EXIT_OK, EXIT_UNTRUSTED, exit_for_run
 from odohil.cli.options import JsonOption, option, robot_option
 from odohil.cli.recording_options import source_options
-from odohil.cli.render import bad_input, bad_inputs, drawn, print_refusal, print_said
+from odohil.cli.render import bad_input, bad_inputs, drawn, print_lines, print_refusal, print_said
 from odohil.cli.session_view import drive
 from odohil.errors import (
     JournalError,
@@ -41,7 +41,7 @@ from odohil.session.results.validation import (
     trials_of_session,
 )
 from odohil.session.run import Opened, SessionSpec
-from odohil.session.text.outcome import outcome_line
+from odohil.session.text.outcome import DETECT_HELP, outcome_line, sizing_lines
 from odohil.session.text.run import error_said
 from odohil.session.trials.logs import ImportOptions
 
@@ -79,6 +79,7 @@ def validate(
     path_text: Annotated[str, option("--path", help=PATH_SYNTAX)],
     trials: Annotated[int | None, option("--trials", bound="plan_n", help="Trials to drive "
                       "(forth-back), or to use from a file (default: all rows).")] = None,
+    detect: Annotated[str | None, option("--detect", help=DETECT_HELP)] = None,
     measure: Annotated[str | None, option("--measure", help="`fake` (the fake robot's true "
                        "pose), `tcp://HOST:PORT` (motion capture) or a file: a trial file for a "
                        "driven path (as run), a pose file for a general path without "
@@ -104,7 +105,7 @@ def validate(
     console = Console(stderr=True)
     bad = (ParameterError, RobotDescriptionError, JournalError, MeasurementError, OSError)
     with bad_inputs(console):
-        setup = validation_setup(session, path_text, robot_file, exclude, recording, alpha)
+        setup = validation_setup(session, path_text, robot_file, exclude, recording, alpha, detect)
     outcome = setup.calibration.outcome
     result = outcome.result
     if result is None or not (result.verdict.trusted or force):
@@ -129,7 +130,7 @@ def validate(
         print_said(console, error_said(str(exc)))
         raise typer.Exit(EXIT_ERROR) from None
     data = validation_document(
-        session, setup.vpath, held.folder, held.measured, setup.calibration, tested
+        session, setup.vpath, held.folder, held.measured, setup.calibration, tested, held.sizing
     )
     if as_json:
         typer.echo(json.dumps(data))
@@ -141,8 +142,8 @@ def validate(
 def _drive(console: Console, spec: SessionSpec) -> ValidationTrials:
     """Drive the validation session ``spec`` (its exit status if it does not finish)."""
 
-    def say(opened: Opened) -> None:
-        console.print(f"validation session {spec.folder}")
+    def say(opened: Opened) -> None:  # --detect's count first, before anything moves
+        print_lines(console, [*sizing_lines(spec.settings), f"validation session {spec.folder}"])
         console.print(f"robot: {opened.prepared.line.describe()}", soft_wrap=True, markup=False)
 
     outcome = drive(console, spec, units.DEFAULT_UNIT_SYSTEM, False, say, verdict=False)

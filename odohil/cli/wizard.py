@@ -76,9 +76,7 @@ from odohil.session.text.run import MAY_STILL_MOVE, Said
 from odohil.session.wizard.dialogue import WIZARD_PLAN, continue_with, guided_run, wizard_spec
 from odohil.session.wizard.interrupts import Interrupts, wait_readable
 from odohil.session.wizard.motion_steps import MotionSteps, pose_text
-from odohil.session.wizard.validate import (
-    GuidedValidation,
-)
+from odohil.session.wizard.validate import DETECT_HELP, GuidedValidation
 
 
 class WizardScreen:
@@ -170,6 +168,7 @@ def wizard(
     path_text: Annotated[str | None, option("--path", help=PATH_SYNTAX)] = None,
     trials: Annotated[int | None, option("--trials", bound="plan_n", help="Trials of --path "
                       "(a new validation).")] = None,
+    detect: Annotated[str | None, option("--detect", help=DETECT_HELP)] = None,
 ) -> None:  # fmt: skip
     """Guide a calibration session beside the robot, one trial at a time
     (with --validate SESSION --path PATH: a validation of it)."""
@@ -188,12 +187,13 @@ def wizard(
             validate,
             path_text,
             trials,
+            detect,
         )
     if guide is not None:
         if not guide.trusted:
             print_refusal(console, guide.calibration.outcome, None, "nothing driven")
             raise typer.Exit(EXIT_UNTRUSTED)
-        print_lines(console, [outcome_line(guide.calibration.outcome)])
+        print_lines(console, [outcome_line(guide.calibration.outcome), *guide.sizing_lines()])
     console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
     with signals_raise():
         code = _guided(console, spec, interrupts, unit_system(units_choice), guide)

@@ -97,12 +97,16 @@ class PathPrediction:
     Attributes:
         mean: (3,) expected (x m, y m, Delta rad).
         cov: (3, 3) the model's covariance (without measurement noise).
-        jacobian: (3, 4) d mean / d (E_R, E_T, K_theta, K_rho).
+        jacobian: (3, 4) d mean / d (E_R, E_T, K_theta, K_rho) (or (3, q): a
+            general-path fit's parameters).
+        cov_jacobian: (3, 3, q) d cov / d the same parameters, or None (then
+            the NEES tests leave the spread's dependence on the estimate out).
     """
 
     mean: FloatArray
     cov: FloatArray
     jacobian: FloatArray
+    cov_jacobian: FloatArray | None = None
 
 
 def predict_path(path: EncoderPath, params: ErrorParameters) -> PathPrediction:
@@ -110,6 +114,7 @@ def predict_path(path: EncoderPath, params: ErrorParameters) -> PathPrediction:
     moments = pose_moments(path, params)
     values = np.array(params.as_tuple(), dtype=np.float64)
     jacobian = np.zeros((3, 4))
+    cov_jacobian = np.zeros((3, 3, 4))
     for j in range(4):
         step = max(_ABSOLUTE_STEPS[j], _RELATIVE_STEP * abs(values[j]))
         low, high = values.copy(), values.copy()
@@ -118,10 +123,11 @@ def predict_path(path: EncoderPath, params: ErrorParameters) -> PathPrediction:
         if j >= 2 and low[j] < 0:  # variance rates stay >= 0: one-sided difference
             low[j] = values[j]
         width = high[j] - low[j]
-        up = pose_moments(path, ErrorParameters(*high)).mean
-        down = pose_moments(path, ErrorParameters(*low)).mean
-        jacobian[:, j] = (up - down) / width
-    return PathPrediction(mean=moments.mean, cov=moments.cov, jacobian=jacobian)
+        up = pose_moments(path, ErrorParameters(*high))
+        down = pose_moments(path, ErrorParameters(*low))
+        jacobian[:, j] = (up.mean - down.mean) / width
+        cov_jacobian[:, :, j] = (up.cov - down.cov) / width
+    return PathPrediction(moments.mean, moments.cov, jacobian, cov_jacobian)
 
 
 def predict_fitted(
@@ -141,6 +147,7 @@ def predict_fitted(
 
     mean, cov = moments(v)
     jacobian = np.zeros((3, len(v)))
+    cov_jacobian = np.zeros((3, 3, len(v)))
     for j in range(len(v)):
         floor = _ABSOLUTE_STEPS[j] if j < 4 else 1e-7
         step = max(floor, _RELATIVE_STEP * abs(v[j]))
@@ -149,8 +156,10 @@ def predict_fitted(
         low[j] -= step
         if j in rates and low[j] < 0:  # variance rates stay >= 0: one-sided difference
             low[j] = v[j]
-        jacobian[:, j] = (moments(high)[0] - moments(low)[0]) / (high[j] - low[j])
-    return PathPrediction(mean=mean, cov=cov, jacobian=jacobian)
+        (up_mean, up_cov), (down_mean, down_cov) = moments(high), moments(low)
+        jacobian[:, j] = (up_mean - down_mean) / (high[j] - low[j])
+        cov_jacobian[:, :, j] = (up_cov - down_cov) / (high[j] - low[j])
+    return PathPrediction(mean, cov, jacobian, cov_jacobian)
 
 
 @dataclass(frozen=True)
@@ -371,19 +380,46 @@ def _test(
     level: float,
     mean: tuple[float, ...] = (),
     stderr: tuple[float, ...] = (),
+    scale_sd: float = 0.0,
 ) -> ChiSquareTest:
-    threshold = distributions.chi2_isf(level, dof)
+    """One test; a NEES whose predicted spread is itself uncertain by the
+    relative ``scale_sd`` (:func:`_spread_scale_sds`) against the scale mixture."""
+    if scale_sd**2 * dof < 1e-4:  # adds under 1e-4 of the chi-square's own variance
+        scale_sd = 0.0
+    threshold = distributions.chi2_scale_mixture_isf(level, dof, scale_sd)
     return ChiSquareTest(
         name=name,
         statistic=statistic,
         dof=dof,
-        p_value=distributions.chi2_sf(statistic, dof),
+        p_value=distributions.chi2_scale_mixture_sf(statistic, dof, scale_sd),
         level=level,
         threshold=threshold,
         passed=statistic <= threshold,
         mean=mean,
         stderr=stderr,
     )
+
+
+def _spread_scale_sds(
+    predictions: Sequence[PathPrediction], blocks: FloatArray, parameter_cov: FloatArray | None
+) -> tuple[float, ...]:
+    """The relative uncertainty of the predicted spread each NEES test (overall,
+    x, y, theta) divides by, from the estimate's (module docstring, "The
+    spread's own uncertainty"): the NEES given the estimate's error e is about
+    (1 + g^T e) chi-square(dof), g_j the mean over trials of
+    tr(S_i^-1 dC_i/d theta_j) / 3 (overall) or (dC_i/d theta_j)_aa / S_i,aa
+    (axis a); returns sqrt(g^T Sigma g) per test (zeros without the
+    covariance's Jacobian or the estimate's covariance)."""
+    derivatives = [p.cov_jacobian for p in predictions]
+    if parameter_cov is None or any(d is None for d in derivatives):
+        return (0.0,) * 4
+    d_cov = np.stack([d for d in derivatives if d is not None])  # (n, 3, 3, q)
+    whitened = np.linalg.solve(blocks[:, None, :, :], np.moveaxis(d_cov, 3, 1))  # (n, q, 3, 3)
+    rows = [np.trace(whitened, axis1=2, axis2=3).mean(axis=0) / 3.0]
+    diagonal = np.diagonal(blocks, axis1=1, axis2=2)  # (n, 3)
+    rows += [(d_cov[:, a, a, :] / diagonal[:, a : a + 1]).mean(axis=0) for a in range(3)]
+    sigma = np.asarray(parameter_cov, dtype=np.float64)
+    return tuple(math.sqrt(max(float(g @ sigma @ g), 0.0)) for g in rows)
 
 
 def _bias_tests(residuals: FloatArray, cov: FloatArray, level: float) -> list[ChiSquareTest]:
@@ -505,13 +541,14 @@ def validation_test(
     residuals = poses - means
     residuals[:, 2] = wrap_angles(residuals[:, 2])
     level = alpha / N_TESTS
+    scale_sds = _spread_scale_sds(predictions, blocks, parameter_cov)
     overall, trial_nees = _woodbury_nees(residuals, blocks, loadings)
-    tests = [_test("overall", overall, 3 * n, level)]
+    tests = [_test("overall", overall, 3 * n, level, scale_sd=scale_sds[0])]
     for a, name in enumerate(AXES):
         axis_nees, _ = _woodbury_nees(
             residuals[:, a : a + 1], blocks[:, a : a + 1, a : a + 1], loadings[:, a : a + 1, :]
         )
-        tests.append(_test(name, axis_nees, n, level))
+        tests.append(_test(name, axis_nees, n, level, scale_sd=scale_sds[a + 1]))
     bias_cov = _bias_covariance(blocks, loadings)
     bias = _bias_tests(residuals, bias_cov, level)
     detectable = detectable_errors(jacobians.mean(axis=0), bias_cov, level)

@@ -19,8 +19,9 @@ import pytest
 from typer.testing import CliRunner
 
 from odohil.cli.app import app
-from odohil.cli.exit_codes import EXIT_OK
+from odohil.cli.exit_codes import EXIT_UNTRUSTED
 from tests.cli.test_validate_paths import resumed
+from tests.session.helpers import doubtful_only_for_few_trials
 
 TURN_SCALE = 0.02
 """The fake's turn-scale error: a spin turns 2 % more than the encoders say."""
@@ -43,9 +44,11 @@ def run_and_estimate(folder: Path, seed: int) -> dict[str, dict[str, object]]:
         ],
     )  # fmt: skip
     code, err = resumed(result.exit_code, result.stderr, session)  # a loaded machine
-    assert code == EXIT_OK, err  # trusted: seed 4's run, measured twice at stop 24
+    # doubtful only for its few trials a path family (issue 31; trusted at stop 24)
+    assert code == EXIT_UNTRUSTED, err
+    assert doubtful_only_for_few_trials(err), err
     done = CliRunner().invoke(app, ["estimate", str(session), "--json"])
-    assert done.exit_code == EXIT_OK, done.stderr
+    assert done.exit_code == EXIT_UNTRUSTED, done.stderr
     data = json.loads(done.stdout)
     assert {g["family"] for g in data["general_paths"]} >= {"square", "circle"}
     parameters: dict[str, dict[str, object]] = data["parameters"]

@@ -253,3 +253,33 @@ def test_motion_capture_is_checked_before_anything_moves(session: Path, tmp_path
     assert done.returncode == 2, done.stdout + done.stderr
     assert "[measurement] pose_sigma" in done.stderr
     assert not out.exists()
+
+
+def test_detect_sizes_the_driven_validation_before_anything_moves(
+    session: Path, tmp_path: Path
+) -> None:
+    """``--detect E_R=0.4`` (deg/m) chooses the trials, printed before the
+    validation session opens; a path that cannot catch the error is refused
+    (exit 2) with nothing driven (issue 31; the sizing itself:
+    tests/session/test_validation_sizing.py)."""
+    out = tmp_path / "sized"
+    port = ["--port", "fakerobot://?seed=7&time_scale=2000", "--measure", "fake", "--seed", "7"]
+    done = in_process(
+        "validate", str(session), "--path", VALIDATION_PATH, "--detect", "E_R=0.4", *port,
+        "--out", str(out), "--json",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    data = json.loads(done.stdout)
+    assert data["n_trials"] == data["sizing"]["trials"] >= 1
+    assert data["sizing"]["detect"]["E_R"]["power"] >= 0.9
+    planned = f"trials: {data['n_trials']} of {VALIDATION_PATH} (planned by --detect)"
+    said = " ".join(done.stderr.split())
+    assert said.index(planned) < said.index("validation session")
+    refused = in_process(
+        "validate", str(session), "--path", VALIDATION_PATH, "--detect", "E_R=0.001", *port,
+        "--out", str(tmp_path / "never"),
+    )  # fmt: skip
+    assert refused.returncode == 2, refused.stderr
+    message = " ".join(refused.stderr.split())
+    assert "cannot catch E_R off by 0.001 deg/m with probability 0.9 in 10000 trials" in message
+    assert not (tmp_path / "never").exists()

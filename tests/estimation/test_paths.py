@@ -25,6 +25,8 @@ from odohil.science.simulator import simulate
 TRUTH = ErrorParameters.from_paper_units(-0.5, -0.003, 0.2, 2e-5)
 TURNS = TurnErrors(-0.007, -0.007, -0.012, -0.012, k_spin=1e-4)
 MEASUREMENT = np.diag([0.3e-3**2, 0.3e-3**2, math.radians(0.05) ** 2])
+FEW = "fewer than 10 trials a path family and direction, the planner's minimum for honest intervals"
+"""The only reason the verdict of few trials a path family gives (issue 31)."""
 
 
 def square(ccw: bool) -> EncoderPath:
@@ -103,7 +105,8 @@ def test_batch_moments_are_pose_moments() -> None:
 def test_recovers_the_turn_errors_of_squares_and_circles() -> None:
     trials = trials_of(MIXED, TURNS, seed=3)
     result = estimate_paths(trials, turns_exact=False, method="joint", split_directions=False)
-    assert result.verdict.status == "trusted", result.verdict.reasons
+    # doubtful only for its 4-5 trials a path family, below the planner's minimum
+    assert [r.split(":")[0] for r in result.verdict.reasons] == [FEW], result.verdict.reasons
     assert result.names == (*PARAMETER_NAMES, "e_turn_spin", "e_turn_arc", "K_spin")
     for p in result.parameters:
         assert p.contains(truth_of(p.name)), (p.name, p.value, p.ci_4sigma)

@@ -97,3 +97,41 @@ def test_importing_the_science_imports_no_scipy_special() -> None:
     )
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60)
     assert done.stdout.split() == ["before", "False", "after", "True"], done.stderr
+
+
+@pytest.mark.parametrize(
+    ("weights", "dofs", "noncentralities", "x"),
+    [
+        ((2.0, 0.5), (3.0, 5.0), (0.0, 0.0), 10.0),
+        ((2.0, 0.5), (3.0, 5.0), (4.0, 1.0), 20.0),
+        ((1.0, 1.3, 0.7), (1.0, 1.0, 1.0), (2.0, 0.0, 1.0), 15.0),
+        ((1.0, 1e-3), (1.0, 1.0), (0.0, 0.0), 8.0),
+        ((1.0, 1.2, 3.0), (3000.0, 3000.0, 2.0), (0.0, 0.0, 1.0), 6700.0),
+    ],
+)
+def test_the_quadratic_forms_survival_is_that_of_its_draws(
+    weights: tuple[float, ...],
+    dofs: tuple[float, ...],
+    noncentralities: tuple[float, ...],
+    x: float,
+) -> None:
+    """Imhof's integral against 200,000 draws of the weighted sum, within 5 SE."""
+    rng = np.random.default_rng(7)
+    n = 200_000
+    draws = sum(
+        w * rng.noncentral_chisquare(h, nc, n) if nc > 0 else w * rng.chisquare(h, n)
+        for w, h, nc in zip(weights, dofs, noncentralities, strict=True)
+    )
+    ours = distributions.quadratic_form_sf(x, weights, dofs, noncentralities)
+    rate = float(np.mean(draws > x))
+    assert abs(ours - rate) < 5 * math.sqrt(max(rate * (1 - rate), 1e-6) / n) + 1e-5, (ours, rate)
+
+
+def test_a_quadratic_form_of_equal_weights_is_a_noncentral_chi_square() -> None:
+    assert distributions.quadratic_form_sf(12.0, (2.0, 2.0), (3.0, 4.0), (1.0, 0.5)) == (
+        pytest.approx(float(stats.ncx2.sf(6.0, 7.0, 1.5)), rel=1e-9)
+    )
+    # nearly equal weights through the integral give the same
+    near = distributions.quadratic_form_sf(12.0, (2.0, 2.0 * (1 + 1e-9)), (3.0, 4.0), (1.0, 0.5))
+    assert near == pytest.approx(float(stats.ncx2.sf(6.0, 7.0, 1.5)), abs=1e-7)
+    assert distributions.quadratic_form_sf(-1.0, (1.0, 2.0), (1.0, 1.0)) == 1.0

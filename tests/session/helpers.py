@@ -87,3 +87,21 @@ class Heard:
 
     def marks(self, description: RobotDescription) -> MarkDistances | None:
         return None
+
+
+FEW_PATH_TRIALS = (
+    "verdict: DOUBTFUL (fewer than 10 trials a path family and direction, the planner's "
+    "minimum for honest intervals: "
+)
+"""How the verdict of a session of general paths below the planner's minimum
+trials a family and direction begins (issue 31: as the forth-and-back one)."""
+
+
+def doubtful_only_for_few_trials(stderr: str) -> bool:
+    """Whether the verdict line in ``stderr`` is doubtful for the few trials
+    a path family and direction alone (one reason)."""
+    said = " ".join(stderr.split())
+    if FEW_PATH_TRIALS not in said:
+        return False
+    reasons = said.split(FEW_PATH_TRIALS, 1)[1].split(")", 1)[0]
+    return ";" not in reasons

@@ -24,9 +24,10 @@ import pytest
 from typer.testing import CliRunner
 
 from odohil.cli.app import app
-from odohil.cli.exit_codes import EXIT_OK
+from odohil.cli.exit_codes import EXIT_UNTRUSTED
 from odohil.session.journal.state import load_session
 from odohil.session.run.running import PathBeliefEstimator, final_estimate
+from tests.session.helpers import doubtful_only_for_few_trials
 
 PLAN = "k=0.5,l=2,n=4;path=square:0.5,cw,n=8;path=square:0.5,ccw,n=8"
 URL = "fakecreate2://?seed=3&time_scale=10&max_gap_ms=15&skip_waits=1"
@@ -44,7 +45,9 @@ def test_squares_are_predicted_with_the_turn_errors_of_the_squares_before(
             "--measure", "fake", "--seed", "3", "--session", str(session), "--json",
         ],
     )  # fmt: skip
-    assert result.exit_code == EXIT_OK, result.stderr  # trusted (seed 3, twice at stop 24)
+    # doubtful only for its 4-8 trials a path family (issue 31; trusted at stop 24)
+    assert result.exit_code == EXIT_UNTRUSTED, result.stderr
+    assert doubtful_only_for_few_trials(result.stderr), result.stderr
     records = [json.loads(line) for line in (session / "journal.jsonl").open(encoding="utf-8")]
     remeasured = {r["data"]["trial"] for r in records if r["kind"] == "remeasured"}
     squares = set(range(5, 21))

@@ -82,7 +82,7 @@ from odohil.science.estimators.robust import (
     robust_em,
 )
 from odohil.science.estimators.scores import point_scores, sandwich_ratio
-from odohil.science.estimators.verdict import judge
+from odohil.science.estimators.verdict import few_trial_groups, judge
 from odohil.science.moments import (
     PathSet,
     TurnErrors,
@@ -604,6 +604,8 @@ def _result(
         [o.label() for o in check.outliers],
         check.verdict,
         misfit=misfit,
+        few=few_trial_groups([f"{t.family} {t.direction}" for t in trials]),
+        group="a path family and direction",
     )
     gaussian: tuple[ParameterEstimate, ...] = ()
     diagnostics: tuple[TrialDiagnostic, ...] = ()

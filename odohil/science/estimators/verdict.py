@@ -101,6 +101,18 @@ def few_trial_designs(
     ]
 
 
+def few_trial_groups(
+    labels: Sequence[str], minimum: int = DEFAULT_MIN_TRIALS_PER_DESIGN
+) -> list[str]:
+    """:func:`few_trial_designs` for trials labelled by their group (a general
+    path's family and direction, ``square cw``): ``square cw (3)`` for each
+    label with fewer than ``minimum`` trials, in order of first appearance."""
+    counts: dict[str, int] = {}
+    for label in labels:
+        counts[label] = counts.get(label, 0) + 1
+    return [f"{label} ({n})" for label, n in counts.items() if n < minimum]
+
+
 def turn_designs(observations: Sequence[Observation]) -> list[str]:
     """Labels of the designs with in-place turns (``turn`` variant) among the trials."""
     designs = dict.fromkeys(o.design for o in observations)
@@ -118,6 +130,8 @@ def judge(
     ambiguous: Sequence[int] = (),
     turns_exact: bool = True,
     misfit: MisfitCheck | None = None,
+    few: Sequence[str] | None = None,
+    group: str = "a design",
 ) -> Verdict:
     """The verdict from the fit's state and its checks (see the module docstring).
 
@@ -135,6 +149,10 @@ def judge(
             doubtful: their spin errors fold into E_R and K_theta unseen.
         misfit: the group-bias and trial-order checks; each failing one is a
             reason (naming the group, the axis and the bias).
+        few: the groups below the minimum trials, for trials that are no
+            design's (general paths: :func:`few_trial_groups`); None: the
+            designs of ``observations`` (:func:`few_trial_designs`).
+        group: what ``few`` counts, for the reason (``a path family and direction``).
     """
     failed: list[str] = []
     doubtful: list[str] = []
@@ -147,10 +165,11 @@ def judge(
         )
     if not converged:
         failed.append("the fit did not converge")
-    few = few_trial_designs(observations)
+    if few is None:
+        few = few_trial_designs(observations)
     if few:
         doubtful.append(
-            f"fewer than {units.plural(DEFAULT_MIN_TRIALS_PER_DESIGN, 'trial')} a design, the "
+            f"fewer than {units.plural(DEFAULT_MIN_TRIALS_PER_DESIGN, 'trial')} {group}, the "
             f"planner's minimum for honest intervals: {', '.join(few)}"
         )
     blind = [n for n, s in zip(names, stderr, strict=True) if not math.isfinite(s)]

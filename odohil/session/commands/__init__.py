@@ -3,7 +3,8 @@
 - plan.py and plan_paths.py: ``odohil plan`` (designs; general paths);
 - design.py: ``odohil predict``, ``covariance`` and ``simulate``; design_tables.py:
   their tables (a module of its own: the captions' words load the estimate's);
-- validate.py: ``odohil validate``; demo.py: ``odohil demo``;
+- validate.py: ``odohil validate``; validate_power.py: its ``--detect`` (the
+  trials that catch an error); demo.py: ``odohil demo``;
 - report.py: ``odohil report``; import_log.py: ``odohil import``.
 
 Only what no other subpackage owns is here. The CLI imports the module named
@@ -19,4 +20,5 @@ __all__ = [
     "plan_paths",
     "report",
     "validate",
+    "validate_power",
 ]

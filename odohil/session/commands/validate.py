@@ -23,7 +23,8 @@ from odohil import units
 from odohil.errors import JournalError, ParameterError
 from odohil.science.estimators import EstimateResult
 from odohil.science.robot_description import RobotDescription
-from odohil.science.validation import ValidationResult
+from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
+from odohil.session.commands.validate_power import Sizing, parse_detect, size_validation
 from odohil.session.journal.state import description_of_header, load_session
 from odohil.session.measure.kinds import TrialFileSettings
 from odohil.session.measure.registry import parse_measure
@@ -198,10 +199,12 @@ def validation_document(
     measured: ValidationTrials,
     calibration: Calibration,
     tested: ValidationResult,
+    sizing: Sizing | None = None,
 ) -> dict[str, Any]:
     """The JSON document of ``odohil validate --json`` (SI): the verdict, the
-    trials with their residuals and NEES, the prediction per path, and the
-    calibration's verdict, parameters and covariance."""
+    trials with their residuals and NEES, the prediction per path, the
+    calibration's verdict, parameters and covariance, and with ``--detect``
+    the sizing of the trials driven."""
     result = calibration.result
     verdict = tested.to_json_dict()
     verdict["parameter_uncertainty"] = (
@@ -227,6 +230,7 @@ def validation_document(
     }
     return {
         "verdict": verdict,
+        **({} if sizing is None else {"sizing": sizing.to_json_dict()}),
         "path": vpath.text,
         "session": str(session),
         "validation_session": str(folder) if folder is not None else None,
@@ -267,11 +271,16 @@ class ValidationSetup:
         vpath: the path (``--path``).
         calibration: the calibration's outcome and, for a session, its state.
         robot: the robot description the held-out trials are read or driven with.
+        detect: ``--detect``, the error the driven trials are sized to catch
+            (odohil/session/commands/validate_power.py), or None.
+        alpha: the verdict's false-rejection level (``--alpha``).
     """
 
     vpath: ValidationPath
     calibration: Calibration
     robot: CalibrationRobot
+    detect: str | None = None
+    alpha: float = DEFAULT_ALPHA
 
 
 def validation_setup(
@@ -281,6 +290,7 @@ def validation_setup(
     exclude: frozenset[int],
     recording: ImportOptions,
     alpha: float,
+    detect: str | None = None,
 ) -> ValidationSetup:
     """``--alpha`` and ``--path`` checked, the calibration ``session`` (a
     session, a trial file or a recording) estimated without ``exclude``, and
@@ -294,7 +304,11 @@ def validation_setup(
     vpath = parse_validation_path(path_text)
     given = None if robot_file is None else load_robot_description(robot_file)
     calibration = load_calibration(session, exclude, given, recording)
-    return ValidationSetup(vpath, calibration, calibration_robot(calibration, robot_file))
+    robot = calibration_robot(calibration, robot_file)
+    result = calibration.outcome.result
+    if detect is not None and result is not None:  # checked before anything moves
+        parse_detect(detect, tuple(p.name for p in result.parameters))
+    return ValidationSetup(vpath, calibration, robot, detect, alpha)
 
 
 def check_file_options(vpath: ValidationPath, port: str | None, measure: str | None) -> None:
@@ -341,11 +355,13 @@ def validation_spec(
     measure: str | None,
     *,
     calibration: EstimateResult | None = None,
+    sizing: Sizing | None = None,
 ) -> SessionSpec:
     """The session that drives ``trials`` of ``vpath`` into ``folder`` with
     ``measure`` as a validation of the calibration ``session``, with
     ``robot``'s description (the line and the seed: the spec's defaults); its
-    trials predicted under ``calibration``, the calibration's estimate.
+    trials predicted under ``calibration``, the calibration's estimate; the
+    ``sizing`` of ``--detect`` journaled in its settings.
 
     Raises:
         ParameterError: no ``--trials`` or no ``--measure``.
@@ -366,7 +382,8 @@ def validation_spec(
         plan=Plan.of([(drivable, trials)]),
         measure=measure,
         purpose="validate",
-        settings={"validation_of": str(session.resolve()), "validation_path": vpath.text},
+        settings={"validation_of": str(session.resolve()), "validation_path": vpath.text}
+        | ({} if sizing is None else {"sizing": sizing.to_json_dict()}),
         calibration=calibration,
     )
 
@@ -381,11 +398,13 @@ class HeldOut:
             from a file, nothing driven).
         reread: the trials of a finished validation journaled in ``folder``,
             tested again without driving.
+        sizing: the trial count ``--detect`` chose for the trials driven, or None.
     """
 
     measured: ValidationTrials
     folder: Path | None = None
     reread: bool = False
+    sizing: Sizing | None = None
 
 
 def held_out(
@@ -403,27 +422,43 @@ def held_out(
     a general path's pose file (the first ``trials``); else those journaled in
     the validation folder (``out``, else SESSION/validation/<path>/), tested
     again when it holds a finished validation of the path, else driven by
-    ``drive`` (a new validation session's spec in, its trials out). Of driven
-    trials the first ``trials``: one the tape found ambiguous is left out, not redone.
+    ``drive`` (a new validation session's spec in, its trials out), as many
+    as ``setup.detect`` needs when given (:func:`size_validation`, before the
+    spec). Of driven trials the first ``trials``: one the tape found
+    ambiguous is left out, not redone.
 
     Raises:
         ParameterError, JournalError, MeasurementError, OSError: bad input (nothing moved).
     """
     vpath, calibration, robot = setup.vpath, setup.calibration, setup.robot
     check_file_options(vpath, port, measure)
+    if setup.detect is not None and not drives(vpath, port, measure):
+        raise ParameterError(
+            f"--detect sizes the trials a validation drives; the trials of --path {vpath.text} "
+            "are given (what a pass rules out is printed with the verdict)"
+        )
     if not drives(vpath, port, measure):
         measured = measured_trials(vpath, calibration, robot.description, recording, port, measure)
         return HeldOut(first_trials(measured, trials))
     folder = drive_folder(vpath, calibration, session, out)
     journaled = journaled_trials(folder, vpath)
+    sizing = None
     if journaled is None:
-        result = calibration.outcome.result
-        spec = validation_spec(folder, vpath, session, robot, trials, measure, calibration=result)
+        result = calibration.result
+        if setup.detect is not None:
+            sizing = size_validation(
+                setup.detect, vpath, result, robot.description, measure=measure, trials=trials,
+                alpha=setup.alpha,
+            )  # fmt: skip
+            trials = sizing.trials
+        spec = validation_spec(
+            folder, vpath, session, robot, trials, measure, calibration=result, sizing=sizing
+        )
         measured = drive(spec)
     else:
         measured = journaled
     taken = first_trials(measured, min(trials or len(measured), len(measured)))
-    return HeldOut(taken, folder, reread=journaled is not None)
+    return HeldOut(taken, folder, reread=journaled is not None, sizing=sizing)
 
 
 def verdict_lines(

@@ -13,7 +13,12 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from odohil.errors import InitError, MeasurementError, ParameterError
+from odohil.science.floor_marks import pose_covariance
+from odohil.science.paths import FloatArray
+from odohil.science.robot_description import RobotDescription
 from odohil.session.addresses import parse_tcp_url
 from odohil.session.measure.files import pose_source_from_file
 from odohil.session.measure.mocap import (
@@ -23,6 +28,7 @@ from odohil.session.measure.mocap import (
     require_pose,
     still_criteria_of,
 )
+from odohil.session.measure.mocap.change import pose_change_with_covariance
 from odohil.session.measure.protocol import PoseSource
 from odohil.session.measure.registry import (
     OPERATOR_WORDS,
@@ -30,6 +36,7 @@ from odohil.session.measure.registry import (
     OpenContext,
     OpenedSource,
     Preflight,
+    parse_measure,
 )
 from odohil.session.measure.tape.distances import FakeTruthSource
 from odohil.session.measure.tape.source import TapeSource
@@ -37,6 +44,7 @@ from odohil.session.trials.pose_file import check_trial_file
 
 __all__ = [
     "TrialFileSettings",
+    "expected_pose_cov",
 ]
 
 MOCAP_SCHEME = "tcp://"
@@ -256,3 +264,25 @@ TRIAL_FILE = TrialFileKind()
 MOTION_CAPTURE = MotionCaptureKind()
 BUILTIN_KINDS = (FAKE, TRIAL_FILE, MOTION_CAPTURE)
 """The pose sources odohil brings."""
+
+
+def expected_pose_cov(
+    measure: str | None, description: RobotDescription, pose_change: FloatArray
+) -> FloatArray:
+    """The covariance a measured pose change near ``pose_change`` (x m, y m,
+    rad) will carry with ``--measure`` (before anything is measured: a
+    validation's sizing, odohil/session/commands/validate_power.py): a
+    motion-capture stream's two still poses with the description's
+    ``pose_sigma``; else the tape's floor-mark solver (``fake``, the operator,
+    a trial file of distances).
+
+    Raises:
+        ParameterError: a malformed ``--measure``.
+        RobotDescriptionError: motion capture without ``pose_sigma``.
+    """
+    settings = None if measure is None else parse_measure(measure).settings
+    if isinstance(settings, MotionCaptureSettings):
+        cov = np.diag(np.square(pose_sigma_of(description, settings.url)))
+        _, change = pose_change_with_covariance((0.0, 0.0, 0.0), pose_change.tolist(), cov, cov)
+        return change
+    return pose_covariance(description, pose_change)

@@ -84,6 +84,7 @@ from odohil.units import paper_text
 
 __all__ = [
     "PATH_SYNTAX",
+    "VARIANCE_RATES",
     "Calibration",
     "ValidationPath",
     "ValidationTrials",
@@ -95,6 +96,7 @@ __all__ = [
     "load_calibration",
     "parameter_covariance",
     "parse_validation_path",
+    "predict_calibrated",
     "predictions_of",
     "read_path_poses",
     "sensitivity_text",

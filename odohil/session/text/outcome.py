@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 from odohil import units
 from odohil.science.estimators import EstimateResult, ParameterEstimate
@@ -16,6 +17,8 @@ from odohil.session.results.outcome import EstimateOutcome
 from odohil.session.table_text import TableText
 
 __all__ = [
+    "DETECT_HELP",
+    "DETECT_SYNTAX",
     "export_refusal_lines",
     "more_trials_lines",
     "outcome_line",
@@ -23,8 +26,46 @@ __all__ = [
     "parameters_line",
     "parameters_text",
     "refusal_line",
+    "sizing_lines",
+    "test_words",
     "verdict_line",
 ]
+
+DETECT_SYNTAX = (
+    "NAME=VALUE[,NAME=VALUE...], the error to catch in the paper's units: E_R deg/m, E_T "
+    "(0.02 or 2%), K_theta deg^2/m, K_rho m (e.g. E_R=0.4,K_theta=0.1)"
+)
+DETECT_HELP = (
+    f"The calibration error a validation must catch with probability 0.9: {DETECT_SYNTAX}. "
+    "It chooses the trials to drive (with --trials, checks them), printed before anything "
+    "moves; exit 2 when the path cannot."
+)
+"""``--detect`` of validate and the wizard (odohil/session/commands/validate_power.py)."""
+
+
+def test_words(test: str) -> str:
+    """``the bias theta test``, ``the overall NEES test``."""
+    return f"the {test} test" if test.startswith("bias") else f"the {test} NEES test"
+
+
+def sizing_lines(settings: Mapping[str, Any]) -> list[str]:
+    """The trial count ``--detect`` chose (a validation session's ``settings``
+    hold it as ``sizing``: odohil/session/commands/validate_power.py
+    ``Sizing.to_json_dict``): ``trials: 6 of forth-back:2,1.5 (planned by
+    --detect)``, then per error its power; none without it."""
+    sizing = settings.get("sizing")
+    if not sizing:
+        return []
+    how = "given by --trials" if sizing["given"] else "planned by --detect"
+    out = [f"trials: {sizing['trials']} of {sizing['path']} ({how})"]
+    for name, c in sizing["detect"].items():
+        fewest = units.plural(int(c["trials"] or 0), "trial")
+        out.append(
+            f"  {name} off by {units.paper_text(name, float(c['error']))}: caught with "
+            f"probability {c['power']:.3f} ({test_words(c['test'])}; {sizing['power']:g} from "
+            f"{fewest} on)"
+        )
+    return out
 
 
 def verdict_line(verdict: Verdict) -> str:

@@ -25,7 +25,7 @@ from typing import Protocol
 
 from odohil import units
 from odohil.driver.odometry import OdometrySample
-from odohil.errors import InconsistentMeasurementError, MeasurementError
+from odohil.errors import InconsistentMeasurementError, MeasurementError, ParameterError
 from odohil.science.estimators import EstimateResult
 from odohil.science.paths import Drivable
 from odohil.science.robot_description import RobotDescription
@@ -306,13 +306,15 @@ def wizard_spec(
     validate: Path | None,
     path_text: str | None,
     trials: int | None,
+    detect: str | None = None,
 ) -> tuple[SessionSpec, GuidedValidation | None]:
     """The session the wizard guides, measured with the operator's tape: a
     calibration, new or continued in ``session`` (default
     ``odohil-session-<time>`` here; ``plan`` else :data:`WIZARD_PLAN`, few
     trials a design allowed); or, with ``validate`` (``--validate SESSION
     --path PATH``, or a validation session ``session`` continues), a guided
-    validation of that calibration and the validation's spec.
+    validation of that calibration and the validation's spec (``detect``:
+    ``--detect``, the error its trial count is sized to catch).
 
     Raises:
         ParameterError, JournalError, RobotDescriptionError: a validation
@@ -320,6 +322,8 @@ def wizard_spec(
     """
     note = {"by": "wizard", "port": port}
     target = validation_target(validate, path_text, trials, session)
+    if target is None and detect is not None:
+        raise ParameterError("--detect sizes a validation: give --validate SESSION --path PATH too")
     if target is not None:
         guide = guided_validation(
             *target,
@@ -330,6 +334,7 @@ def wizard_spec(
             baud=baud,
             max_leg_m=max_leg_m,
             note=note,
+            detect=detect,
         )
         return guide.spec, guide
     spec = SessionSpec(

@@ -27,6 +27,7 @@ from odohil import units
 from odohil.errors import JournalError, MeasurementError, ParameterError
 from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.commands.validate import calibration_robot, drive_folder
+from odohil.session.commands.validate_power import Sizing, size_validation
 from odohil.session.journal.events import OPERATOR
 from odohil.session.journal.state import SessionState, load_session
 from odohil.session.plans.plan import Plan
@@ -42,8 +43,10 @@ from odohil.session.results.validation import (
     trials_of_session,
 )
 from odohil.session.run import SessionSpec
+from odohil.session.text.outcome import DETECT_HELP
 
 __all__ = [
+    "DETECT_HELP",
     "GuidedValidation",
 ]
 
@@ -59,6 +62,8 @@ class GuidedValidation:
         vpath: the path validated.
         session: the calibration session folder.
         alpha: the verdict's false-rejection level.
+        sizing: the trial count ``--detect`` chose or checked (None without it,
+            or when a validation is continued).
     """
 
     spec: SessionSpec
@@ -66,6 +71,11 @@ class GuidedValidation:
     vpath: ValidationPath
     session: Path
     alpha: float = DEFAULT_ALPHA
+    sizing: Sizing | None = None
+
+    def sizing_lines(self) -> list[str]:
+        """The trial count ``--detect`` chose and each error's power (none without it)."""
+        return [] if self.sizing is None else self.sizing.lines()
 
     @property
     def trusted(self) -> bool:
@@ -142,11 +152,13 @@ def guided_validation(
     baud: int | None = None,
     max_leg_m: float | None = None,
     note: Mapping[str, Any] | None = None,
+    detect: str | None = None,
 ) -> GuidedValidation:
     """The wizard's validation of the calibration ``session`` on ``path_text``
-    (``--path``), ``trials`` trials (None: a resumed validation's), journaled
-    in ``folder`` (default ``SESSION/validation/<path>/``); nothing is
-    written, opened or moved.
+    (``--path``), ``trials`` trials (None: a resumed validation's, or as many
+    as ``detect`` (``--detect``) needs: odohil/session/commands/validate_power.py,
+    measured with the tape), journaled in ``folder`` (default
+    ``SESSION/validation/<path>/``); nothing is written, opened or moved.
 
     Raises:
         ParameterError: a path the wizard does not drive (``file:``), no
@@ -163,19 +175,30 @@ def guided_validation(
             "file are tested by `odohil validate SESSION --path file:...`"
         )
     target = folder or default_folder(session, vpath)
-    plan: Plan | None = None if trials is None else Plan.of([(vpath.drivable, trials)])
-    if (target / "journal.jsonl").is_file():
+    continued = (target / "journal.jsonl").is_file()
+    if continued:
         journaled = load_session(target).state.header.settings.get("validation_path")
         if journaled != vpath.text:
             held = f"the validation of {journaled}" if journaled else "another session"
             raise JournalError(
                 f"{target} holds {held}, not of --path {vpath.text}: give --session NEW_FOLDER"
             )
-    elif plan is None:
-        raise ParameterError("--trials N is needed to start a validation (N in 1..10000)")
+    elif trials is None and detect is None:
+        raise ParameterError(
+            "--trials N is needed to start a validation (N in 1..10000), or --detect "
+            "NAME=VALUE to choose it"
+        )
     calibration = load_calibration(session)
     drive_folder(vpath, calibration, session, target)  # a session, not fitted on the path
     robot = calibration_robot(calibration, robot_file)
+    sizing = None
+    if detect is not None and not continued and calibration.outcome.result is not None:
+        sizing = size_validation(
+            detect, vpath, calibration.outcome.result, robot.description, measure=None,
+            trials=trials, alpha=DEFAULT_ALPHA,
+        )  # fmt: skip
+        trials = sizing.trials
+    plan: Plan | None = None if trials is None else Plan.of([(vpath.drivable, trials)])
     spec = SessionSpec(
         target,
         "auto",
@@ -192,7 +215,7 @@ def guided_validation(
         note=dict(note or {}),
         calibration=calibration.outcome.result,
     )
-    return GuidedValidation(spec, calibration, vpath, session)
+    return GuidedValidation(spec, calibration, vpath, session, sizing=sizing)
 
 
 def validation_of(folder: Path) -> tuple[Path, str] | None:
