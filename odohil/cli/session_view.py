@@ -24,7 +24,7 @@ from odohil.cli.exit_codes import (
     exit_for_run,
     exit_for_signal,
 )
-from odohil.cli.render import bad_input, drawn, print_said, print_verdict
+from odohil.cli.render import bad_input, drawn, print_lines, print_said, print_verdict
 from odohil.errors import (
     JournalError,
     OdohilError,
@@ -54,7 +54,7 @@ from odohil.session.run import (
 from odohil.session.run.engine import StartCheck
 from odohil.session.run.opening import CheckSeen
 from odohil.session.signals import ctrl_c_in_words, signal_of, signals_raise
-from odohil.session.text.outcome import parameters_text
+from odohil.session.text.outcome import outcome_notes, parameters_text
 from odohil.session.text.run import MAY_STILL_MOVE, RunWatch, Said, error_said, run_ended
 
 
@@ -211,16 +211,16 @@ def finish(
     system: units.UnitSystem = units.DEFAULT_UNIT_SYSTEM,
     code: int | None = None,
 ) -> None:
-    """Print the summary (a table on stdout, or one JSON object) and exit with
-    the outcome's status (``code`` when given). With ``json_out`` a run that
-    did not finish prints its status and partial estimate instead of nothing."""
+    """Print the summary (a table and the notes on stdout, or one JSON object) and
+    exit with the outcome's status (``code`` when given); with ``json_out`` a run
+    that did not finish prints its status and partial estimate, not nothing."""
     code = exit_for_run(outcome) if code is None else code
-    result = outcome.estimate.result if outcome.status == "finished" else None
     if json_out:
         typer.echo(json.dumps({**outcome.to_json_dict(code), **(extra or {})}))
-    elif result is not None:
-        table = drawn(parameters_text(result, system, "estimate", truth))
-        Console(width=max(110, Console().width)).print(table)
+    elif outcome.status == "finished" and (result := outcome.estimate.result) is not None:
+        wide = Console(width=max(110, Console().width))
+        wide.print(drawn(parameters_text(result, system, "estimate", truth)))
+        print_lines(wide, outcome_notes(outcome.estimate, system))
     if code:
         raise typer.Exit(code)
 

@@ -330,7 +330,7 @@ def _from_mapping(data: dict[str, Any], lookup: FactsLookup | None) -> RobotDesc
         sigma_m=sigma_m,
         cross_pairs=cross_pairs,
         serial=serial,
-        priors=_priors(_table(data, "priors", required=False)),
+        priors=_priors(_table(data, "priors", required=False), given="priors" in data),
         floor_length_m=floor_m,
         pose_sigma=pose_sigma,
         robot=robot,
@@ -398,7 +398,9 @@ def _robot(
     return settings, facts
 
 
-def _priors(table: dict[str, Any]) -> ParameterPriors:
+def _priors(table: dict[str, Any], given: bool) -> ParameterPriors:
+    """``[priors]``; ``given``: the table is there, even empty (the paper's
+    Nomad 150 with the default deviations, said of this robot)."""
     _reject_unknown(table, _PRIOR_KEYS, "priors.")
     default_mean = NOMAD150.to_paper_units()
     means = tuple(
@@ -417,7 +419,7 @@ def _priors(table: dict[str, Any]) -> ParameterPriors:
     except ParameterError as exc:
         raise RobotDescriptionError(f"priors: {exc}") from None
     return ParameterPriors(
-        mean=mean, sd=_paper_to_si((sds[0], sds[1], sds[2], sds[3])), given=bool(table)
+        mean=mean, sd=_paper_to_si((sds[0], sds[1], sds[2], sds[3])), given=given
     )
 
 

@@ -27,7 +27,11 @@ def test_demo_create2_is_trusted_and_near_the_truth(tmp_path: Path) -> None:
     )
     assert done.returncode == 0, done.stderr  # 3 would be an untrusted verdict
     result = json.loads(done.stdout)
-    assert result["n_trials"] == parse_plan(TURN_FREE_PLAN).n_trials
+    # a trial whose tiny pose change two candidates explain alike is left out
+    # (the robot is no Nomad, and there is no [priors]) and named, never guessed
+    left_out = result["ambiguous_trials"]
+    assert len(left_out) <= 2, left_out
+    assert result["n_trials"] + len(left_out) == parse_plan(TURN_FREE_PLAN).n_trials
     assert all(item.design.variant == "reverse" for item in parse_plan(TURN_FREE_PLAN).items)
     truth = DEMO_TRUTH.to_si_dict()
     # The acceptance: every 95 % interval contains the fake's true value. The

@@ -64,6 +64,13 @@ def test_example_parses_to_the_documented_values() -> None:
     assert description.positions().shape == (3, 2)
 
 
+def test_an_empty_priors_table_says_the_robot_is_the_papers_nomad() -> None:
+    """``[priors]`` with no keys is the paper's Nomad 150, said of this robot;
+    without the table the slip check predicts for any robot (issue 31)."""
+    assert parse_robot_description(MINIMAL + "[priors]\n").priors == ParameterPriors(given=True)
+    assert parse_robot_description(MINIMAL).priors == ParameterPriors(given=False)
+
+
 def test_example_in_the_docs_is_the_tested_one() -> None:
     docs = Path(__file__).resolve().parents[2] / "docs" / "measurements.md"
     assert EXAMPLE.strip() in docs.read_text()

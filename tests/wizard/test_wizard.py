@@ -392,7 +392,9 @@ def test_resumed_mid_trial_shows_its_context_and_back_corrects_the_last_value(
     design, what was entered), and ``back`` at the next prompt corrects the
     value typed just before it: the wrong one never reaches the journal."""
     robot = tmp_path / "robot.toml"
-    robot.write_text(ROBOT_TOML)
+    # the fake is the paper's Nomad: said so, its priors tell trial 2's pose
+    # from the runner-up that two crosses leave (without, it asks a third)
+    robot.write_text(ROBOT_TOML + "[priors]\n")
     folder = tmp_path / "session"
     args = ["--seed", "4", "--time-scale", "20", "--no-pacing"]
     with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:

@@ -243,8 +243,8 @@ def size_validation(
         raise ParameterError(
             f"--detect: {vpath.text} cannot catch "
             + "; ".join(
-                f"{d.text()} with probability {DETECTION_POWER:g} in {MAX_TRIALS} trials "
-                f"(best {p.power:.3f}, {test_words(p.test)})"
+                f"{d.text()} with probability {DETECTION_POWER:g} in "
+                f"{units.plural(MAX_TRIALS, 'trial')} (best {p.power:.3f}, {test_words(p.test)})"
                 for d, p in cannot
             )
             + ". What would help: a longer path (its mean moves further with the error), a "
@@ -268,7 +268,7 @@ def size_validation(
             + "; ".join(
                 f"{c.detect.text()} is caught with probability {c.power:.3f} only" for c in short
             )
-            + f"; {needed} trials reach {DETECTION_POWER:g} (give --trials {needed}, or "
-            "leave --trials out and --detect chooses)"
+            + f"; {units.plural(needed, 'trial')} reach {DETECTION_POWER:g} "
+            f"(give --trials {needed}, or leave --trials out and --detect chooses)"
         )
     return Sizing(chosen, tuple(caught), trials is not None, vpath.text)

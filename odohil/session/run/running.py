@@ -71,10 +71,11 @@ class RunOutcome:
 
     def to_json_dict(self, exit_code: int) -> dict[str, Any]:
         """The ``--json`` object of a session command: the status with the
-        final estimate (SI) when it finished with one, else with the exit
+        final estimate (SI) when it finished with one, as ``estimate --json``
+        gives it (the flagged and ambiguous trials named), else with the exit
         status and :meth:`details`."""
         if self.status == "finished" and self.estimate.result is not None:
-            return {"status": self.status, **self.estimate.result.to_json_dict()}
+            return {"status": self.status, **self.estimate.to_json_dict()}
         return {"status": self.status, "exit_code": exit_code, **self.details()}
 
     def details(self) -> dict[str, Any]:
