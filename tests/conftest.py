@@ -134,3 +134,26 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     ]
     rank = {name: i for i, name in enumerate(names)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("[", 1)[0], len(rank)))
+
+
+_KEPT_DISPOSITIONS = (
+    signal.SIGINT, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT, signal.SIGPIPE,
+    signal.SIGUSR1, signal.SIGUSR2, signal.SIGTSTP, signal.SIGALRM,
+)  # fmt: skip
+"""Signals whose handler a test must leave as it found it: a worker left with
+SIGINT's default action (not Python's Ctrl-C) is killed by the next test that
+sends it, and xdist reports only "node down"."""
+
+
+@pytest.fixture(autouse=True)
+def _signal_dispositions_kept() -> Any:
+    """Every test leaves the handlers of :data:`_KEPT_DISPOSITIONS` as it found
+    them; one that does not is named, and the handlers are put back."""
+    before = {signum: signal.getsignal(signum) for signum in _KEPT_DISPOSITIONS}
+    yield
+    changed = {s: h for s, h in before.items() if signal.getsignal(s) != h}
+    for signum, handler in changed.items():
+        signal.signal(signum, handler)  # type: ignore[arg-type]
+    assert not changed, "left swapped: " + ", ".join(
+        f"{signal.Signals(s).name} (found {h!r})" for s, h in changed.items()
+    )

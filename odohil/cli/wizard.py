@@ -174,33 +174,33 @@ def wizard(
     (with --validate SESSION --path PATH: a validation of it)."""
     console = Console(highlight=False)
     interrupts = Interrupts.on_stderr(EXIT_INTERRUPTED, EXIT_STOP_UNCONFIRMED, MAY_STILL_MOVE)
-    interrupts.install()
-    with bad_inputs():  # --validate, or a validation session continued by --session alone
-        spec, guide = wizard_spec(
-            session,
-            robot_file,
-            plan_text,
-            port,
-            baud,
-            max_leg_m,
-            allow_turns,
-            validate,
-            path_text,
-            trials,
-            detect,
-        )
-    if guide is not None:
-        if not guide.trusted:
-            print_refusal(console, guide.calibration.outcome, None, "nothing driven")
-            raise typer.Exit(EXIT_UNTRUSTED)
-        print_lines(console, [outcome_line(guide.calibration.outcome), *guide.sizing_lines()])
-    console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
-    with signals_raise():
-        code = _guided(console, spec, interrupts, unit_system(units_choice), guide)
-    again = f"the wizard again with --session {spec.folder}" if guide is None else guide.again
-    if code not in (EXIT_OK, EXIT_BAD_INPUT, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
-        console.print(f"Stopped. The journal is in {spec.folder}; run {again} to continue.")
-    raise typer.Exit(code)
+    with interrupts.installed():  # Python's Ctrl-C back on the way out
+        with bad_inputs():  # --validate, or a validation session continued by --session alone
+            spec, guide = wizard_spec(
+                session,
+                robot_file,
+                plan_text,
+                port,
+                baud,
+                max_leg_m,
+                allow_turns,
+                validate,
+                path_text,
+                trials,
+                detect,
+            )
+        if guide is not None:
+            if not guide.trusted:
+                print_refusal(console, guide.calibration.outcome, None, "nothing driven")
+                raise typer.Exit(EXIT_UNTRUSTED)
+            print_lines(console, [outcome_line(guide.calibration.outcome), *guide.sizing_lines()])
+        console.print("[bold]Pre-flight checks[/] (nothing moves until all pass)")
+        with signals_raise():
+            code = _guided(console, spec, interrupts, unit_system(units_choice), guide)
+        again = f"the wizard again with --session {spec.folder}" if guide is None else guide.again
+        if code not in (EXIT_OK, EXIT_BAD_INPUT, EXIT_UNTRUSTED, EXIT_STOP_UNCONFIRMED):
+            console.print(f"Stopped. The journal is in {spec.folder}; run {again} to continue.")
+        raise typer.Exit(code)
 
 
 def _guided(

@@ -12,7 +12,6 @@ import os
 import signal
 import subprocess
 import sys
-from collections.abc import Iterator
 
 import pytest
 
@@ -24,9 +23,8 @@ from tests.session.helpers import FAST, fake_robot
 from odohil.session.wizard.interrupts import Interrupts
 
 interrupts = Interrupts(lambda text: os.write(2, text.encode()), 130, 4, "may still move")
-interrupts.install()
-interrupts.in_motion = True
-with fake_robot(FAST) as (robot, truth):
+with interrupts.installed(), fake_robot(FAST) as (robot, truth):
+    interrupts.in_motion = True
     if sys.argv[1] == "robot":
         interrupts.robot = robot
     os.kill(os.getpid(), signal.SIGINT)
@@ -36,31 +34,37 @@ sys.exit(0)
 """
 
 
-@pytest.fixture
-def sigint() -> Iterator[None]:
-    previous = signal.getsignal(signal.SIGINT)
-    yield
-    signal.signal(signal.SIGINT, previous)
-
-
-def test_a_ctrl_c_during_a_motion_waits_for_the_next_sample(sigint: None) -> None:
+def test_a_ctrl_c_during_a_motion_waits_for_the_next_sample() -> None:
     said: list[str] = []
     interrupts = Interrupts(said.append, 130, 4, "may still move")
-    interrupts.install()
-    interrupts.in_motion = True
-    os.kill(os.getpid(), signal.SIGINT)
-    assert interrupts.pending
-    assert said == ["\nCtrl-C: stopping the robot...\n"]
-    with pytest.raises(KeyboardInterrupt):
-        interrupts.check()
-    interrupts.check()  # raised once
-
-
-def test_a_ctrl_c_at_a_prompt_is_raised_at_once(sigint: None) -> None:
-    interrupts = Interrupts([].append, 130, 4, "may still move")
-    interrupts.install()
-    with pytest.raises(KeyboardInterrupt):
+    with interrupts.installed():
+        interrupts.in_motion = True
         os.kill(os.getpid(), signal.SIGINT)
+        assert interrupts.pending
+        assert said == ["\nCtrl-C: stopping the robot...\n"]
+        with pytest.raises(KeyboardInterrupt):
+            interrupts.check()
+        interrupts.check()  # raised once
+
+
+def test_a_ctrl_c_at_a_prompt_is_raised_at_once() -> None:
+    interrupts = Interrupts([].append, 130, 4, "may still move")
+    with interrupts.installed(), pytest.raises(KeyboardInterrupt):
+        os.kill(os.getpid(), signal.SIGINT)
+
+
+def test_the_policy_gives_back_the_handler_it_found() -> None:
+    """Before: ``install`` took SIGINT for good; the in-process wizard (a test,
+    a library caller) left its worker with the policy's handler, and a later
+    Ctrl-C there met it (tests/conftest.py now checks every test)."""
+    found = signal.getsignal(signal.SIGINT)
+    policy = Interrupts([].append, 130, 4, "")
+    with policy.installed():
+        assert signal.getsignal(signal.SIGINT) == policy._handler
+    assert signal.getsignal(signal.SIGINT) is found
+    with pytest.raises(KeyboardInterrupt), policy.installed():
+        os.kill(os.getpid(), signal.SIGINT)  # the policy's Ctrl-C at a prompt
+    assert signal.getsignal(signal.SIGINT) is found
 
 
 @pytest.mark.parametrize(("robot", "status", "said"), [

@@ -12,10 +12,11 @@ keeps a prompt's read from holding a signal back.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import select
 import signal
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from types import FrameType
 from typing import TextIO
 
@@ -64,9 +65,15 @@ class Interrupts:
             lambda text: os.write(2, text.encode()), exit_stopped, exit_unconfirmed, unconfirmed
         )
 
-    def install(self) -> None:
-        """Take over SIGINT."""
-        signal.signal(signal.SIGINT, self._handler)
+    @contextlib.contextmanager
+    def installed(self) -> Iterator[None]:
+        """Take over SIGINT within; on the way out the handler it found is
+        back (an in-process caller, a test, is not left with this one)."""
+        previous = signal.signal(signal.SIGINT, self._handler)
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, previous)
 
     def _handler(self, signum: int, frame: FrameType | None) -> None:
         self.count += 1
