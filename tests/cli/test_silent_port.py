@@ -113,7 +113,8 @@ def _robot_with_timeout(tmp_path: Path, robot: str, timeout: str) -> Path:
 
 
 def _run_args(tmp_path: Path, robot: Path, port: str) -> list[str | Path]:
-    variants = ("reverse", "reverse-backward") if "create2" in robot.name else ("turn", "turn-backward")
+    create2 = "create2" in robot.name
+    variants = ("reverse", "reverse-backward") if create2 else ("turn", "turn-backward")
     trials = _trials(tmp_path / "t.csv", 0.5, 1, 2, *variants)
     return [
         "run", "--port", port, "--robot", robot, "--plan", "k=0.5,l=1,n=2",

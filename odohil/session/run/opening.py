@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from odohil.errors import OdohilError
+from odohil.errors import OdohilError, ParameterError
 from odohil.session.journal.file import Journal, TornRecord
 from odohil.session.journal.state import SessionState
 from odohil.session.measure.protocol import PoseSource
@@ -60,8 +60,14 @@ def _ignore(check: PreflightCheck) -> None:
 
 
 def _step(name: str, run: Callable[[], T], exit_class: ExitClass = "bad input") -> T:
+    """``run()``; a failure raises PreflightFailed naming step ``name``, of
+    ``exit_class``, except a ParameterError, which is always bad input (a
+    value the user gave, such as a port URL option its handler refuses:
+    odohil/driver/port.py)."""
     try:
         return run()
+    except ParameterError as exc:
+        raise PreflightFailed(PreflightCheck(name, False, str(exc), "bad input")) from exc
     except (OdohilError, OSError) as exc:
         raise PreflightFailed(PreflightCheck(name, False, str(exc), exit_class)) from exc
 
