@@ -166,5 +166,6 @@ def test_a_resume_whose_port_does_not_answer_journals_no_resume(tmp_path: Path) 
     text = " ".join(resumed.output.split())
     assert resumed.exit_code == EXIT_ERROR, text
     assert "cannot open '/nonexistent/tty-odohil'" in text
-    assert read_journal(session).records == before
-    assert all(r.kind != ev.RESUMED for r in read_journal(session).records)
+    after = read_journal(session).records
+    assert after == before
+    assert [r.kind for r in after].count(ev.RESUMED) == [r.kind for r in before].count(ev.RESUMED)
