@@ -87,7 +87,7 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     ``truth_socket``, read by the client its backend declares
     (odohil/session/robots/registry.py ``fake_hooks``). The robot is closed (stopped) on exit.
     """
-    robot = open_robot(line.protocol, line.port, line.baud, line.robot)
+    robot = open_robot(line.protocol, line.port, line.baud, line.robot, line.timeout_s)
     transport = robot.transport
     truth: Any = None
     try:
