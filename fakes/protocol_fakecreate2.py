@@ -31,6 +31,7 @@ from typing import Any, cast
 
 from serial.serialutil import SerialException
 
+from fakes import url_options
 from fakes.create2.clock import LagAbsorbingClock
 from fakes.create2.config import CREATE2_TRUTH, build_config
 from fakes.create2.engine import Create2Engine
@@ -41,6 +42,12 @@ from odohil.errors import OdohilError
 from odohil.science.parameters import ErrorParameters
 
 _PAPER = ("E_R", "E_T", "K_theta", "K_rho")
+OPTIONS = (
+    "seed", "time_scale", "fault", "pacing", *_PAPER, "turn_scale", "spin_k",
+    "encoder_origin", "mode_offset", "angle_bug", "max_gap_ms", "skip_waits", "baud",
+    "mode_change_ms", "passive_sleep_s",
+)  # fmt: skip
+"""The URL's options (a bad one: PortOptionError, fakes/url_options.py)."""
 
 
 class Serial(FakeNomadSerial):
@@ -79,31 +86,29 @@ class Serial(FakeNomadSerial):
             for key, values in options.items():
                 value = values[-1]
                 if key == "seed":
-                    kwargs["seed"] = int(value)
-                elif key in ("time_scale", "turn_scale"):
-                    kwargs[key] = float(value)
-                elif key == "spin_k":
-                    kwargs["spin_k"] = float(value)
+                    kwargs["seed"] = url_options.integer(key, value)
+                elif key in ("time_scale", "turn_scale", "spin_k"):
+                    kwargs[key] = url_options.number(key, value)
                 elif key in ("encoder_origin", "mode_offset", "baud"):
-                    kwargs[key] = int(value)
+                    kwargs[key] = url_options.integer(key, value)
                 elif key == "mode_change_ms":
-                    kwargs["mode_change_s"] = float(value) / 1000.0
+                    kwargs["mode_change_s"] = url_options.number(key, value) / 1000.0
                 elif key == "passive_sleep_s":
-                    kwargs[key] = float(value) or None
+                    kwargs[key] = url_options.number(key, value) or None
                 elif key == "angle_bug":
                     kwargs["angle_bug"] = value not in ("", "0", "false", "no")
                 elif key == "fault":
                     faults.extend(values)
                 elif key == "max_gap_ms":
-                    max_gap_s = float(value) / 1000.0
+                    max_gap_s = url_options.number(key, value) / 1000.0
                 elif key == "skip_waits":
                     skip_waits = value not in ("", "0", "false", "no")
                 elif key == "pacing":
                     self._pacing = value not in ("", "0", "false", "no")
                 elif key in _PAPER:
-                    paper[key] = float(value)
+                    paper[key] = url_options.number(key, value)
                 else:
-                    raise ValueError(f"unknown option {key!r}")
+                    raise url_options.unknown(key, OPTIONS)
             params = ErrorParameters.from_paper_units(*(paper[k] for k in _PAPER))
             config = build_config(params=params, faults=faults, **kwargs)
             clock: Callable[[], float] = time.monotonic
@@ -112,7 +117,7 @@ class Serial(FakeNomadSerial):
                 self._skip = bounded.skip if skip_waits else None
                 clock = bounded
         except (ValueError, OdohilError) as exc:
-            raise SerialException(f"bad fakecreate2 URL {url!r}: {exc}") from exc
+            raise url_options.bad_url("fakecreate2", url, exc) from exc
         engine = Create2Engine(config, clock)
         engine.host_baud = self._baudrate
         return cast(NomadEngine, engine)

@@ -20,6 +20,7 @@ from typing import Any
 import serial
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException
 
+from fakes import url_options
 from fakes.nomad.config import build_config
 from fakes.nomad.engine import Disconnect, NomadEngine
 from fakes.nomad.pacing import LinePacer
@@ -36,6 +37,8 @@ _FLOAT_OPTIONS = {
     "K_theta": "k_theta_deg2_per_m",
     "K_rho": "k_rho_m",
 }
+OPTIONS = ("seed", "time_scale", "fault", "pacing", *_FLOAT_OPTIONS)
+"""The URL's options (a bad one: PortOptionError, fakes/url_options.py)."""
 
 
 class Serial(SerialBase):  # type: ignore[misc]
@@ -239,20 +242,20 @@ class Serial(SerialBase):  # type: ignore[misc]
             for key, values in options.items():
                 value = values[-1]
                 if key == "seed":
-                    seed = int(value)
+                    seed = url_options.integer(key, value)
                 elif key == "time_scale":
-                    time_scale = float(value)
+                    time_scale = url_options.number(key, value)
                 elif key == "fault":
                     faults.extend(values)
                 elif key == "pacing":
                     self._pacing = value not in ("", "0", "false", "no")
                 elif key in _FLOAT_OPTIONS:
-                    kwargs[_FLOAT_OPTIONS[key]] = float(value)
+                    kwargs[_FLOAT_OPTIONS[key]] = url_options.number(key, value)
                 else:
-                    raise ValueError(f"unknown option {key!r}")
+                    raise url_options.unknown(key, OPTIONS)
             config = build_config(seed=seed, time_scale=time_scale, faults=faults, **kwargs)
         except (ValueError, OdohilError) as exc:
-            raise SerialException(f"bad fakerobot URL {url!r}: {exc}") from exc
+            raise url_options.bad_url("fakerobot", url, exc) from exc
         return NomadEngine(config)
 
 

@@ -33,6 +33,14 @@ class ParameterError(InitError, ValueError):
     """A numeric argument is out of its domain (for example a negative length)."""
 
 
+class PortOptionError(ParameterError):
+    """A port URL with an option its transport does not accept (an unknown
+    option, a value of the wrong kind): bad input, refused before anything is
+    sent. A pyserial URL handler raises it from ``open``, and pyserial passes
+    it through ``serial_for_url`` (it is a ValueError); odohil/driver/port.py
+    keeps it, naming the URL."""
+
+
 class RobotDescriptionError(InitError):
     """The robot description (TOML) is invalid."""
 

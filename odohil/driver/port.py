@@ -3,6 +3,13 @@
 ``serial.serial_for_url`` takes a device path, a pty, ``socket://``,
 ``rfc2217://`` and the fakes' URL schemes alike, so every transport goes
 through one code path. A backend checks its own baud rates first.
+
+A URL handler that refuses one of its URL's options (an unknown one, a value
+of the wrong kind) raises :class:`~odohil.errors.PortOptionError` from its
+``open``; ``serial_for_url`` passes it through (it opens the port it made and
+catches nothing), and :func:`open_serial_url` keeps it, a ParameterError (bad
+input: exit 2), where a port that does not open is a ConnectionFailedError
+(exit 1). No handler is named here.
 """
 
 from __future__ import annotations
@@ -12,7 +19,7 @@ from typing import Protocol
 
 import serial
 
-from odohil.errors import ConnectionFailedError
+from odohil.errors import ConnectionFailedError, PortOptionError
 
 IO_ERRORS = (serial.SerialException, OSError, termios.error)
 """What a vanished line raises: EIO from read/write, or from tcflush on a pty."""
@@ -41,7 +48,8 @@ def open_serial_url(url: str, baud: int, read_timeout_s: float = READ_SLICE_S) -
     """Open a serial URL (device path, pty, ``socket://``, a fake's scheme)
     8N1 without flow control, reads returning after ``read_timeout_s``.
 
-    Raises ConnectionFailedError when the port does not open.
+    Raises ConnectionFailedError when the port does not open, and
+    PortOptionError when its URL handler refuses an option of the URL.
     """
     try:
         port: Port = serial.serial_for_url(
@@ -54,6 +62,8 @@ def open_serial_url(url: str, baud: int, read_timeout_s: float = READ_SLICE_S) -
             xonxoff=False,
             timeout=read_timeout_s,
         )
+    except PortOptionError as exc:
+        raise PortOptionError(f"cannot open {url!r}: {exc}") from exc
     except (serial.SerialException, OSError, ValueError) as exc:
         raise ConnectionFailedError(f"cannot open {url!r}: {exc}") from exc
     return port

@@ -26,7 +26,7 @@ Parsed from TOML text (the file itself is read by :mod:`odohil.session.robots.de
     [serial]                 # optional, for the driver
     port = "/dev/ttyUSB0"    # or any pyserial URL
     baud = 9600              # one of the backend's line speeds (default: its own)
-    timeout_s = 1.0
+    timeout_s = 1.0          # the driver's reply timeout, s (default and range: the backend's)
     [priors]                 # optional: belief in the four parameters before any trial
     E_R_deg_per_m = -0.202   # (paper units; defaults: the paper's Nomad 150 values)
     E_R_sd_deg_per_m = 0.5   # one standard deviation of that belief
@@ -159,7 +159,9 @@ class SerialSettings:
         port: device path or any pyserial URL; None when not configured.
         baud: line speed in baud (one of the backend's ``baud_rates``); None:
             the backend's default.
-        timeout_s: reply timeout in seconds.
+        timeout_s: the driver's reply timeout, s (default: the backend's,
+            ``RobotFacts.reply_timeout_s``; checked against its
+            ``reply_timeout_range_s``); handed to the backend only when given.
         given: the keys the file gave (the others are defaults), so that a
             command can say where each value in force came from.
     """
@@ -506,7 +508,13 @@ def _serial(table: dict[str, Any], facts: RobotFacts | None) -> SerialSettings:
             f"serial.baud must be one of {list(facts.baud_rates)} for {facts.name}, "
             f"got {baud_value!r}"
         )
-    timeout_s = _number(table.get("timeout_s", DEFAULT_TIMEOUT_S), "serial.timeout_s")
+    default_timeout = DEFAULT_TIMEOUT_S if facts is None else facts.reply_timeout_s
+    timeout_s = _number(table.get("timeout_s", default_timeout), "serial.timeout_s")
+    if facts is not None and "timeout_s" in table:
+        try:
+            facts.check_reply_timeout(timeout_s, "serial.timeout_s")
+        except ParameterError as exc:
+            raise RobotDescriptionError(str(exc)) from None
     return SerialSettings(port=port, baud=baud_value, timeout_s=timeout_s, given=frozenset(table))
 
 

@@ -68,6 +68,9 @@ class RobotFacts:
             ``wheel_diameter_m`` and ``wheel_base_m``; None: not a
             differential drive (those keys are then refused).
         fake: its fake robot (None: it has none).
+        reply_timeout_s: how long its driver waits for a reply by default, s
+            (the default of the description's ``[serial] timeout_s``).
+        reply_timeout_range_s: the ``[serial] timeout_s`` it accepts, s (low, high).
     """
 
     name: str
@@ -81,6 +84,8 @@ class RobotFacts:
     robot_keys: tuple[str, ...] = ()
     drive: DiffDriveGeometry | None = None
     fake: FakeFacts | None = None
+    reply_timeout_s: float = 1.0
+    reply_timeout_range_s: tuple[float, float] = (0.05, 60.0)
 
     def __post_init__(self) -> None:
         if self.default_baud not in self.baud_rates:
@@ -108,6 +113,18 @@ class RobotFacts:
                 f"({self.name}), got {l_m!r}"
             )
         return l_m
+
+    def check_reply_timeout(self, timeout_s: float, label: str = "timeout_s") -> float:
+        """``timeout_s`` if its driver accepts that reply timeout (s), else
+        ParameterError naming ``label``, the range and the robot."""
+        low, high = self.reply_timeout_range_s
+        number = not isinstance(timeout_s, bool) and isinstance(timeout_s, int | float)
+        if not (number and math.isfinite(timeout_s) and low <= timeout_s <= high):
+            raise ParameterError(
+                f"{label} must be at least {low:g} and at most {high:g} s for the "
+                f"{self.label} ({self.name}), got {timeout_s!r}"
+            )
+        return float(timeout_s)
 
     def speaks(self, baud: int) -> bool:
         """Whether ``baud`` is one of its line speeds."""

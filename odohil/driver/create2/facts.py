@@ -4,6 +4,7 @@ what the rest of odohil may know about this robot, read through the registry
 
 from __future__ import annotations
 
+from odohil.driver.create2.link import REPLY_TIMEOUT_S
 from odohil.protocol.create2.geometry import CREATE2_GEOMETRY
 from odohil.protocol.create2.opcodes import BAUD_RATES, DEFAULT_BAUD
 from odohil.science.limits import L_MAX_M
@@ -28,6 +29,8 @@ CREATE2_FACTS = RobotFacts(
     turns_exact=False,
     robot_keys=(*DRIVE_KEYS, "full_mode"),
     drive=CREATE2_GEOMETRY,
+    reply_timeout_s=REPLY_TIMEOUT_S,
+    reply_timeout_range_s=(0.05, 60.0),  # at least three 15 ms stream frames
     fake=FakeFacts(
         url_scheme="fakecreate2:",
         truth_client="fakes.create2.truth:Create2TruthClient",

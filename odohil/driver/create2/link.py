@@ -122,16 +122,23 @@ class Create2Link:
         url: what it was opened from (for messages).
         baud: its line rate (for the line time of a reading).
         sampling: ``poll`` or ``stream`` (see the module docstring).
+        reply_timeout_s: longest wait for a reading, s (``[serial] timeout_s``).
     """
 
     def __init__(
-        self, port: Port, url: str, baud: int = DEFAULT_BAUD, sampling: Sampling = "poll"
+        self,
+        port: Port,
+        url: str,
+        baud: int = DEFAULT_BAUD,
+        sampling: Sampling = "poll",
+        reply_timeout_s: float = REPLY_TIMEOUT_S,
     ) -> None:
         if sampling not in SAMPLINGS:
             raise ParameterError(f"sampling must be one of {SAMPLINGS}, got {sampling!r}")
         if sampling == "stream" and not stream_fits(baud):
             sampling = "poll"  # the frame would not fit the line: a corrupted stream
         self.port = port
+        self.reply_timeout_s = reply_timeout_s
         self.url = url
         self.baud = baud
         self.sampling = sampling
@@ -183,11 +190,14 @@ class Create2Link:
         except _IO_ERRORS as exc:
             raise DisconnectedError(f"flushing {self.url}: {exc}") from exc
 
-    def ask(self, request: bytes, size: int, timeout_s: float = REPLY_TIMEOUT_S) -> bytes:
+    def ask(self, request: bytes, size: int, timeout_s: float | None = None) -> bytes:
         """Flush input, send a sensor request, read its ``size`` raw bytes.
 
-        Raises OdohilTimeoutError when fewer arrive within ``timeout_s``.
+        Raises OdohilTimeoutError when fewer arrive within ``timeout_s``
+        (None: :attr:`reply_timeout_s`).
         """
+        if timeout_s is None:
+            timeout_s = self.reply_timeout_s
         wait = self._last_poll + STREAM_PERIOD_S - time.monotonic()
         if wait > 0:
             time.sleep(wait)
@@ -239,11 +249,14 @@ class Create2Link:
                     "although its stream was paused"
                 )
 
-    def reading(self, timeout_s: float = REPLY_TIMEOUT_S) -> Reading:
-        """The freshest reading: polled, or the newest complete stream frame."""
+    def reading(self, timeout_s: float | None = None) -> Reading:
+        """The freshest reading: polled, or the newest complete stream frame,
+        within ``timeout_s`` (None: :attr:`reply_timeout_s`)."""
+        if timeout_s is None:
+            timeout_s = self.reply_timeout_s
         self.readings += 1
         if self.sampling == "poll" or not self.streaming:
-            data = self.ask(commands.query_list(SAMPLE_IDS), reply_size_of_samples())
+            data = self.ask(commands.query_list(SAMPLE_IDS), reply_size_of_samples(), timeout_s)
             now = time.monotonic()
             return _reading(decode_reply(SAMPLE_IDS, data), now, now)
         deadline = time.monotonic() + timeout_s

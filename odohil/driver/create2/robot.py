@@ -61,6 +61,7 @@ from typing import NoReturn
 from odohil.driver import stopping
 from odohil.driver.create2.facts import CREATE2_FACTS, CREATE2_GEOMETRY, STEP_TOLERANCE_M
 from odohil.driver.create2.link import (
+    REPLY_TIMEOUT_S,
     Create2Link,
     Reading,
     Sampling,
@@ -225,13 +226,15 @@ class Create2Robot:
         full_mode: bool = False,
         sampling: Sampling = "stream",
         open_wait_s: float = OPEN_WAIT_S,
+        reply_timeout_s: float = REPLY_TIMEOUT_S,
     ) -> Create2Robot:
-        """Open ``url`` and bring the OI to Passive (module docstring).
+        """Open ``url`` and bring the OI to Passive (module docstring);
+        ``reply_timeout_s``: the longest wait for a reading, s.
 
         Raises ConnectionFailedError when the port does not open or the robot
         does not answer in Passive (asleep? BRC wiring, docs/create2.md).
         """
-        link = Create2Link(open_port(url, baud), url, baud, sampling)
+        link = Create2Link(open_port(url, baud), url, baud, sampling, reply_timeout_s)
         robot = cls(link, geometry, full_mode=full_mode)
         try:
             if not listens_at_open(link.port):
@@ -258,16 +261,26 @@ class Create2Robot:
 
     @classmethod
     def open(
-        cls, url: str, baud: int | None = None, robot: RobotSettings | None = None
+        cls,
+        url: str,
+        baud: int | None = None,
+        robot: RobotSettings | None = None,
+        *,
+        reply_timeout_s: float | None = None,
     ) -> Create2Robot:
         """The backend entry: connect at ``baud`` (its default when None) with the
-        description's ``[robot]`` constants and mode (defaults: the Create 2's)."""
+        description's ``[robot]`` constants and mode (defaults: the Create 2's),
+        waiting ``reply_timeout_s`` for each reading (None: 1 s,
+        ``REPLY_TIMEOUT_S``; the description's ``[serial] timeout_s``)."""
         settings = robot or RobotSettings(protocol=CREATE2_FACTS.name)
+        if reply_timeout_s is not None:
+            CREATE2_FACTS.check_reply_timeout(reply_timeout_s)
         return cls.connect(
             url,
             baud=cls.default_baud if baud is None else baud,
             geometry=settings.drive or CREATE2_GEOMETRY,
             full_mode=settings.full_mode,
+            reply_timeout_s=REPLY_TIMEOUT_S if reply_timeout_s is None else reply_timeout_s,
         )
 
     @property

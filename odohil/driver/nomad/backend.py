@@ -87,23 +87,36 @@ class NomadBackend:
         """Sends ``st`` if this process dies between :meth:`arm` and :meth:`close`."""
 
     @classmethod
-    def open(cls, url: str, baud: int | None = None, robot: object = None) -> NomadBackend:
+    def open(
+        cls,
+        url: str,
+        baud: int | None = None,
+        robot: object = None,
+        *,
+        reply_timeout_s: float | None = None,
+    ) -> NomadBackend:
         """Open ``url`` at ``baud`` (the Nomad's default when None) and check
         that the robot answers ``gs``. ``robot`` (the description's ``[robot]``
         settings) is accepted and ignored: a synchronous drive needs no
-        kinematic constants here.
+        kinematic constants here. ``reply_timeout_s``: the first-byte wait of
+        ordinary requests and the silence that aborts a reply, s (None: 1 s,
+        ``NORMAL_TIMEOUT_S``; the description's ``[serial] timeout_s``).
 
         Raises ParameterError for an unsupported baud, ConnectionFailedError
         when the port does not open or the robot does not answer.
         """
+        if reply_timeout_s is not None:
+            NOMAD150_FACTS.check_reply_timeout(reply_timeout_s)
         raw = open_port(url, cls.default_baud if baud is None else baud)
-        return cls.from_port(raw, url)
+        return cls.from_port(raw, url, reply_timeout_s)
 
     @classmethod
-    def from_port(cls, raw: Port, url: str = "") -> NomadBackend:
+    def from_port(
+        cls, raw: Port, url: str = "", reply_timeout_s: float | None = None
+    ) -> NomadBackend:
         """Wrap an already open port and check that the robot answers ``gs``."""
         name = url or str(getattr(raw, "name", "") or getattr(raw, "port", "") or "")
-        return cls(NomadRobot.from_port(raw, name), name, raw)
+        return cls(NomadRobot.from_port(raw, name, reply_timeout_s), name, raw)
 
     @property
     def port(self) -> str:

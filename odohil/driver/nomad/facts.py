@@ -4,7 +4,7 @@ what the rest of odohil may know about this robot, read through the registry
 
 from __future__ import annotations
 
-from odohil.driver.nomad.link import BAUD_RATES, DEFAULT_BAUD
+from odohil.driver.nomad.link import BAUD_RATES, DEFAULT_BAUD, NORMAL_TIMEOUT_S
 from odohil.protocol.nomad.limits import MAX_LEG_M, MIN_LEG_M
 from odohil.protocol.nomad.numbers import S16_MAX
 from odohil.protocol.nomad.wire_units import wire_to_radians
@@ -21,6 +21,8 @@ NOMAD150_FACTS = RobotFacts(
     turns_exact=True,
     robot_keys=(),
     drive=None,
+    reply_timeout_s=NORMAL_TIMEOUT_S,
+    reply_timeout_range_s=(0.05, 60.0),
     fake=FakeFacts(
         url_scheme="fakerobot:",
         truth_client="fakes.nomad.truth:TruthClient",

@@ -95,8 +95,12 @@ NO_ANSWER_CHECK = (
 class NomadRobot:
     """A connected Nomad 150 (context manager; :meth:`close` sends ``st``)."""
 
-    def __init__(self, link: Link, mask: StateMask = N150_MASK) -> None:
+    def __init__(
+        self, link: Link, mask: StateMask = N150_MASK, reply_timeout_s: float = NORMAL_TIMEOUT_S
+    ) -> None:
         self._link = link
+        self._reply_s = reply_timeout_s
+        """First-byte wait of ordinary requests, s (``[serial] timeout_s``)."""
         self._mask = mask
         self._last: EncoderSample | None = None
         self._last_ms: int | None = None
@@ -112,10 +116,15 @@ class NomadRobot:
         return cls.from_port(open_port(url, baud))
 
     @classmethod
-    def from_port(cls, port: Port, url: str = "") -> NomadRobot:
+    def from_port(
+        cls, port: Port, url: str = "", reply_timeout_s: float | None = None
+    ) -> NomadRobot:
         """Wrap an already open port (opened from ``url``, for messages) and
-        check that the robot answers ``gs``."""
-        robot = cls(Link(port))
+        check that the robot answers ``gs``; ``reply_timeout_s``: the
+        first-byte wait of ordinary requests and the silence that aborts a
+        reply, s (None: :data:`NORMAL_TIMEOUT_S`)."""
+        reply_s = NORMAL_TIMEOUT_S if reply_timeout_s is None else reply_timeout_s
+        robot = cls(Link(port, reply_s), reply_timeout_s=reply_s)
         try:
             robot.state()
         except OdohilError as exc:
@@ -157,10 +166,11 @@ class NomadRobot:
 
     # -- requests -------------------------------------------------------
 
-    def _request(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> RobotState:
+    def _request(self, request: m.Request, first_byte_s: float | None = None) -> RobotState:
         code = request.code
+        wait_s = self._reply_s if first_byte_s is None else first_byte_s
         packet = self._link.exchange(
-            m.encode_request(request), first_byte_s, lambda p: self._answers(p, code)
+            m.encode_request(request), wait_s, lambda p: self._answers(p, code)
         )
         reply = decode_reply(packet, request, self._mask)
         if not isinstance(reply, RobotState):  # pragma: no cover - state requests only
@@ -190,7 +200,7 @@ class NomadRobot:
             return True  # not a state packet after all: decode_reply says why
         return not is_older_ms(timestamp_ms, self._last_ms)
 
-    def _call(self, request: m.Request, first_byte_s: float = NORMAL_TIMEOUT_S) -> EncoderSample:
+    def _call(self, request: m.Request, first_byte_s: float | None = None) -> EncoderSample:
         """One request; on failure stop if moving, resync with ``gs``, re-raise."""
         try:
             self._request(request, first_byte_s)
@@ -391,7 +401,7 @@ class NomadRobot:
 
         def ask(request: m.Request) -> Callable[[float], EncoderSample]:
             def send(left_s: float) -> EncoderSample:
-                state = self._request(request, first_byte_s=min(NORMAL_TIMEOUT_S, left_s))
+                state = self._request(request, first_byte_s=min(self._reply_s, left_s))
                 return EncoderSample.from_state(state, time.monotonic())
 
             return send

@@ -27,6 +27,8 @@ class Line:
         baud: the line speed; baud_from: where it came from.
         robot: the description's ``[robot]`` settings, handed to the backend
             (its kinematic constants).
+        timeout_s: the description's ``[serial] timeout_s``, the driver's
+            reply timeout, s; None when not given (the backend's own).
     """
 
     protocol: str
@@ -35,6 +37,7 @@ class Line:
     baud: int
     baud_from: str
     robot: RobotSettings | None = None
+    timeout_s: float | None = None
 
     def describe(self) -> str:
         """E.g. ``PROTOCOL on /dev/ttyUSB0 (--port) at 9600 baud (robot.toml [serial])``."""
@@ -106,6 +109,7 @@ def resolve_line(
         int(found_baud[0]),
         found_baud[1],
         description.robot,
+        serial.timeout_s if "timeout_s" in serial.given else None,
     )
 
 

@@ -8,7 +8,11 @@ A backend is a class (or any object) with ``facts`` (its
 leg limits, whether its turns are exact, its ``[robot]`` keys and nominal
 constants, its fake robot) and an ``open(url, baud, robot)`` that returns a
 connected ``Robot`` (odohil/session/robots/protocol.py); ``robot`` is the description's
-``[robot]`` table (:class:`RobotSettings`), which a backend uses or ignores.
+``[robot]`` table (:class:`RobotSettings`), which a backend uses or ignores. A
+description's ``[serial] timeout_s`` (checked against the facts'
+``reply_timeout_range_s`` when it is read) is handed to ``open`` as the keyword
+``reply_timeout_s``, only when given: a backend's driver then waits that long for
+each reply instead of its own default (``facts.reply_timeout_s``).
 Another package adds a robot by declaring an entry point in the group;
 nothing here names one, and nothing outside the backend knows its numbers:
 the session and the CLI read them here (:func:`robot_facts`).
@@ -50,9 +54,18 @@ class RobotBackend(Protocol):
     """What the rest of odohil may know about the robot (line speeds, leg
     limits, turns, ``[robot]`` keys, its fake)."""
 
-    def open(self, url: str, baud: int | None = None, robot: RobotSettings | None = None) -> Robot:
+    def open(
+        self,
+        url: str,
+        baud: int | None = None,
+        robot: RobotSettings | None = None,
+        *,
+        reply_timeout_s: float | None = None,
+    ) -> Robot:
         """Connect to the robot at ``url`` and check that it answers; ``robot``:
-        the description's ``[robot]`` settings (None: the backend's defaults)."""
+        the description's ``[robot]`` settings (None: the backend's defaults);
+        ``reply_timeout_s``: how long its driver waits for a reply, s (None:
+        its own default; passed only when the description gives one)."""
         ...
 
 
@@ -93,12 +106,23 @@ def find_backend(protocol: str) -> RobotBackend:
 
 
 def open_robot(
-    protocol: str, url: str, baud: int | None = None, robot: RobotSettings | None = None
+    protocol: str,
+    url: str,
+    baud: int | None = None,
+    robot: RobotSettings | None = None,
+    reply_timeout_s: float | None = None,
 ) -> Robot:
     """Connect through the backend named ``protocol`` at ``url`` (at ``baud``,
     or the backend's default when None), handing it the description's
-    ``[robot]`` settings (None: the backend's defaults)."""
-    return find_backend(protocol).open(url, baud, robot)
+    ``[robot]`` settings (None: the backend's defaults) and its reply timeout
+    ``reply_timeout_s`` (s; None: the backend's own, and the keyword is not
+    passed, so a backend that predates it still opens)."""
+    backend = find_backend(protocol)
+    if reply_timeout_s is None:
+        return backend.open(url, baud, robot)
+    facts = robot_facts(protocol)
+    facts.check_reply_timeout(reply_timeout_s)  # the description was checked; a caller may not
+    return backend.open(url, baud, robot, reply_timeout_s=reply_timeout_s)
 
 
 def robot_facts(protocol: str) -> RobotFacts:

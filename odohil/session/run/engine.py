@@ -245,8 +245,17 @@ class ResumedSession:
     torn: TornRecord | None
 
 
-def resume_session(folder: str | Path, note: Mapping[str, Any] | None = None) -> ResumedSession:
-    """Open a session to continue it; a torn last record is kept aside and journaled.
+def open_to_resume(folder: str | Path) -> ResumedSession:
+    """Open a session to continue it, without journaling the resume yet.
+
+    The journal is locked (a second process on it sends nothing) and
+    replayed; a torn last record is copied aside and cut from the journal,
+    and that is journaled (``torn_record``: what was done to the file, true
+    whether or not the resume goes on). No ``resumed`` record is written:
+    the caller journals it with :func:`journal_resumed` once the robot has
+    answered (odohil/session/run/opening.py), so that a resume whose port
+    does not open or whose robot does not answer leaves no record claiming
+    a resume that never happened.
 
     Raises:
         JournalError: no journal, in use, corrupt, or already finished.
@@ -269,11 +278,36 @@ def resume_session(folder: str | Path, note: Mapping[str, Any] | None = None) ->
                 )
             )
             state = apply(state, record)
-        state = apply(state, journal.write(Resumed(dict(note or {}))))
     except BaseException:
         journal.close()
         raise
     return ResumedSession(journal, state, contents.torn)
+
+
+def journal_resumed(
+    resumed: ResumedSession, note: Mapping[str, Any] | None = None
+) -> ResumedSession:
+    """``resumed`` with its ``resumed`` record journaled (``note``: what the
+    resuming process says about itself): the resume has happened."""
+    record = resumed.journal.write(Resumed(dict(note or {})))
+    return replace(resumed, state=apply(resumed.state, record))
+
+
+def resume_session(folder: str | Path, note: Mapping[str, Any] | None = None) -> ResumedSession:
+    """Open a session to continue it and journal the resume at once
+    (:func:`open_to_resume`, then :func:`journal_resumed`), for a caller with
+    no robot to wait for; a session that drives a robot journals the resume
+    only once the robot answered (odohil/session/run/opening.py).
+
+    Raises:
+        JournalError: no journal, in use, corrupt, or already finished.
+    """
+    resumed = open_to_resume(folder)
+    try:
+        return journal_resumed(resumed, note)
+    except BaseException:
+        resumed.journal.close()
+        raise
 
 
 def description_of(state: SessionState) -> RobotDescription:

@@ -3,8 +3,12 @@ robot (through the backend registry) with the fake's truth side channel, and
 the session's journal; everything closed on exit, the robot stopped.
 
 Order: a resumed session is locked before the robot's port opens (a second
-run on it sends nothing); a new session is created only once the robot has
-answered, so a failure before leaves no folder behind. Each step that fails
+run on it sends nothing), but its ``resumed`` record is journaled only once
+the robot has answered, so a resume whose port does not open or whose robot
+does not answer leaves the journal's records as they were (only a torn last
+record kept aside is journaled then: that repair of the file did happen;
+odohil/session/run/engine.py ``open_to_resume``); a new session is created
+only once the robot has answered, so a failure before leaves no folder behind. Each step that fails
 raises :class:`~odohil.session.run.checks.PreflightFailed` naming it.
 """
 
@@ -15,7 +19,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from odohil.errors import OdohilError
+from odohil.errors import OdohilError, ParameterError
 from odohil.session.journal.file import Journal, TornRecord
 from odohil.session.journal.state import SessionState
 from odohil.session.measure.protocol import PoseSource
@@ -24,7 +28,7 @@ from odohil.session.robots.line import Line, open_truth_client
 from odohil.session.robots.protocol import Robot
 from odohil.session.robots.registry import open_robot
 from odohil.session.run.checks import ExitClass, PreflightCheck, PreflightFailed, Prepared
-from odohil.session.run.engine import resume_session, start_session
+from odohil.session.run.engine import journal_resumed, open_to_resume, start_session
 from odohil.session.run.measure_option import journal_name
 from odohil.session.run.start_pose import pose_text, sample_pose
 
@@ -60,8 +64,14 @@ def _ignore(check: PreflightCheck) -> None:
 
 
 def _step(name: str, run: Callable[[], T], exit_class: ExitClass = "bad input") -> T:
+    """``run()``; a failure raises PreflightFailed naming step ``name``, of
+    ``exit_class``, except a ParameterError, which is always bad input (a
+    value the user gave, such as a port URL option its handler refuses:
+    odohil/driver/port.py)."""
     try:
         return run()
+    except ParameterError as exc:
+        raise PreflightFailed(PreflightCheck(name, False, str(exc), "bad input")) from exc
     except (OdohilError, OSError) as exc:
         raise PreflightFailed(PreflightCheck(name, False, str(exc), exit_class)) from exc
 
@@ -77,7 +87,7 @@ def connect(line: Line, truth_socket: str | None) -> Iterator[tuple[Robot, Any]]
     ``truth_socket``, read by the client its backend declares
     (odohil/session/robots/registry.py ``fake_hooks``). The robot is closed (stopped) on exit.
     """
-    robot = open_robot(line.protocol, line.port, line.baud, line.robot)
+    robot = open_robot(line.protocol, line.port, line.baud, line.robot, line.timeout_s)
     transport = robot.transport
     truth: Any = None
     try:
@@ -109,11 +119,12 @@ def open_session(prepared: Prepared, seen: CheckSeen = _ignore) -> Iterator[Open
             if measuring.note:
                 seen(PreflightCheck("measurement", True, measuring.note))
         torn = None
+        resuming = None
         if prepared.resumed is not None:
-            resumed = _step("session", lambda: resume_session(spec.folder, spec.note))
-            stack.enter_context(resumed.journal)
-            journal, state, torn = resumed.journal, resumed.state, resumed.torn
-            assert state.plan is not None
+            resuming = _step("session", lambda: open_to_resume(spec.folder))
+            stack.enter_context(resuming.journal)
+            journal, torn = resuming.journal, resuming.torn
+            assert resuming.state.plan is not None
             seen(PreflightCheck("session", True, f"resuming {spec.folder}"))
         robot, truth = _step(
             "robot answers",
@@ -124,7 +135,10 @@ def open_session(prepared: Prepared, seen: CheckSeen = _ignore) -> Iterator[Open
         moving = "MOVING (it will be stopped first)" if sample.moving else "standing still"
         encoders = f"{line.describe()}; encoders {pose_text(sample_pose(sample))}, {moving}"
         seen(PreflightCheck("robot answers", True, encoders))
-        if prepared.resumed is None:
+        if resuming is not None:
+            opened = resuming
+            state = _step("session", lambda: journal_resumed(opened, spec.note).state, "error")
+        else:
             journal, state = _step("session", lambda: _start(prepared))
             stack.enter_context(journal)
             seen(PreflightCheck("session", True, f"new session in {spec.folder}"))
