@@ -10,7 +10,6 @@ from __future__ import annotations
 import os
 import shutil
 import socket
-import time
 import tty
 from collections.abc import Iterator
 from pathlib import Path
@@ -20,7 +19,6 @@ from typer.testing import CliRunner, Result
 
 from odohil.cli.app import app
 from odohil.cli.exit_codes import EXIT_BAD_INPUT, EXIT_ERROR
-from odohil.driver.create2.robot import OPEN_WAIT_S
 from odohil.session.journal import events as ev
 from odohil.session.journal.file import read_journal
 
@@ -129,14 +127,12 @@ def test_the_descriptions_serial_timeout_is_the_drivers_reply_timeout(
     # [serial] timeout_s = 0.1 on a port where nothing answers: the connect gives
     # up after 0.1 s waits (each backend's default is 1 s, and its connect waits
     # at least 2 s in all), and says so; the Create 2 keeps its 1 s wait after open
+    # (the driver's message names the wait it used; no wall-time bound: a loaded
+    # machine stretches any, and tests assert no timings)
     path = _robot_with_timeout(tmp_path, robot, "0.1")
-    start = time.monotonic()
     result = _invoke(*_run_args(tmp_path, path, silent_socket))
-    elapsed = time.monotonic() - start
     _says_no_answer(result, robot, silent_socket)
     assert "within 0.1 s" in " ".join(result.output.split())
-    fixed_s = OPEN_WAIT_S if robot == "create2" else 0.0
-    assert elapsed - fixed_s < 0.9, elapsed  # the default's own waits: 2 s (Nomad), 1 s
     assert not (tmp_path / "s").exists()
 
 
