@@ -11,11 +11,13 @@ no scipy.stats); an import from elsewhere (tests, ``--help``) registers all.
 from __future__ import annotations
 
 import importlib
+import json
 import sys
 from pathlib import Path
 from typing import Any
 
 import typer
+from typer._click.exceptions import ClickException
 from typer.core import TyperGroup
 
 from odohil import __version__
@@ -56,6 +58,21 @@ class OdohilGroup(TyperGroup):
         command = super().get_command(ctx, cmd_name)
         _no_flag_metavars(command, ctx)
         return command
+
+    def invoke(self, ctx: Any) -> Any:
+        """The command; with ``--json`` a refusal (bad option, bad input, failed pre-flight)
+        is also one JSON object on stdout (odohil/session/run/running.py refused_before_run)."""
+        as_json = "--json" in ctx.args
+        try:
+            return super().invoke(ctx)
+        except (ClickException, typer.Exit) as exc:  # typer.Exit: bad_input's, refuse's note
+            notes = getattr(exc, "__notes__", [""])
+            said = exc.format_message() if isinstance(exc, ClickException) else notes[0]
+            if as_json and said:
+                from odohil.session.run.running import refused_before_run
+
+                typer.echo(json.dumps(refused_before_run(said, exc.exit_code)))
+            raise
 
     def format_help(self, ctx: Any, formatter: Any) -> None:
         """The group's help, its own flags without metavar."""

@@ -102,7 +102,8 @@ def option(*flags: str, help: str, bound: str | None = None) -> Any:
 K_OPTION = option("--k", bound="k", help="Forth-and-back pairs k, a multiple of 1/2.")
 L_OPTION = option("--l", bound="l", help="Leg length l of the forth-and-back runs, m.")
 SEGMENT_OPTION = option("--segment-m", bound="segment_m", help="Largest simulated segment, m.")
-JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JSON (SI).")]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as JSON (SI); when "
+    'refused (exit 2), {"status": "refused", "exit_code": 2, "error": ...}.')]  # fmt: skip
 
 
 PAPER_DEFAULTS = NOMAD150.to_paper_units()
@@ -163,14 +164,9 @@ class UnitsChoice(StrEnum):
     si = "si"
 
 
-UnitsOption = Annotated[
-    UnitsChoice,
-    typer.Option(
-        "--units",
-        help="Parameters printed in the paper's units (E_R deg/m, K_theta deg^2/m) "
-        "or SI (rad/m, rad^2/m); E_T is a plain number, K_rho metres. JSON is always SI.",
-    ),
-]
+UnitsOption = Annotated[UnitsChoice, typer.Option("--units", help="Parameters printed in the "
+    "paper's units (E_R deg/m, K_theta deg^2/m) or SI (rad/m, rad^2/m); E_T is a plain number, "
+    "K_rho metres. JSON is always SI.")]  # fmt: skip
 UNITS_DEFAULT = UnitsChoice(units.DEFAULT_UNIT_SYSTEM)
 """The same default on every command."""
 
@@ -180,45 +176,21 @@ def unit_system(choice: UnitsChoice) -> units.UnitSystem:
     return "si" if choice is UnitsChoice.si else "paper"
 
 
-EXCLUDE_HELP = (
-    "Trial numbers to leave out of the estimate, comma-separated (e.g. 3,17); "
-    "the journal and files keep every trial."
-)
+EXCLUDE_HELP = ("Trial numbers to leave out of the estimate, comma-separated (e.g. 3,17); "
+                "the journal and files keep every trial.")  # fmt: skip
 ExcludeOption = Annotated[str | None, typer.Option("--exclude", help=EXCLUDE_HELP)]
-PortOption = Annotated[
-    str | None,
-    typer.Option(
-        "--port",
-        help="Serial device, pty path or pyserial URL (default: the session's, else "
-        "robot.toml \\[serial] port).",
-    ),
-]
-BaudOption = Annotated[
-    int | None,
-    option(
-        "--baud",
-        bound="baud",
-        help="Line speed (default: the session's, else robot.toml \\[serial] baud, else "
-        "the robot's default).",
-    ),
-]
-TruthSocketOption = Annotated[
-    str | None,
-    typer.Option("--truth-socket", help="The fake robot's truth socket (for --measure fake)."),
-]
-RunJsonOption = Annotated[
-    bool,
-    typer.Option(
-        "--json",
-        help="Print one JSON object (SI): the final estimate (as estimate --json) with "
-        '"status": "finished"; when interrupted or failed, the status, the signal, '
-        "whether the stop was confirmed and the partial estimate.",
-    ),
-]
-ALLOW_TURNS_HELP = (
-    "Run `turn` designs on a robot whose turns carry error (\\[robot] turns_exact = false); "
-    "the estimate is then not trusted."
-)
+PortOption = Annotated[str | None, typer.Option("--port", help="Serial device, pty path or "
+    "pyserial URL (default: the session's, else robot.toml \\[serial] port).")]  # fmt: skip
+BaudOption = Annotated[int | None, option("--baud", bound="baud", help="Line speed (default: "
+    "the session's, else robot.toml \\[serial] baud, else the robot's default).")]  # fmt: skip
+TruthSocketOption = Annotated[str | None, typer.Option("--truth-socket",
+    help="The fake robot's truth socket (for --measure fake).")]  # fmt: skip
+RunJsonOption = Annotated[bool, typer.Option("--json", help="Print one JSON object (SI): the "
+    'final estimate (as estimate --json) with "status": "finished"; when interrupted or failed, '
+    'the status, the signal, whether the stop was confirmed and the partial estimate; when '
+    'refused, "status": "refused", the exit code and the error.')]  # fmt: skip
+ALLOW_TURNS_HELP = ("Run `turn` designs on a robot whose turns carry error (\\[robot] "
+                    "turns_exact = false); the estimate is then not trusted.")  # fmt: skip
 AllowTurnsOption = Annotated[bool, typer.Option("--allow-turns", help=ALLOW_TURNS_HELP)]
 ROBOT_HELP = f"Robot description (TOML file), or a built-in one: {', '.join(builtin_names())}."
 

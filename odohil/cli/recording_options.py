@@ -33,8 +33,8 @@ _SECONDS = (  # (parameter, flag, field of ImportOptions, help)
     ("time_offset", "--time-offset", "time_offset_s", "TUM, bags: added to the ground "
      "truth's stamps, s."),
     ("min_rest", "--min-rest", "min_rest_s", "Shortest rest between two trials, s."),
-    ("min_edge_rest", "--min-edge-rest", "min_edge_rest_s", "Shortest rest at either end of "
-     "a trial cut by a trial column or file, s."),
+    ("min_edge_rest", "--min-edge-rest", "min_edge_rest_s", "Shortest rest averaged at an end "
+     "of a trial cut by a trial column or file, s (0: any); without one, its first/last sample."),
     ("max_truth_gap", "--max-truth-gap", "max_truth_gap_s", "Longest time without ground "
      "truth in a trial, s."),
 )  # fmt: skip

@@ -74,7 +74,8 @@ def print_said(console: Console, *said: Said, soft_wrap: bool = True) -> None:
 def bad_input(exc: BaseException | str, console: Console | None = None) -> typer.Exit:
     """Print ``error: <message>`` on stderr; the exit of bad input (2) to raise."""
     print_said(console or Console(stderr=True), error_said(str(exc)))
-    return typer.Exit(EXIT_BAD_INPUT)
+    (refused := typer.Exit(EXIT_BAD_INPUT)).add_note(str(exc))  # for --json (odohil/cli/app.py)
+    return refused
 
 
 @contextlib.contextmanager

@@ -97,7 +97,8 @@ def refuse(
         if not ticked:
             tick(check)
         console.print("[red]Pre-flight failed: nothing was moved.[/]")
-    raise typer.Exit(exit_for_check(check))
+    (refused := typer.Exit(exit_for_check(check))).add_note(f"{check.message}; nothing moved")
+    raise refused
 
 
 def say_opened(console: Console) -> CheckSeen:

@@ -82,6 +82,8 @@ values of the centred positions); the pose from such marks is ill-conditioned.""
 _TOP_KEYS = ("robot", "screws", "measurement", "serial", "priors", "floor")
 DEFAULT_PROTOCOL = "nomad150"
 """The robot protocol (driver backend) when ``[robot] protocol`` is absent."""
+RECORDED_PROTOCOL = "recorded"
+"""The protocol of a robot known only from its logs (no backend: docs/recording.md)."""
 _COMMON_ROBOT_KEYS = ("protocol", "turns_exact")
 """``[robot]`` keys of every description; the others are the backend's
 (``RobotFacts.robot_keys``), or, with no installed backend, these:"""
@@ -351,7 +353,13 @@ def _robot(
     protocol = protocol.strip()
     facts = None if lookup is None else lookup(protocol)
     known = _ANY_ROBOT_KEYS if facts is None else (*_COMMON_ROBOT_KEYS, *facts.robot_keys)
-    _reject_unknown(table, known, "robot.")
+    hint = ""
+    if "protocol" not in table and all(key in _ANY_ROBOT_KEYS for key in table):
+        hint = (
+            f" (without robot.protocol the robot is a {DEFAULT_PROTOCOL}); for a robot known "
+            f'from its logs add protocol = "{RECORDED_PROTOCOL}" to [robot]'
+        )
+    _reject_unknown(table, known, "robot.", hint)
     nominal = None if facts is None else facts.drive
     constants: dict[str, float] = {}
     for key, (low, high) in _DRIVE_RANGES.items():
@@ -425,12 +433,14 @@ def _priors(table: dict[str, Any], given: bool) -> ParameterPriors:
     )
 
 
-def _reject_unknown(table: dict[str, Any], known: tuple[str, ...], prefix: str) -> None:
+def _reject_unknown(
+    table: dict[str, Any], known: tuple[str, ...], prefix: str, hint: str = ""
+) -> None:
     unknown = [key for key in table if key not in known]
     if unknown:
         listed = ", ".join(f"{prefix}{key}" for key in unknown)
         raise RobotDescriptionError(
-            f"unknown key(s) {listed}; allowed here: {', '.join(prefix + k for k in known)}"
+            f"unknown key(s) {listed}; allowed here: {', '.join(prefix + k for k in known)}" + hint
         )
 
 

@@ -129,11 +129,16 @@ def test_time_that_goes_back_is_refused(tmp_path: Path) -> None:
         read_recording([session], optiodom_robot(), OPTIONS)
 
 
-def test_a_run_that_starts_moving_is_refused(tmp_path: Path) -> None:
+def test_a_run_that_starts_moving_starts_at_its_first_sample(tmp_path: Path) -> None:
     session = _copy_session(tmp_path)
     run = session / "250620201618_run-01.csv"
+    whole = read_recording([session], optiodom_robot(), OPTIONS)[0]
     lines = run.read_text().splitlines()
-    del lines[:13]  # the rest before the motion
+    del lines[:13]  # the rest before the motion (refused before issue 30)
     run.write_text("\n".join(lines) + "\n")
-    with pytest.raises(RecordingError, match=r"run-01.csv line 1: .*not at rest at its start"):
-        read_recording([session], optiodom_robot(), OPTIONS)
+    cut = read_recording([session], optiodom_robot(), OPTIONS)[0]
+    assert cut.span_s is not None
+    assert cut.span_s[0] == float(lines[0].split(",")[0])
+    assert cut.family == whole.family == "straight"
+    assert abs(cut.path.distance_m - whole.path.distance_m) < 0.01
+    assert abs(cut.pose_change[0] - whole.pose_change[0]) < 0.01

@@ -111,6 +111,26 @@ def test_a_description_may_give_only_the_robot_keys_its_backend_reads() -> None:
     assert create2.drive.wheel_base_m == nominal.wheel_base_m
 
 
+def test_geometry_keys_without_a_protocol_are_told_to_add_the_recorded_protocol() -> None:
+    """Before (issue 30): only "unknown key(s) robot.counts_per_rev ...", no way out."""
+    geometry = "[robot]\ncounts_per_rev = 2796.8\nwheel_diameter_m = 0.084\nwheel_base_m = 0.2\n"
+    with pytest.raises(
+        RobotDescriptionError,
+        match=r"unknown key\(s\) robot\.counts_per_rev, robot\.wheel_diameter_m, "
+        r"robot\.wheel_base_m;.*"
+        r'add protocol = "recorded" to \[robot\]',
+    ):
+        parse_description(BASE + geometry)
+    # a stated protocol, or a key no protocol reads, gets no such advice
+    for text in (description("nomad150", "counts_per_rev = 512\n"), BASE + "[robot]\ncolour = 1\n"):
+        with pytest.raises(RobotDescriptionError, match="unknown key") as refused:
+            parse_description(text)
+        assert "recorded" not in str(refused.value)
+    recorded = parse_description(BASE + '[robot]\nprotocol = "recorded"\n' + geometry[8:]).robot
+    assert recorded.drive is not None
+    assert recorded.drive.wheel_base_m == 0.2
+
+
 def test_turns_exact_defaults_to_the_backends_fact() -> None:
     for protocol in BACKENDS:
         robot = parse_description(description(protocol)).robot

@@ -29,6 +29,7 @@ from odohil.session.run.running import (
     interrupt_text,
     interrupted_before_run,
     progress_estimator,
+    refused_before_run,
     run_session,
 )
 from odohil.session.run.spec import SessionSpec, default_session_folder
@@ -66,6 +67,7 @@ __all__ = [
     "progress_estimator",
     "put_back",
     "refuse_off_start",
+    "refused_before_run",
     "require",
     "run_session",
 ]

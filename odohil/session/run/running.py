@@ -121,6 +121,13 @@ def interrupted_before_run(exc: BaseException) -> dict[str, Any]:
     }
 
 
+def refused_before_run(message: str, exit_code: int) -> dict[str, Any]:
+    """For ``--json``: the command refused its input (exit 2: a bad option
+    value, an unreadable file, a failed pre-flight check; or a pre-flight
+    check of the error class, exit 1) before doing anything."""
+    return {"status": "refused", "exit_code": exit_code, "error": message}
+
+
 def final_estimate(state: SessionState, exclude: Collection[int] = ()) -> EstimateOutcome:
     """A session's estimate and verdict by the one recipe
     (odohil/session/results/outcome.py): every solved trial but the ambiguous ones and

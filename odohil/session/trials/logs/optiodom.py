@@ -5,8 +5,9 @@ Layout: ``<kind>/<session>/<session>_run-NN.csv`` beside
 cycle: time since the run's start (s), ground-truth x, y (m) and heading
 (rad) in the run's start frame, then the right and the left wheel's encoder
 counts *in that cycle* (increments). Each run is one trial; the robot stands
-still at its start and end (the rests are found from the odometry,
-odohil/science/rest_cutting.py).
+still at its start and end in the June sessions (the rests are found from the
+odometry, odohil/science/rest_cutting.py); a run that moves at once starts at
+its first sample (and one that ends moving ends at its last).
 
 Geometry: the raw counts do not depend on the nominal constants each session
 was configured with (some were deliberately wrong: ``Li`` 0.205 m, ``Di``

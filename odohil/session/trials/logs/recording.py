@@ -79,8 +79,11 @@ class ImportOptions:
             odometry and ground-truth pair (TUM, bags), s.
         time_offset_s: added to the ground truth's stamps before associating, s.
         min_rest_s: shortest rest that separates two trials, s.
-        min_edge_rest_s: shortest rest at either end of a trial whose cut is
-            given (a ``trial`` column, one file per trial), s.
+        min_edge_rest_s: shortest still stretch at either end of a trial whose
+            cut is given (a ``trial`` column, one file per trial) that is
+            averaged as its rest, s; a trial without one (it moves at once)
+            starts at its first sample (ends at its last). 0: every still
+            stretch is averaged, however short.
         max_truth_gap_s: longest time without a ground-truth pose in a trial, s.
         bounds: how odometry is compressed into legs and turns.
     """
@@ -102,6 +105,11 @@ class ImportOptions:
                 if not math.isfinite(value):
                     raise ParameterError(
                         f"{option} must be a finite number of seconds, got {value!r}"
+                    )
+            elif name == "min_edge_rest_s":
+                if not (math.isfinite(value) and value >= 0):
+                    raise ParameterError(
+                        f"{option} must be zero or a positive number of seconds, got {value!r}"
                     )
             elif not (math.isfinite(value) and value > 0):
                 raise ParameterError(
@@ -156,10 +164,14 @@ def check_increasing(t_s: FloatArray, where: IntArray, source: str, field: str, 
         )
 
 
-def _rest_cov(poses: FloatArray, description: RobotDescription) -> FloatArray:
+def _rest_cov(poses: FloatArray, description: RobotDescription, other: FloatArray) -> FloatArray:
+    """The covariance of a rest's mean pose (module docstring). A rest of one
+    sample (a trial that moves at once) has no scatter of its own: the other
+    rest's scatter per sample stands for the capture's jitter, if it has one."""
     if description.pose_sigma is not None:
         return np.diag(np.square(np.array(description.pose_sigma, dtype=np.float64)))
-    scatter = np.array(pose_scatter(poses)) / math.sqrt(len(poses))
+    spread = poses if len(poses) > 1 or len(other) < 2 else other
+    scatter = np.array(pose_scatter(spread)) / math.sqrt(len(poses))
     return np.diag(np.square(np.maximum(scatter, np.array(SCATTER_FLOOR))))
 
 
@@ -219,8 +231,8 @@ def _trial(
     change, cov = measured_change(
         mean_pose(start_poses),
         mean_pose(end_poses),
-        _rest_cov(start_poses, description),
-        _rest_cov(end_poses, description),
+        _rest_cov(start_poses, description, end_poses),
+        _rest_cov(end_poses, description, start_poses),
         path.net_turn_rad,
         path.winding_rad,
     )
@@ -312,15 +324,10 @@ def trials_of(
             start, end = edge_rests(
                 rec.t_s[first : last + 1], rec.odometry[first : last + 1], options.min_edge_rest_s
             )
-            for rest, what, index in ((start, "start", first), (end, "end", last)):
-                if rest is None:
-                    raise RecordingError(
-                        f"{rec.at(index)}: {rec.odometry_field}: trial {label!r} is "
-                        f"not at rest at its {what} (the odometry must stay still for "
-                        f"{options.min_edge_rest_s:g} s; --min-edge-rest)"
-                    )
-            assert start is not None
-            assert end is not None
+            # no rest at an end (the trial moves at once, or ends moving): the
+            # end's pose is its first (last) sample alone
+            start = start or (0, 0)
+            end = end or (last - first, last - first)
             trials.append(
                 _trial(
                     rec,
