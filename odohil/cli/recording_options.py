@@ -1,11 +1,10 @@
-"""The options of every command that reads a source in place of a session
-(``import``, ``estimate``, ``export``, ``report``, ``validate``), declared and
-resolved in one place: :func:`source_options` adds them to a command, which
-receives them typed: ``recording`` (:class:`~odohil.session.trials.logs.ImportOptions`:
-format, bag topics, time association, rest thresholds), ``selection``
-(:class:`~odohil.session.results.outcome.Selection`: ``--family``/``--direction``) and
-``exclude`` (the trial numbers of ``--exclude``). A value the session layer
-refuses is reported as every bad input is (exit 2, nothing done)."""
+"""The options of every command that reads a source in place of a session (``import``,
+``estimate``, ``export``, ``report``, ``validate``), declared and resolved in one place:
+:func:`source_options` adds them to a command, which receives them typed: ``recording``
+(:class:`~odohil.session.trials.logs.ImportOptions`: format, bag topics, time association,
+rest thresholds, ``--window-m``), ``selection`` (``--family``/``--direction``: a
+:class:`~odohil.session.results.outcome.Selection`), ``exclude`` (numbers of ``--exclude``).
+A value the session layer refuses is reported as every bad input is (exit 2, nothing done)."""
 
 from __future__ import annotations
 
@@ -17,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 from odohil.cli.options import EXCLUDE_HELP, Command, add_options, choices, keyword
 from odohil.cli.render import bad_inputs
 from odohil.session.results.outcome import Selection, parse_exclude
-from odohil.session.trials.logs import FORMATS, ImportOptions
+from odohil.session.trials.logs import FORMATS, WINDOW_M_HELP, ImportOptions
 
 if TYPE_CHECKING:
     FormatChoice = StrEnum
@@ -65,7 +64,7 @@ def _parameters(format_flags: tuple[str, ...], selection: bool) -> list[inspect.
     params += [
         keyword(name, float, getattr(_DEFAULTS, field), flag, help=text)
         for name, flag, field, text in _SECONDS
-    ]
+    ] + [keyword("window_m", float | None, None, "--window-m", help=WINDOW_M_HELP)]
     if selection:
         params += [keyword(n, str | None, None, flag, help=text) for n, flag, text in _SELECTION]
     return params
@@ -79,6 +78,7 @@ def _resolve(values: dict[str, Any]) -> dict[str, Any]:
                 format=None if log_format is None else log_format.value,
                 odom_topic=values.pop("odom_topic"),
                 truth_topic=values.pop("truth_topic"),
+                window_m=values.pop("window_m"),
                 **{field: values.pop(name) for name, _, field, _ in _SECONDS},
             )
         }

@@ -143,7 +143,7 @@ def print_outcome(
         out.print(drawn(parameters_text(result, system, title)))
         checks = [f"model check: {result.model_check.verdict}"]
         print_lines(out, [*checks, f"sufficiency: {result.sufficiency.verdict}"])
-        print_lines(out, outcome_notes(outcome, system))
+    print_lines(out, outcome_notes(outcome, system))
 
 
 def check_line(check: PreflightCheck) -> Text:

@@ -11,7 +11,8 @@ from pathlib import Path
 from odohil import units
 from odohil.session.robots.description import load_robot_description
 from odohil.session.table_text import TableText
-from odohil.session.trials.logs import ImportOptions, guess_format, read_recording
+from odohil.session.text.outcome import windows_lines
+from odohil.session.trials.logs import ImportOptions, guess_format, read_cut
 from odohil.session.trials.path_trial_file import summary_rows, write_path_trials
 
 __all__ = [
@@ -26,7 +27,9 @@ class ImportSummary:
     Attributes:
         table: ``12 trials from 2 log paths, read as tum``: per path family
             and direction the trials and the distance driven, m.
-        wrote: ``wrote 12 trials (20.965 m driven) to FILE``.
+        wrote: ``wrote 12 trials (20.965 m driven) to FILE``, and with
+            ``--window-m`` how the windows went (odohil/session/text/outcome.py
+            ``windows_lines``) on the lines after.
     """
 
     table: TableText
@@ -44,7 +47,8 @@ def import_recording(
             option or description that cannot be used (nothing written).
     """
     description = load_robot_description(robot)
-    trials = read_recording(logs, description, recording)
+    cut = read_cut(logs, description, recording)
+    trials = list(cut.trials)
     written = write_path_trials(out, trials, robot=robot.stem)
     read_as = recording.format or guess_format(logs)
     title = f"{units.plural(written, 'trial')} from {units.plural(len(logs), 'log path')}"
@@ -54,6 +58,8 @@ def import_recording(
     ]
     total = sum(trial.path.distance_m for trial in trials)
     wrote = f"wrote {units.plural(written, 'trial')} ({total:.3f} m driven) to {out}"
+    if cut.windows is not None:
+        wrote = "\n".join([wrote, *windows_lines(cut.windows)])
     columns = ("family", "direction", "trials", "distance (m)")
     table = TableText(f"{title}, read as {read_as}", columns, rows, ("family", "direction"))
     return ImportSummary(table, wrote)

@@ -55,7 +55,7 @@ from odohil.session.journal.state import (
     session_path_trials,
     session_trials,
 )
-from odohil.session.trials.logs import ImportOptions, guess_format, read_recording
+from odohil.session.trials.logs import Cut, ImportOptions, WindowCount, guess_format, read_cut
 from odohil.session.trials.logs.csv_log import TIME_COLUMN
 from odohil.session.trials.path_trial_file import is_path_trial_file, read_path_trials, summary_rows
 from odohil.session.trials.trial_file import Trial, TrialSet, read_trials
@@ -100,6 +100,9 @@ class EstimateOutcome:
         path_flagged: (trial number, why) of the trials of a session with
             general paths whose pose from the marks is in doubt (the others'
             come from ``trials``).
+        windows: how a recording cut by ``--window-m`` went (windows used,
+            left out for a gap in the ground truth, partial ones dropped);
+            None otherwise.
     """
 
     source: str
@@ -113,6 +116,7 @@ class EstimateOutcome:
     torn: TornRecord | None = None
     path_trials: tuple[PathTrial, ...] = ()
     path_flagged: tuple[tuple[int, str], ...] = ()
+    windows: WindowCount | None = None
 
     @property
     def verdict(self) -> Verdict | None:
@@ -154,6 +158,8 @@ class EstimateOutcome:
                 {"family": family, "direction": direction, "trials": n, "distance_m": dist}
                 for family, direction, n, dist in summary_rows(self.path_trials)
             ]
+        if self.windows is not None:
+            data["windows"] = self.windows.to_json_dict()
         return data
 
     @property
@@ -469,27 +475,44 @@ def load_path_trials(
     selection: Selection | None = None,
 ) -> list[PathTrial]:
     """The general-path trials of a general-path trial file or a recording,
-    selected.
+    selected (:func:`load_path_cut`'s trials)."""
+    return list(load_path_cut(paths, description, recording, selection).trials)
+
+
+def load_path_cut(
+    paths: Sequence[Path],
+    description: RobotDescription | None,
+    recording: ImportOptions | None = None,
+    selection: Selection | None = None,
+) -> Cut:
+    """The general-path trials of a general-path trial file or a recording,
+    selected, and how a recording's windows went (``--window-m``).
 
     Raises:
         ParameterError: a recording without a robot description (``--robot``),
-            a selection that keeps nothing.
+            a selection that keeps nothing, ``--window-m`` on a trial file.
         TrialFileError, RecordingError: the files cannot be used.
     """
     kind = source_kind(paths, recording)
     name = ", ".join(map(str, paths))
+    recording = recording or ImportOptions()
     if kind == "path-trials":
-        trials = read_path_trials(paths[0])
+        if recording.window_m is not None:
+            raise ParameterError(
+                f"--window-m cuts a recording; {name} is a general-path trial file, "
+                "already cut into trials"
+            )
+        cut = Cut(tuple(read_path_trials(paths[0])))
     elif kind == "recording":
         if description is None:
             raise ParameterError(
                 f"--robot is needed to read the recording {name}: its [robot] geometry and "
                 "turns_exact come from the robot description"
             )
-        trials = read_recording(paths, description, recording or ImportOptions())
+        cut = read_cut(paths, description, recording)
     else:
         raise ParameterError(f"{name} is a {kind}, not a recording or a general-path trial file")
-    return (selection or Selection()).apply(trials, name)
+    return replace(cut, trials=tuple((selection or Selection()).apply(cut.trials, name)))
 
 
 def estimate_path_trials(
@@ -561,14 +584,20 @@ def estimate_source(
                 f"`odohil import`); {files[0]} is a "
                 + ("session" if kind == "session" else "trial file")
             )
+        if recording is not None and recording.window_m is not None:
+            raise ParameterError(
+                f"--window-m cuts a recording; {files[0]} is a "
+                + ("session" if kind == "session" else "trial file")
+            )
         if method not in ("robust", "joint", "paper"):
             raise ParameterError(f"--method {method}: one of robust, joint, paper")
         return estimate_path(files[0], description, exclude, method)  # type: ignore[arg-type]
-    trials = load_path_trials(files, description, recording, selection)
+    cut = load_path_cut(files, description, recording, selection)
     turns_exact = description.robot.turns_exact if description is not None else True
-    return estimate_path_trials(
-        trials, turns_exact, exclude, method, ", ".join(str(p) for p in files)
+    outcome = estimate_path_trials(
+        cut.trials, turns_exact, exclude, method, ", ".join(str(p) for p in files)
     )
+    return replace(outcome, windows=cut.windows)
 
 
 def path_export_refusals(

@@ -15,6 +15,7 @@ from odohil.science.estimators.verdict import Verdict
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.session.results.outcome import EstimateOutcome
 from odohil.session.table_text import TableText
+from odohil.session.trials.logs import WindowCount
 
 __all__ = [
     "DETECT_HELP",
@@ -29,6 +30,7 @@ __all__ = [
     "sizing_lines",
     "test_words",
     "verdict_line",
+    "windows_lines",
 ]
 
 DETECT_SYNTAX = (
@@ -188,11 +190,13 @@ def gaussian_line(
 def outcome_notes(outcome: EstimateOutcome, system: units.UnitSystem) -> list[str]:
     """What is printed below an estimate's table: the sufficiency check's
     reasons, notes, refusals, the Gaussian fit beside, and the trials left out
-    (on request, ambiguous) or flagged. Empty without an estimate."""
+    (on request, ambiguous) or flagged; how the windows of ``--window-m`` went.
+    Without an estimate only the windows."""
     result = outcome.result
+    windows = [] if outcome.windows is None else windows_lines(outcome.windows)
     if result is None:
-        return []
-    lines = [f"  - {reason}" for reason in result.sufficiency.reasons]
+        return windows
+    lines = windows + [f"  - {reason}" for reason in result.sufficiency.reasons]
     lines += [f"note: {note}" for note in result.notes] + export_refusal_lines(outcome)
     if result.gaussian:
         lines.append(gaussian_line(result, system))
@@ -209,6 +213,30 @@ def outcome_notes(outcome: EstimateOutcome, system: units.UnitSystem) -> list[st
     if outcome.flagged:
         named = ", ".join(f"{trial} ({note})" for trial, note in outcome.flagged)
         lines.append(f"flagged trials (pose from the marks in doubt): {named}")
+    return lines
+
+
+WINDOWS_NAMED = 5
+"""Most windows left out that :func:`windows_lines` names one by one."""
+
+
+def windows_lines(count: WindowCount) -> list[str]:
+    """``windows of 2 m travelled (--window-m): 29 trials, 1 left out for a
+    gap in the ground truth, 1 partial window dropped (1.08 m)``, and where
+    and why each window was left out (the first :data:`WINDOWS_NAMED`)."""
+    partial = (
+        f", {units.plural(count.partial, 'partial window')} dropped ({count.dropped_m:.3g} m)"
+        if count.partial
+        else ""
+    )
+    lines = [
+        f"windows of {count.window_m:g} m travelled (--window-m): "
+        f"{units.plural(count.used, 'trial')}, {len(count.left_out)} left out for a gap in "
+        f"the ground truth{partial}"
+    ]
+    lines += [f"  - left out: {why}" for why in count.left_out[:WINDOWS_NAMED]]
+    if len(count.left_out) > WINDOWS_NAMED:
+        lines.append(f"  - and {len(count.left_out) - WINDOWS_NAMED} more")
     return lines
 
 

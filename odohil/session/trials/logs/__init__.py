@@ -3,16 +3,19 @@
 The API (stable; the general-path estimator and ``odohil import`` call it)::
 
     read_recording(paths, description, options) -> list[PathTrial]
+    read_cut(paths, description, options) -> Cut  # the trials, and how the windows went
 
 reads the files ``paths`` in the format ``options.format`` (None: guessed by
-:func:`guess_format`), cuts them into trials (at rest, or by a given cut) and
-returns one :class:`~odohil.science.path_trials.PathTrial` per trial,
-numbered from 1 in file order. ``description`` is the robot description: its
+:func:`guess_format`), cuts them into trials (at rest, by a given cut, or
+with ``options.window_m`` into windows of travelled distance:
+odohil/session/trials/logs/windows.py) and returns one
+:class:`~odohil.science.path_trials.PathTrial` per trial, numbered from 1 in
+file order. ``description`` is the robot description: its
 ``[robot]`` geometry turns wheel counts into odometry (CSV logs with
 ``ticks_left,ticks_right``) and its ``[measurement] pose_sigma``, when given,
 is the ground truth's accuracy (odohil/session/trials/logs/recording.py).
 
-Per format (each ``(paths, description, options) -> list[PathTrial]``):
+Per format (each ``(paths, description, options) -> Cut``):
 
 - ``csv``: :func:`odohil.session.trials.logs.csv_log.read_csv_logs`, odohil's own log;
 - ``tum``: :func:`odohil.session.trials.logs.tum.read_tum_pairs`, TUM trajectory
@@ -37,8 +40,9 @@ from odohil.errors import RecordingError
 from odohil.science.path_trials import PathTrial
 from odohil.science.robot_description import RobotDescription
 from odohil.session.trials.logs.recording import ImportOptions
+from odohil.session.trials.logs.windows import WINDOW_M_HELP, Cut, WindowCount
 
-Reader = Callable[[list[Path], RobotDescription, ImportOptions], list[PathTrial]]
+Reader = Callable[[list[Path], RobotDescription, ImportOptions], Cut]
 
 READERS: dict[str, str] = {
     "csv": "odohil.session.trials.logs.csv_log:read_csv_logs",
@@ -52,8 +56,12 @@ FORMATS: tuple[str, ...] = tuple(READERS)
 __all__ = [
     "FORMATS",
     "READERS",
+    "WINDOW_M_HELP",
+    "Cut",
     "ImportOptions",
+    "WindowCount",
     "guess_format",
+    "read_cut",
     "read_recording",
     "reader",
 ]
@@ -91,17 +99,30 @@ def guess_format(paths: Sequence[Path]) -> str:
 def read_recording(
     paths: Sequence[str | Path], description: RobotDescription, options: ImportOptions
 ) -> list[PathTrial]:
-    """The trials of a recording (module docstring).
+    """The trials of a recording (module docstring; :func:`read_cut`'s trials).
 
     Raises:
         RecordingError: unreadable or unusable files (the message names the
             file, the line or message, and the field), or no trial at all.
+        ParameterError: ``--window-m`` without ``[measurement] pose_sigma``.
+    """
+    return list(read_cut(paths, description, options).trials)
+
+
+def read_cut(
+    paths: Sequence[str | Path], description: RobotDescription, options: ImportOptions
+) -> Cut:
+    """The trials of a recording and, with ``options.window_m``, how its
+    windows went (:class:`WindowCount`).
+
+    Raises:
+        as :func:`read_recording`.
     """
     files = [Path(path) for path in paths]
     if not files:
         raise RecordingError("no log file given")
     name = options.format or guess_format(files)
-    trials = reader(name)(files, description, options)
-    if not trials:
+    cut = reader(name)(files, description, options)
+    if not cut.trials:
         raise RecordingError(f"no trial in {', '.join(map(str, files))}")
-    return trials
+    return cut

@@ -34,7 +34,6 @@ import numpy as np
 
 from odohil.errors import RecordingError
 from odohil.science.odometry_paths import integrate_ticks
-from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
 from odohil.session.trials.logs.files import finite_number, read_text
@@ -43,8 +42,8 @@ from odohil.session.trials.logs.recording import (
     IntArray,
     Recording,
     check_increasing,
-    trials_of,
 )
+from odohil.session.trials.logs.windows import Cut, cut_of, joined, next_number
 
 __all__ = [
     "TIME_COLUMN",
@@ -311,15 +310,13 @@ def read_csv_log(path: Path, description: RobotDescription) -> Recording:
     )
 
 
-def read_csv_logs(
-    paths: list[Path], description: RobotDescription, options: ImportOptions
-) -> list[PathTrial]:
+def read_csv_logs(paths: list[Path], description: RobotDescription, options: ImportOptions) -> Cut:
     """The trials of odohil log CSV files, numbered from 1 in file order."""
-    trials: list[PathTrial] = []
+    cuts: list[Cut] = []
     for path in paths:
         recording = read_csv_log(path, description)
-        trials.extend(trials_of(recording, description, options, len(trials) + 1))
-    return trials
+        cuts.append(cut_of(recording, description, options, next_number(cuts)))
+    return joined(cuts)
 
 
 def write_csv_log(path: Path, recording: Recording) -> None:

@@ -36,7 +36,6 @@ import numpy as np
 from odohil.errors import RecordingError
 from odohil.science.diff_drive import DiffDriveGeometry
 from odohil.science.odometry_paths import integrate_ticks
-from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
 from odohil.science.robot_facts import DRIVE_KEYS
@@ -46,8 +45,8 @@ from odohil.session.trials.logs.recording import (
     IntArray,
     Recording,
     check_increasing,
-    trials_of,
 )
+from odohil.session.trials.logs.windows import Cut, cut_of, joined, next_number
 
 GEOMETRY_FILE = "datasets/optiodom.toml"
 """The data set's robot, in the ``odohil.robots`` package (data, not a built-in ``--robot``)."""
@@ -253,12 +252,10 @@ def joined_runs(paths: list[Path], gap_s: float = 0.05) -> Recording:
     )
 
 
-def read_optiodom(
-    paths: list[Path], description: RobotDescription, options: ImportOptions
-) -> list[PathTrial]:
+def read_optiodom(paths: list[Path], description: RobotDescription, options: ImportOptions) -> Cut:
     """The trials of optiodom run files and folders (module docstring), one
     per run, numbered from 1 in file order."""
-    trials: list[PathTrial] = []
+    cuts: list[Cut] = []
     for path in run_files(paths):
-        trials.extend(trials_of(read_run(path), description, options, len(trials) + 1))
-    return trials
+        cuts.append(cut_of(read_run(path), description, options, next_number(cuts)))
+    return joined(cuts)

@@ -25,6 +25,7 @@ import numpy as np
 import numpy.typing as npt
 
 from odohil.errors import MeasurementError, ParameterError, RecordingError
+from odohil.science.distance_windows import check_window
 from odohil.science.odometry_paths import CompressionBounds, compress_odometry, path_family
 from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray
@@ -85,6 +86,9 @@ class ImportOptions:
             starts at its first sample (ends at its last). 0: every still
             stretch is averaged, however short.
         max_truth_gap_s: longest time without a ground-truth pose in a trial, s.
+        window_m: cut into windows of this travelled wheel distance, m,
+            in place of rests and given cuts (a continuous log:
+            odohil/session/trials/logs/windows.py); None: not.
         bounds: how odometry is compressed into legs and turns.
     """
 
@@ -96,6 +100,7 @@ class ImportOptions:
     min_rest_s: float = MIN_REST_S
     min_edge_rest_s: float = MIN_EDGE_REST_S
     max_truth_gap_s: float = MAX_TRUTH_GAP_S
+    window_m: float | None = None
     bounds: CompressionBounds = field(default_factory=CompressionBounds)
 
     def __post_init__(self) -> None:
@@ -115,6 +120,8 @@ class ImportOptions:
                 raise ParameterError(
                     f"{option} must be a positive number of seconds, got {value!r}"
                 )
+        if self.window_m is not None:
+            check_window(self.window_m, "--window-m")
 
 
 @dataclass(frozen=True)

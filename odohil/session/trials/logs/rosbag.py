@@ -27,16 +27,15 @@ from typing import Any
 import numpy as np
 
 from odohil.errors import RecordingError
-from odohil.science.path_trials import PathTrial
 from odohil.science.robot_description import RobotDescription
 from odohil.session.trials.logs.files import MAX_BAG_BYTES, check_regular
 from odohil.session.trials.logs.recording import (
     ImportOptions,
     associate,
     check_increasing,
-    trials_of,
 )
 from odohil.session.trials.logs.tum import QUATERNION_TOLERANCE, heading_of
+from odohil.session.trials.logs.windows import Cut, cut_of, joined, next_number
 
 ODOMETRY_TYPE = "nav_msgs/msg/Odometry"
 TRUTH_TYPES = ("geometry_msgs/msg/PoseStamped", ODOMETRY_TYPE)
@@ -132,11 +131,9 @@ def read_topics(
     return found
 
 
-def read_bags(
-    paths: list[Path], description: RobotDescription, options: ImportOptions
-) -> list[PathTrial]:
+def read_bags(paths: list[Path], description: RobotDescription, options: ImportOptions) -> Cut:
     """The trials of ROS 2 bags, numbered from 1 in bag order."""
-    trials: list[PathTrial] = []
+    cuts: list[Cut] = []
     for path in paths:
         topics = read_topics(path, options.odom_topic, options.truth_topic)
         arrays = {}
@@ -160,5 +157,5 @@ def read_bags(
             odometry_field=f"{options.odom_topic} pose",
             truth_field=f"{options.truth_topic} pose",
         )
-        trials.extend(trials_of(recording, description, options, len(trials) + 1))
-    return trials
+        cuts.append(cut_of(recording, description, options, next_number(cuts)))
+    return joined(cuts)

@@ -19,7 +19,6 @@ from pathlib import Path
 import numpy as np
 
 from odohil.errors import RecordingError
-from odohil.science.path_trials import PathTrial
 from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
 from odohil.session.trials.logs.files import finite_number, read_text
@@ -28,8 +27,8 @@ from odohil.session.trials.logs.recording import (
     IntArray,
     associate,
     check_increasing,
-    trials_of,
 )
+from odohil.session.trials.logs.windows import Cut, cut_of, joined, next_number
 
 FIELDS = ("timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw")
 QUATERNION_TOLERANCE = 1e-3
@@ -88,16 +87,14 @@ def read_tum(path: Path) -> tuple[FloatArray, FloatArray, IntArray]:
     return t_s, np.array(poses, dtype=np.float64), lines
 
 
-def read_tum_pairs(
-    paths: list[Path], description: RobotDescription, options: ImportOptions
-) -> list[PathTrial]:
+def read_tum_pairs(paths: list[Path], description: RobotDescription, options: ImportOptions) -> Cut:
     """The trials of TUM file pairs (odometry, ground truth), numbered from 1."""
     if len(paths) % 2:
         raise RecordingError(
             f"TUM files come in pairs (odometry, ground truth); got {len(paths)} files: "
             f"{', '.join(map(str, paths))}"
         )
-    trials: list[PathTrial] = []
+    cuts: list[Cut] = []
     for odometry_path, truth_path in zip(paths[0::2], paths[1::2], strict=True):
         t_odo, odo, odo_lines = read_tum(odometry_path)
         t_truth, truth, _ = read_tum(truth_path)
@@ -113,5 +110,5 @@ def read_tum_pairs(
             odometry_field="tx ty qz qw (odometry)",
             truth_field="tx ty qz qw (ground truth)",
         )
-        trials.extend(trials_of(recording, description, options, len(trials) + 1))
-    return trials
+        cuts.append(cut_of(recording, description, options, next_number(cuts)))
+    return joined(cuts)
