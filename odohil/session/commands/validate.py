@@ -34,6 +34,7 @@ from odohil.session.results.validation import (
     ValidationPath,
     ValidationTrials,
     check_not_fitted,
+    check_turn_errors,
     default_folder,
     detectable_by_name,
     held_out_trials,
@@ -146,6 +147,11 @@ def measured_trials(
         measured = held_out_trials(vpath.file, description, recording)
         plan = None if calibration.state is None else calibration.state.plan
         check_not_fitted(plan, [d.forward for d in measured.designs])
+        if calibration.outcome.result is not None:
+            check_turn_errors(
+                measured.paths, calibration.outcome.result, description.robot.turns_exact,
+                f"--path {vpath.text}",
+            )  # fmt: skip
         return measured
     assert vpath.path is not None  # a general path
     if drives(vpath, port, measure):
@@ -294,7 +300,9 @@ def validation_setup(
 ) -> ValidationSetup:
     """``--alpha`` and ``--path`` checked, the calibration ``session`` (a
     session, a trial file or a recording) estimated without ``exclude``, and
-    the robot description (``--robot``'s, else the session's); before anything moves.
+    the robot description (``--robot``'s, else the session's); a path whose
+    turns the calibration has no turn error for refused (:func:`check_turn_errors`);
+    before anything moves.
 
     Raises:
         ParameterError, RobotDescriptionError, JournalError, MeasurementError,
@@ -306,6 +314,10 @@ def validation_setup(
     calibration = load_calibration(session, exclude, given, recording)
     robot = calibration_robot(calibration, robot_file)
     result = calibration.outcome.result
+    if result is not None and vpath.path is not None:  # a file's paths: held_out
+        check_turn_errors(
+            [vpath.path], result, robot.description.robot.turns_exact, f"--path {vpath.text}"
+        )
     if detect is not None and result is not None:  # checked before anything moves
         parse_detect(detect, tuple(p.name for p in result.parameters))
     return ValidationSetup(vpath, calibration, robot, detect, alpha)

@@ -41,10 +41,11 @@ from odohil.errors import (
 )
 from odohil.science.estimators import EstimateResult
 from odohil.science.limits import RANGES
+from odohil.science.moments import turn_errors_from
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.science.path_designs import PATH_KINDS, PathDesign, parse_path_design
 from odohil.science.path_trials import PathTrial
-from odohil.science.paths import Design, EncoderPath, FloatArray, Variant
+from odohil.science.paths import TURN_CLASSES, Design, EncoderPath, FloatArray, Variant
 from odohil.science.robot_description import RobotDescription
 from odohil.science.validation import (
     DEFAULT_ALPHA,
@@ -90,6 +91,7 @@ __all__ = [
     "ValidationTrials",
     "check_not_fitted",
     "check_trials",
+    "check_turn_errors",
     "default_folder",
     "detectable_by_name",
     "held_out_trials",
@@ -282,6 +284,60 @@ def check_not_fitted(plan: Plan | None, designs: Sequence[Design | PathDesign]) 
                 f"--path: {design.forward.label()} is a design of the calibration's plan; "
                 "validate on a path the fit did not use"
             )
+
+
+TURN_PLAN = (
+    "k=1,l=2,n=10,variant=reverse;k=0.5,l=2,n=10,variant=reverse;"
+    "path=polygon:3,0.5,cw,n=10;path=polygon:3,0.5,ccw,n=10"
+)
+"""A calibration plan that fits the turn errors: straight runs and triangles both ways."""
+
+
+def check_turn_errors(
+    paths: Sequence[EncoderPath], calibration: EstimateResult, turns_exact: bool, option: str
+) -> None:
+    """A path that turns in a way no turn error of the calibration covers
+    is refused on a robot whose turns are not exact (``turns_exact = false``):
+    the prediction would miss every turn's error, so a right calibration fails
+    (a Create 2 calibrated on ``reverse`` designs only, then a square: a
+    heading bias of -4 deg, z -7). One check, before anything moves or is
+    tested: ``odohil validate`` (driven, pose files, trial files) and the
+    wizard's validation.
+
+    Raises:
+        ParameterError: naming ``option``, the turns without a turn error and
+            how to calibrate them.
+    """
+    if turns_exact:
+        return
+    turned = np.zeros(len(TURN_CLASSES))
+    for path in paths:
+        turned += path.turns.total_abs_rad
+    names = [p.name for p in calibration.parameters]
+    covered = turn_errors_from(names, [1.0] * len(names)).scales != 0.0
+    missing = [c for row, c in enumerate(TURN_CLASSES) if turned[row] > 0 and not covered[row]]
+    if not missing:
+        return
+    kinds = " and ".join(
+        words
+        for kind, words in (("spin", "turns in place"), ("arc", "arcs"))
+        if any(c.startswith(kind) for c in missing)
+    )
+    fitted = [n for n in names if n.startswith("e_turn") or n == "K_spin"]
+    has = (
+        f"its turn errors ({', '.join(fitted)}) cover none of them"
+        if fitted
+        else "it has no e_turn, no K_spin (only a plan with squares or polygons fits them)"
+    )
+    raise ParameterError(
+        f"{option}: this robot's turns are not exact (turns_exact = false) and the path makes "
+        f"{kinds} ({', '.join(missing)}), but the calibration estimated no turn error for "
+        f"them: {has}. Its prediction would miss each turn's error, so even a right "
+        "calibration would fail. Calibrate with squares or triangles both ways beside the "
+        f'straight runs (e.g. --plan "{TURN_PLAN}", or path=square:0.5,cw,n=10;'
+        "path=square:0.5,ccw,n=10), or validate on a path without turns "
+        "(forth-back:K,L,reverse). Nothing was driven or tested."
+    )
 
 
 @dataclass(frozen=True)

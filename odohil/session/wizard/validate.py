@@ -36,6 +36,7 @@ from odohil.session.results.validation import (
     Calibration,
     ValidationPath,
     check_trials,
+    check_turn_errors,
     default_folder,
     load_calibration,
     parse_validation_path,
@@ -163,7 +164,9 @@ def guided_validation(
     Raises:
         ParameterError: a path the wizard does not drive (``file:``), no
             ``--trials`` for a new validation, a path the calibration was
-            fitted on, or a calibration that is no session.
+            fitted on, a path whose turns the calibration has no turn error
+            for (odohil/session/results/validation.py ``check_turn_errors``),
+            or a calibration that is no session.
         JournalError: the folder holds another path's validation, or the
             calibration's journal is corrupt.
         RobotDescriptionError: a ``--robot`` that cannot be used.
@@ -191,6 +194,11 @@ def guided_validation(
     calibration = load_calibration(session)
     drive_folder(vpath, calibration, session, target)  # a session, not fitted on the path
     robot = calibration_robot(calibration, robot_file)
+    if calibration.outcome.result is not None and vpath.path is not None:
+        check_turn_errors(  # as odohil validate
+            [vpath.path], calibration.outcome.result, robot.description.robot.turns_exact,
+            f"--path {path_text}",
+        )  # fmt: skip
     sizing = None
     if detect is not None and not continued and calibration.outcome.result is not None:
         sizing = size_validation(
