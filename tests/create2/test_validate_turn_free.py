@@ -86,7 +86,9 @@ def test_a_driven_square_is_refused_before_anything_moves(turn_free: Path, direc
         "--json",
     )  # fmt: skip
     assert code == EXIT_BAD_INPUT, err  # it drove 15 squares and exited 3
-    assert not out.strip()
+    refused = json.loads(out)  # --json: the refusal as one object (issue 30)
+    assert (refused["status"], refused["exit_code"]) == ("refused", EXIT_BAD_INPUT)
+    says_what_to_do(refused["error"])
     says_what_to_do(err)
     assert not folder.exists()  # no validation session: nothing was driven
 

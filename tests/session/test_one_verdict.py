@@ -113,8 +113,11 @@ def test_every_command_gives_the_session_one_verdict(tmp_path: Path, name: str) 
     statuses["export"] = status_of(json.loads(forced.stdout) if forced.exit_code == 0 else None)
 
     trials = tmp_path / "validation.csv"
+    # turns with error: validated without turns (turn trials are refused, exit 2,
+    # when the calibration fitted no turn errors: tests/create2/test_validate_turn_free.py)
+    variant = "reverse" if name == "turns-with-error" else "turn"
     made = invoke("simulate", "--k", "2", "--l", "1.5", "--trials", "5", "--seed", "1",
-                  "--out", trials)  # fmt: skip
+                  "--variant", variant, "--out", trials)  # fmt: skip
     assert made.exit_code == 0, made.output
     checked = invoke("validate", session, "--path", f"file:{trials}", "--json")
     assert checked.exit_code == validate_exit, checked.output
