@@ -95,7 +95,8 @@ def _header(path: Path, fields: list[str], line: int) -> tuple[str, ...]:
 
 _COMMAS = operator.methodcaller("count", ",")
 _NEWLINE, _COMMA, _SPACE = 10, 44, 32
-_NOT_IN_NUMBERS = np.frombuffer(b' \t\r"#', dtype=np.uint8)
+_NOT_IN_NUMBERS = np.zeros(256, dtype=np.bool_)
+_NOT_IN_NUMBERS[np.frombuffer(b' \t\r"#', dtype=np.uint8)] = True
 """Bytes that send a piece to the other readers when among the numbers
 (``fromstring`` skips white space where ``float`` would refuse a blank field)."""
 _PIECE_BYTES = 4 * 1024 * 1024
@@ -289,7 +290,7 @@ def _piece_values(
         inside[first] += 1
         inside[stop] -= 1
         in_label = np.cumsum(inside[:-1], dtype=np.int64) > 0
-        if np.isin(data[~in_label], _NOT_IN_NUMBERS).any():
+        if _NOT_IN_NUMBERS[data[~in_label]].any():
             return None
         kept = data[in_label | _at(data.size, stop)]
         kept[kept == _COMMA] = _NEWLINE
@@ -307,7 +308,7 @@ def _piece_values(
         given = list(map(stripped.__getitem__, raw))
         data[in_label] = _SPACE
         data[stop if label < columns - 1 else first - 1] = _SPACE
-    elif np.isin(data, _NOT_IN_NUMBERS).any():
+    elif _NOT_IN_NUMBERS[data].any():
         return None
     data[ends] = _COMMA
     with warnings.catch_warnings():
