@@ -27,16 +27,20 @@ from __future__ import annotations
 import csv
 import math
 import operator
+import warnings
+from contextlib import closing
 from dataclasses import dataclass
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from odohil.errors import RecordingError
 from odohil.science.odometry_paths import integrate_ticks
 from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
-from odohil.session.trials.logs.files import finite_number, read_text
+from odohil.session.trials.logs.files import finite_number, read_pieces, read_text
 from odohil.session.trials.logs.recording import (
     ImportOptions,
     IntArray,
@@ -89,6 +93,13 @@ def _header(path: Path, fields: list[str], line: int) -> tuple[str, ...]:
 
 
 _COMMAS = operator.methodcaller("count", ",")
+_NEWLINE, _COMMA, _SPACE = 10, 44, 32
+_NOT_IN_NUMBERS = np.zeros(256, dtype=np.bool_)
+_NOT_IN_NUMBERS[np.frombuffer(b' \t\r"#', dtype=np.uint8)] = True
+"""Bytes that send a piece to the other readers when among the numbers
+(``fromstring`` skips white space where ``float`` would refuse a blank field)."""
+_PIECE_BYTES = 4 * 1024 * 1024
+"""Bytes of the file parsed at once by the piecewise reader."""
 _CHUNK_CHARS = 4 * 1024 * 1024
 """Characters of text split into rows at once by the fast reader (bounds its
 lists of fields to a few tens of MB whatever the log's size)."""
@@ -195,6 +206,128 @@ def _fast_rows(path: Path, text: str, chunk_chars: int = _CHUNK_CHARS) -> _Rows 
     return _Rows(names, t, odometry, truth, where, labels)
 
 
+def _piece_rows(path: Path, piece_bytes: int = _PIECE_BYTES) -> _Rows | None:
+    """The rows of the log at ``path``, read a piece of a few MB at a time
+    and parsed without a Python object per number (:func:`_piece_values`),
+    or None for anything :func:`_fast_rows` or the slow reader must see (the
+    file is then read whole; errors of reading raise here already)."""
+    pieces = read_pieces(path, piece_bytes=piece_bytes)
+    with closing(pieces):
+        first, found = b"", None
+        while found is None:
+            piece = next(pieces, None)
+            if piece is None:
+                return None
+            first += piece
+            try:
+                text = first.decode("utf-8")
+            except UnicodeDecodeError:
+                return None
+            found = _first_line(text)
+        if '"' in text[: found[1]]:
+            return None
+        header_line, offset, header = found
+        names = _header(path, next(csv.reader([header])), header_line)
+        odo_names = POSE_COLUMNS if POSE_COLUMNS[0] in names else TICK_COLUMNS
+        numeric = [TIME_COLUMN, *odo_names, *TRUTH_COLUMNS]
+        label = names.index(TRIAL_COLUMN) if TRIAL_COLUMN in names else None
+        parts: list[FloatArray] = []
+        labels: list[str] = []
+        rows = 0
+        for piece in chain([first[len(text[:offset].encode("utf-8")) :]], pieces):
+            parsed = _piece_values(piece, len(names), label)
+            if parsed is None:
+                return None
+            values, given = parsed
+            rows += values.shape[0]
+            if rows > MAX_ROWS:
+                return None
+            parts.append(values)
+            labels.extend(given)
+    if rows == 0:
+        return None
+    table = np.concatenate(parts)
+    del parts
+    kept = [name for name in names if name != TRIAL_COLUMN]
+    columns = [kept.index(name) for name in numeric]
+    if not np.isfinite(table).all():
+        return None
+    t = np.ascontiguousarray(table[:, columns[0]])
+    odometry = np.ascontiguousarray(table[:, columns[1 : 1 + len(odo_names)]])
+    truth = np.ascontiguousarray(table[:, columns[1 + len(odo_names) :]])
+    where = np.arange(header_line + 1, header_line + 1 + rows, dtype=np.int64)
+    return _Rows(names, t, odometry, truth, where, labels)
+
+
+def _piece_values(
+    piece: bytes, columns: int, label: int | None
+) -> tuple[FloatArray, list[str]] | None:
+    """The numbers of a piece of whole lines, (rows, numeric columns), by one
+    ``np.fromstring`` over its bytes with the trial labels blanked out and
+    the newlines made commas, and the labels; None unless every line has
+    ``columns`` fields, no space, tab, CR, quote or comment among the numbers
+    and every number field is one number (the other readers then look)."""
+    if not piece:
+        return np.empty((0, columns - (label is not None))), []
+    if not piece.endswith(b"\n"):
+        piece += b"\n"
+    data = np.frombuffer(piece, dtype=np.uint8).copy()
+    ends = np.flatnonzero(data == _NEWLINE)
+    commas = np.flatnonzero(data == _COMMA)
+    lines = ends.size
+    if commas.size != lines * (columns - 1):
+        return None
+    per_line = commas.reshape(lines, columns - 1)
+    starts = np.concatenate(([0], ends[:-1] + 1))
+    if not (np.all(per_line[:, 0] >= starts) and np.all(per_line[:, -1] < ends)):
+        return None  # a newline inside a line's commas: a short or long line
+    given: list[str] = []
+    if label is not None:
+        first = starts if label == 0 else per_line[:, label - 1] + 1
+        stop = ends if label == columns - 1 else per_line[:, label]
+        inside = np.zeros(data.size + 1, dtype=np.int8)
+        inside[first] += 1
+        inside[stop] -= 1
+        in_label = np.cumsum(inside[:-1], dtype=np.int64) > 0
+        if _NOT_IN_NUMBERS[data[~in_label]].any():
+            return None
+        kept = data[in_label | _at(data.size, stop)]
+        kept[kept == _COMMA] = _NEWLINE
+        try:
+            raw = kept.tobytes().decode("utf-8").splitlines()
+        except UnicodeDecodeError:
+            return None
+        if len(raw) != lines or any('"' in value for value in raw):
+            return None  # a line break splitlines sees inside a label, a quote
+        stripped = {value: value.strip() for value in set(raw)}
+        if max(map(len, stripped.values())) > MAX_TRIAL_LABEL:
+            return None
+        if label == 0 and any(value.startswith("#") for value in stripped.values()):
+            return None  # a comment line
+        given = list(map(stripped.__getitem__, raw))
+        data[in_label] = _SPACE
+        data[stop if label < columns - 1 else first - 1] = _SPACE
+    elif _NOT_IN_NUMBERS[data].any():
+        return None
+    data[ends] = _COMMA
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecationWarning)
+        try:
+            values = np.fromstring(data.tobytes(), dtype=np.float64, sep=",")
+        except (ValueError, DeprecationWarning):
+            return None
+    numbers = columns - (label is not None)
+    if values.size != lines * numbers:
+        return None
+    return values.reshape(lines, numbers), given
+
+
+def _at(size: int, positions: IntArray) -> npt.NDArray[np.bool_]:
+    mask = np.zeros(size, dtype=np.bool_)
+    mask[positions] = True
+    return mask
+
+
 def _floats(column: list[str], may_be_empty: bool) -> FloatArray:
     """``float`` of every field (NaN for an empty one where ``may_be_empty``).
 
@@ -285,9 +418,11 @@ def read_csv_log(path: Path, description: RobotDescription) -> Recording:
         RecordingError: unreadable file, bad header, a bad value (the message
             names the line and the column), time not increasing.
     """
-    text = read_text(path)
-    parsed = _fast_rows(path, text) or _checked_rows(path, text)
-    del text
+    parsed = _piece_rows(path)
+    if parsed is None:
+        text = read_text(path)
+        parsed = _fast_rows(path, text) or _checked_rows(path, text)
+        del text
     names, t, lines, odo = parsed.names, parsed.t_s, parsed.where, parsed.odometry
     check_increasing(t, lines, str(path), TIME_COLUMN, "line")
     if odo.shape[1] == 2:

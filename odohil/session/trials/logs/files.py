@@ -8,10 +8,11 @@ it is opened: a typo on the command line must not hang or exhaust the machine.
 from __future__ import annotations
 
 import math
+from collections.abc import Generator
 from pathlib import Path
 
 from odohil.errors import RecordingError
-from odohil.session.bounded_io import check_regular_file, read_file_text
+from odohil.session.bounded_io import check_regular_file, read_file_pieces, read_file_text
 
 MAX_TEXT_BYTES = 512 * 1024 * 1024
 """Largest text log read, bytes (about 5 million rows of a CSV log)."""
@@ -41,6 +42,25 @@ def read_text(path: Path, max_bytes: int = MAX_TEXT_BYTES) -> str:
     """
     return read_file_text(
         path, what="log", max_bytes=max_bytes, error=RecordingError, max_line_bytes=MAX_LINE_BYTES
+    )
+
+
+def read_pieces(
+    path: Path, max_bytes: int = MAX_TEXT_BYTES, piece_bytes: int = 4 * 1024 * 1024
+) -> Generator[bytes, None, None]:
+    """The bytes of the regular file ``path`` in pieces of whole lines, checked
+    as :func:`read_text` checks them (but for UTF-8: the reader decodes).
+
+    Raises:
+        RecordingError: as :func:`read_text`.
+    """
+    return read_file_pieces(
+        path,
+        what="log",
+        max_bytes=max_bytes,
+        error=RecordingError,
+        max_line_bytes=MAX_LINE_BYTES,
+        piece_bytes=piece_bytes,
     )
 
 
