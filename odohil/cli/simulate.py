@@ -25,8 +25,7 @@ from odohil.cli.options import (
 )
 from odohil.science.paths import Design
 from odohil.science.simulator import DEFAULT_SEGMENT_M
-from odohil.science.simulator import simulate as run_simulation
-from odohil.session.commands.design import check_simulation, fresh_seed, write_simulated_trials
+from odohil.session.commands import design as tools
 
 _PROGRESS_AFTER_S = 1.0
 
@@ -66,6 +65,15 @@ def simulate(
         option("--seed", bound="seed", help="Random seed; default: fresh, reported."),
     ] = None,
     segment_m: Annotated[float, SEGMENT_OPTION] = DEFAULT_SEGMENT_M,
+    as_driven_flag: Annotated[
+        bool,
+        typer.Option(
+            "--as-driven",
+            help="Trials as a plan of "
+            "the design drives them (a one-way design's go out and back: every other row "
+            "VARIANT-backward), so `run --measure FILE` serves that plan.",
+        ),
+    ] = False,
     *,
     params: Parameters,
 ) -> None:
@@ -78,19 +86,18 @@ def simulate(
     err = Console(stderr=True)
     with usage_errors():
         design = Design(k, l_m, variant.value)
-        check_simulation(design, trials, segment_m, out)
+        tools.check_simulation(design, trials, segment_m, out)
     if seed is None:
-        seed = fresh_seed()
+        seed = tools.fresh_seed()
         err.print(f"seed {seed}", highlight=False)
     progress = _LazyProgress(trials, err)
     try:
-        result = run_simulation(
-            design.path(), params, trials, seed=seed, segment_m=segment_m, progress=progress
-        )
+        designs = tools.as_driven(design, trials) if as_driven_flag else (design,) * trials
+        poses = tools.simulate_as_driven(designs, params, seed, segment_m, progress)
     finally:
         progress.stop()
     try:
-        write_simulated_trials(out, design, result.pose_change)
+        tools.write_simulated_trials(out, designs, poses)
     except OSError as exc:
         raise typer.BadParameter(f"cannot write {str(out)!r}: {exc}", param_hint="--out") from exc
     err.print(

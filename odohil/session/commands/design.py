@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -20,15 +21,25 @@ from odohil.science.covariance import SimulatedMoments, predicted_moments, simul
 from odohil.science.limits import check_simulation_work, segments_of
 from odohil.science.moments import PoseMoments
 from odohil.science.parameters import SI_UNITS, ErrorParameters
-from odohil.science.paths import Design, EncoderPath, FloatArray, Variant, square
+from odohil.science.paths import (
+    Design,
+    EncoderPath,
+    FloatArray,
+    Variant,
+    floor_choreography,
+    square,
+)
+from odohil.science.simulator import simulate
 
 __all__ = [
+    "as_driven",
     "check_simulation",
     "covariance_document",
     "fresh_seed",
     "named_path",
     "path_moments",
     "predict_document",
+    "simulate_as_driven",
     "write_simulated_trials",
 ]
 
@@ -198,23 +209,68 @@ def check_simulation(design: Design, trials: int, segment_m: float, out: Path) -
         raise ParameterError(f"--out: {str(out)!r} is a folder")
 
 
-def write_simulated_trials(out: Path, design: Design, pose_change: FloatArray) -> None:
+def write_simulated_trials(
+    out: Path, design: Design | Sequence[Design], pose_change: FloatArray
+) -> None:
     """Write the trial file (a header, then one row per trial, floats in full
     precision: k, l_m m, variant, dx_m, dy_m m in the start frame,
     dtheta_rad) through a temporary file next to ``out`` and a rename: never
-    a half-written ``out``.
+    a half-written ``out``. ``design``: every row's, or each row's in turn (a
+    backward one's variant written with ``-backward``, as the reader takes it).
 
     Raises:
         OSError: it cannot be written.
     """
+    rows = [design] * len(pose_change) if isinstance(design, Design) else list(design)
     handle, temporary = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
     try:
         with os.fdopen(handle, "w", encoding="utf-8", newline="") as stream:
             stream.write(TRIAL_FILE_HEADER + "\n")
-            prefix = f"{float(design.k)!r},{float(design.l_m)!r},{design.variant},"
-            for dx, dy, dtheta in pose_change.tolist():
+            for row, (dx, dy, dtheta) in zip(rows, pose_change.tolist(), strict=True):
+                prefix = f"{float(row.k)!r},{float(row.l_m)!r},{row.variant_text},"
                 stream.write(f"{prefix}{dx!r},{dy!r},{dtheta!r}\n")
         os.replace(temporary, out)
     except BaseException:
         Path(temporary).unlink(missing_ok=True)
         raise
+
+
+def as_driven(design: Design, trials: int) -> tuple[Design, ...]:
+    """Each of ``trials`` trials of ``design`` as a plan of it drives them
+    (odohil/science/paths.py ``floor_choreography``): a one-way design's
+    trials go out and back, every other one backwards; a two-way design's all
+    forwards."""
+    driven = floor_choreography([(design, trials)])
+    return tuple(driven.trial(number)[0] for number in range(1, trials + 1))
+
+
+def simulate_as_driven(
+    designs: Sequence[Design],
+    params: ErrorParameters,
+    seed: int,
+    segment_m: float,
+    progress: Callable[[int], None] | None = None,
+) -> FloatArray:
+    """The real pose change (n x 3: dx m, dy m, dtheta rad) of each trial of
+    ``designs`` in turn, one simulation a direction: the forward trials with
+    ``seed`` (so an all-forward list gives what one simulation of ``seed``
+    gives), the backward ones with the seed sequence (``seed``, 1)."""
+    poses = np.empty((len(designs), 3))
+    done = 0
+    for backward in (False, True):
+        rows = [i for i, d in enumerate(designs) if d.backward == backward]
+        if not rows:
+            continue
+        start = done
+
+        def step(count: int, start: int = start) -> None:
+            if progress is not None:
+                progress(start + count)
+
+        rng = seed if not backward else np.random.default_rng(np.random.SeedSequence([seed, 1]))
+        result = simulate(
+            designs[rows[0]].path(), params, len(rows), seed=rng, segment_m=segment_m, progress=step
+        )
+        poses[rows] = result.pose_change
+        done += len(rows)
+    return poses
