@@ -145,7 +145,7 @@ def test_with_triangles_the_square_passes_and_a_worse_robot_fails(
         url = URL.format(seed=SEED + 100) + ("&turn_scale=0.03" if worse else "")
         code, out, err = odohil(
             "validate", str(turning), "--port", url, "--robot", "create2", "--path", path,
-            "--trials", "15", "--measure", "fake", "--seed", str(SEED + 100),
+            "--trials", "8", "--measure", "fake", "--seed", str(SEED + 100),
             "--out", str(turning / "validation" / f"{direction}-{worse}"), "--force", "--json",
         )  # fmt: skip
         data = json.loads(out)
