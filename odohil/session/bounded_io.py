@@ -157,15 +157,7 @@ def read_fd_bytes(
             chunk = os.read(fd, min(CHUNK_BYTES, max_bytes + 1 - size))
             if not chunk:
                 return b"".join(chunks)
-            size += len(chunk)
-            if size > max_bytes:
-                raise error(
-                    f"{source}: more than the limit of {_size_text(max_bytes)} "
-                    "(it grew while being read)"
-                )
-            problem = lines.feed(chunk)
-            if problem is not None:
-                raise error(f"{source}: {problem}")
+            size = _checked(chunk, size, lines, source, max_bytes, error)
             chunks.append(chunk)
     except BlockingIOError:
         raise error(f"{source}: would block; odohil reads only regular files") from None
@@ -212,15 +204,7 @@ def read_file_pieces(
                 if held:
                     yield held
                 return
-            size += len(chunk)
-            if size > max_bytes:
-                raise error(
-                    f"{source}: more than the limit of {_size_text(max_bytes)} "
-                    "(it grew while being read)"
-                )
-            problem = lines.feed(chunk)
-            if problem is not None:
-                raise error(f"{source}: {problem}")
+            size = _checked(chunk, size, lines, source, max_bytes, error)
             end = chunk.rfind(b"\n") + 1
             if end == 0:
                 held += chunk
@@ -230,6 +214,31 @@ def read_file_pieces(
             yield piece
     finally:
         os.close(fd)
+
+
+def _checked(
+    chunk: bytes,
+    size: int,
+    lines: _LineCounter,
+    source: str,
+    max_bytes: int,
+    error: type[OdohilError],
+) -> int:
+    """The bytes read so far once ``chunk`` is counted in (its lines checked by
+    ``lines``).
+
+    Raises:
+        error: the file grew past ``max_bytes`` while being read, or a line is too long.
+    """
+    size += len(chunk)
+    if size > max_bytes:
+        raise error(
+            f"{source}: more than the limit of {_size_text(max_bytes)} (it grew while being read)"
+        )
+    problem = lines.feed(chunk)
+    if problem is not None:
+        raise error(f"{source}: {problem}")
+    return size
 
 
 class _LineCounter:
