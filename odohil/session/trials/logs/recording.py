@@ -27,7 +27,7 @@ import numpy.typing as npt
 from odohil.errors import MeasurementError, ParameterError, RecordingError
 from odohil.science.distance_windows import check_window
 from odohil.science.odometry_paths import CompressionBounds, compress_odometry, path_family
-from odohil.science.path_trials import PathTrial
+from odohil.science.path_trials import Direction, PathTrial
 from odohil.science.paths import FloatArray
 from odohil.science.rest_cutting import (
     EDGE_MOVE_M,
@@ -227,23 +227,46 @@ def _trial(
     start = (start[0], _held_until(rec.odometry, start[0], start[1]))
     end = (_held_from(rec.odometry, end[0], end[1]), end[1])
     first, last = start[1], end[0]
+    start_poses = _truth_in(rec, start[0], start[1], "start")
+    end_poses = _truth_in(rec, end[0], end[1], "end")
+    return path_trial(
+        rec, first, last,
+        (mean_pose(start_poses), _rest_cov(start_poses, description, end_poses)),
+        (mean_pose(end_poses), _rest_cov(end_poses, description, start_poses)),
+        options, number, "trial",
+    )  # fmt: skip
+
+
+def path_trial(
+    rec: Recording,
+    first: int,
+    last: int,
+    start: tuple[tuple[float, float, float], FloatArray],
+    end: tuple[tuple[float, float, float], FloatArray],
+    options: ImportOptions,
+    number: int,
+    kind: str,
+    family: tuple[str, Direction] | None = None,
+) -> PathTrial:
+    """Trial ``number`` of samples ``first``..``last``: the odometry between as
+    its encoder path, the change from the truth pose ``start`` to ``end``
+    ((x m, y m, theta rad), 3x3 covariance each) as its measurement; named
+    ``kind`` ("trial", "window") in messages; (family, direction) as
+    ``path_family`` tells them unless given.
+
+    Raises:
+        RecordingError: the odometry between is no path (the sample named).
+    """
     try:
         path = compress_odometry(
-            rec.odometry[first : last + 1], options.bounds, name=f"{rec.source} trial {number}"
+            rec.odometry[first : last + 1], options.bounds, name=f"{rec.source} {kind} {number}"
         )
     except (MeasurementError, ParameterError) as exc:
         raise RecordingError(f"{rec.at(first)}: {rec.odometry_field}: {exc}") from None
-    start_poses = _truth_in(rec, start[0], start[1], "start")
-    end_poses = _truth_in(rec, end[0], end[1], "end")
     change, cov = measured_change(
-        mean_pose(start_poses),
-        mean_pose(end_poses),
-        _rest_cov(start_poses, description, end_poses),
-        _rest_cov(end_poses, description, start_poses),
-        path.net_turn_rad,
-        path.winding_rad,
+        start[0], end[0], start[1], end[1], path.net_turn_rad, path.winding_rad
     )
-    family, direction = path_family(path)
+    named, direction = path_family(path) if family is None else family
     return PathTrial(
         path=path,
         pose_change=change,
@@ -251,7 +274,7 @@ def _trial(
         source=rec.source,
         span_s=(float(rec.t_s[first]), float(rec.t_s[last])),
         trial=number,
-        family=family,
+        family=named,
         direction=direction,
     )
 

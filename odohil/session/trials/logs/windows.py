@@ -24,13 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from odohil.errors import MeasurementError, ParameterError, RecordingError
+from odohil.errors import ParameterError, RecordingError
 from odohil.science.distance_windows import distance_windows
-from odohil.science.odometry_paths import compress_odometry
 from odohil.science.path_trials import PathTrial
-from odohil.science.rest_cutting import measured_change
 from odohil.science.robot_description import RobotDescription
-from odohil.session.trials.logs.recording import ImportOptions, Recording, trials_of
+from odohil.session.trials.logs.recording import ImportOptions, Recording, path_trial, trials_of
 
 WINDOW_FAMILY = "window"
 """The path family of every window, its direction ``mixed``: the windows are
@@ -196,28 +194,10 @@ def _window_trial(
     options: ImportOptions,
     number: int,
 ) -> PathTrial:
-    try:
-        path = compress_odometry(
-            rec.odometry[first : last + 1], options.bounds, name=f"{rec.source} window {number}"
-        )
-    except (MeasurementError, ParameterError) as exc:
-        raise RecordingError(f"{rec.at(first)}: {rec.odometry_field}: {exc}") from None
     start, end = rec.truth[first], rec.truth[last]
-    change, cov = measured_change(
-        (float(start[0]), float(start[1]), float(start[2])),
-        (float(end[0]), float(end[1]), float(end[2])),
-        pose_cov,
-        pose_cov,
-        path.net_turn_rad,
-        path.winding_rad,
-    )
-    return PathTrial(
-        path=path,
-        pose_change=change,
-        measurement_cov=cov,
-        source=rec.source,
-        span_s=(float(rec.t_s[first]), float(rec.t_s[last])),
-        trial=number,
-        family=WINDOW_FAMILY,
-        direction="mixed",
-    )
+    return path_trial(
+        rec, first, last,
+        ((float(start[0]), float(start[1]), float(start[2])), pose_cov),
+        ((float(end[0]), float(end[1]), float(end[2])), pose_cov),
+        options, number, "window", (WINDOW_FAMILY, "mixed"),
+    )  # fmt: skip
