@@ -303,6 +303,8 @@ class Create2Engine:
 
     def truth(self, now: float | None = None) -> Create2Truth:
         """The true state and logs (the side channel; never on the wire)."""
+        if now is None:
+            now = self.clock()
         self.poll(now)
         x, y, theta = self.body.true_pose()
         return Create2Truth(
@@ -326,6 +328,7 @@ class Create2Engine:
             dropped_out_bytes=self.dropped_out_bytes,
             baud=self.baud,
             motion_lost_s=self.motion_lost_s(now),
+            wall_s=now - self.wall0,
         )
 
     def event(self, name: str) -> None:

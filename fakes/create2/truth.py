@@ -59,6 +59,9 @@ class Create2Truth:
         motion_lost_s: wall seconds the motion has been held because the host
             was behind in reading (the pty fake's bound,
             fakes/create2/clock.py ``ReadBoundClock``), s.
+        wall_s: wall seconds since the robot started: the clock of
+            ``CommandRecord.wall_s`` (``sim_time_s`` is the motion's clock,
+            scaled and held while the host is behind), s.
     """
 
     sim_time_s: float
@@ -81,6 +84,7 @@ class Create2Truth:
     dropped_out_bytes: int = 0
     baud: int = 115200
     motion_lost_s: float = 0.0
+    wall_s: float = 0.0
 
     def to_json(self) -> str:
         """One JSON line (no newline)."""

@@ -70,6 +70,20 @@ def test_a_starved_host_finds_the_wheels_at_most_the_bound_on() -> None:
     assert engine.truth().travel_m - back.travel_m == pytest.approx(SPEED_MM_S * 0.03 / 1000.0)
 
 
+def test_the_truth_gives_the_wall_clock_its_command_log_is_on() -> None:
+    # the command log is stamped in wall seconds since the start; the motion's
+    # clock is held while frames lie unread (after a host has gone, for good):
+    # a test placing a stop on its own clock needs the wall time, not the motion's
+    engine, wall = _driving(HOST_BOUND_S)
+    wall[0] = 134 * TICK_S
+    engine.receive(direct(0, 0))
+    wall[0] = 300 * TICK_S  # the host gone, the stream still on
+    snap = engine.truth()
+    assert snap.commands[-1].wall_s == pytest.approx(134 * TICK_S)
+    assert snap.wall_s == pytest.approx(300 * TICK_S)
+    assert snap.sim_time_s < snap.wall_s - 1.0  # the motion's clock is no stand-in
+
+
 def test_a_host_that_keeps_up_sees_wall_time() -> None:
     engine, wall = _driving(HOST_BOUND_S)
     for tick in range(1, 101):  # it reads each frame 5 ms after its tick

@@ -44,6 +44,7 @@ import pytest
 from typer.testing import CliRunner
 
 from fakes.create2.process import Create2Process
+from fakes.create2.truth import Create2Truth
 from fakes.nomad.process import EmulatorProcess
 from fakes.nomad.truth import TruthClient
 from odohil.cli.app import app
@@ -337,10 +338,13 @@ class Fake:
         return snap.moving, snap.true_x_m, snap.true_y_m
 
     def wall0(self) -> float:
-        """The fake's start on our monotonic clock (its time scale is 1)."""
+        """The fake's start on our monotonic clock (its time scale is 1). The
+        Create 2's motion clock is held while frames lie unread, as they do
+        once odohil has gone: its wall clock, not its motion's, places a stop."""
         before = time.monotonic()
         snap = self.process.truth()
-        return (before + time.monotonic()) / 2 - snap.sim_time_s
+        since = snap.wall_s if isinstance(snap, Create2Truth) else snap.sim_time_s
+        return (before + time.monotonic()) / 2 - since
 
 
 def _nomad_stops(fake: Fake) -> list[float]:
