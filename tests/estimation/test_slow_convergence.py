@@ -27,8 +27,10 @@ SESSION = Path(__file__).parent / "data" / "create2_turns_seed12.jsonl"
 def test_a_fit_that_creeps_to_its_root_converges(method: str) -> None:
     create2 = load_robot_description(resolve_robot("create2"))
     outcome = estimate_source([SESSION], create2, method=method)
-    assert outcome.result.converged, outcome.result.notes
+    result, verdict = outcome.result, outcome.verdict
+    assert result is not None and verdict is not None
+    assert result.converged, result.notes
     # doubtful for its few trials a path family (6 each), nothing else
-    assert outcome.verdict.status == "doubtful", outcome.verdict.reasons
-    assert len(outcome.verdict.reasons) == 1, outcome.verdict.reasons
-    assert "fewer than 10 trials a path family" in outcome.verdict.reasons[0]
+    assert verdict.status == "doubtful", verdict.reasons
+    assert len(verdict.reasons) == 1, verdict.reasons
+    assert "fewer than 10 trials a path family" in verdict.reasons[0]
