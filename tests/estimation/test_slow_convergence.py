@@ -28,7 +28,8 @@ def test_a_fit_that_creeps_to_its_root_converges(method: str) -> None:
     create2 = load_robot_description(resolve_robot("create2"))
     outcome = estimate_source([SESSION], create2, method=method)
     result, verdict = outcome.result, outcome.verdict
-    assert result is not None and verdict is not None
+    assert result is not None
+    assert verdict is not None
     assert result.converged, result.notes
     # doubtful for its few trials a path family (6 each), nothing else
     assert verdict.status == "doubtful", verdict.reasons

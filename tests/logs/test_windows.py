@@ -156,3 +156,17 @@ def test_import_writes_the_windows_and_counts_them(lab: Path, tmp_path: Path) ->
         done.output
     )
     assert [t.family for t in read_path_trials(out)] == ["window"] * 28
+
+
+def test_the_report_page_counts_the_windows_left_out(lab: Path, tmp_path: Path) -> None:
+    # issue 30: the text and --json counted the windows; the report page did not
+    out = tmp_path / "report"
+    args = ("report", lab / "gap.csv", "--robot", lab / "robot.toml", "--window-m", WINDOW)
+    done = odohil(*args, "--out", out)
+    assert done.exit_code == EXIT_OK, done.output
+    page = " ".join((out / "index.html").read_text(encoding="utf-8").split())
+    assert (
+        "windows of 2 m travelled (--window-m): 28 trials, 1 left out for a gap in the ground truth"
+        in page
+    )
+    assert "a gap in the ground truth of 1.6 s" in page  # where and why

@@ -11,7 +11,6 @@ from pathlib import Path
 from odohil import units
 from odohil.session.robots.description import load_robot_description
 from odohil.session.table_text import TableText
-from odohil.session.text.outcome import windows_lines
 from odohil.session.trials.logs import ImportOptions, guess_format, read_cut
 from odohil.session.trials.path_trial_file import summary_rows, write_path_trials
 
@@ -29,7 +28,7 @@ class ImportSummary:
             and direction the trials and the distance driven, m.
         wrote: ``wrote 12 trials (20.965 m driven) to FILE``, and with
             ``--window-m`` how the windows went (odohil/session/text/outcome.py
-            ``windows_lines``) on the lines after.
+            ``WindowCount.lines``) on the lines after.
     """
 
     table: TableText
@@ -59,7 +58,7 @@ def import_recording(
     total = sum(trial.path.distance_m for trial in trials)
     wrote = f"wrote {units.plural(written, 'trial')} ({total:.3f} m driven) to {out}"
     if cut.windows is not None:
-        wrote = "\n".join([wrote, *windows_lines(cut.windows)])
+        wrote = "\n".join([wrote, *cut.windows.lines()])
     columns = ("family", "direction", "trials", "distance (m)")
     table = TableText(f"{title}, read as {read_as}", columns, rows, ("family", "direction"))
     return ImportSummary(table, wrote)

@@ -15,7 +15,6 @@ from odohil.science.estimators.verdict import Verdict
 from odohil.science.parameters import PARAMETER_NAMES
 from odohil.session.results.outcome import EstimateOutcome
 from odohil.session.table_text import TableText
-from odohil.session.trials.logs import WindowCount
 
 __all__ = [
     "DETECT_HELP",
@@ -30,7 +29,6 @@ __all__ = [
     "sizing_lines",
     "test_words",
     "verdict_line",
-    "windows_lines",
 ]
 
 DETECT_SYNTAX = (
@@ -193,7 +191,7 @@ def outcome_notes(outcome: EstimateOutcome, system: units.UnitSystem) -> list[st
     (on request, ambiguous) or flagged; how the windows of ``--window-m`` went.
     Without an estimate only the windows."""
     result = outcome.result
-    windows = [] if outcome.windows is None else windows_lines(outcome.windows)
+    windows = [] if outcome.windows is None else outcome.windows.lines()
     if result is None:
         return windows
     lines = windows + [f"  - {reason}" for reason in result.sufficiency.reasons]
@@ -213,30 +211,6 @@ def outcome_notes(outcome: EstimateOutcome, system: units.UnitSystem) -> list[st
     if outcome.flagged:
         named = ", ".join(f"{trial} ({note})" for trial, note in outcome.flagged)
         lines.append(f"flagged trials (pose from the marks in doubt): {named}")
-    return lines
-
-
-WINDOWS_NAMED = 5
-"""Most windows left out that :func:`windows_lines` names one by one."""
-
-
-def windows_lines(count: WindowCount) -> list[str]:
-    """``windows of 2 m travelled (--window-m): 29 trials, 1 left out for a
-    gap in the ground truth, 1 partial window dropped (1.08 m)``, and where
-    and why each window was left out (the first :data:`WINDOWS_NAMED`)."""
-    partial = (
-        f", {units.plural(count.partial, 'partial window')} dropped ({count.dropped_m:.3g} m)"
-        if count.partial
-        else ""
-    )
-    lines = [
-        f"windows of {count.window_m:g} m travelled (--window-m): "
-        f"{units.plural(count.used, 'trial')}, {len(count.left_out)} left out for a gap in "
-        f"the ground truth{partial}"
-    ]
-    lines += [f"  - left out: {why}" for why in count.left_out[:WINDOWS_NAMED]]
-    if len(count.left_out) > WINDOWS_NAMED:
-        lines.append(f"  - and {len(count.left_out) - WINDOWS_NAMED} more")
     return lines
 
 

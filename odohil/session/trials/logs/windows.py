@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from odohil import units
 from odohil.errors import ParameterError, RecordingError
 from odohil.science.distance_windows import distance_windows
 from odohil.science.path_trials import PathTrial
@@ -53,6 +54,10 @@ __all__ = [
     "joined",
     "next_number",
 ]
+
+
+WINDOWS_NAMED = 5
+"""Most windows left out that :meth:`WindowCount.lines` names one by one."""
 
 
 @dataclass(frozen=True)
@@ -85,6 +90,26 @@ class WindowCount:
             "partial_dropped": self.partial,
             "partial_dropped_m": self.dropped_m,
         }
+
+    def lines(self) -> list[str]:
+        """``windows of 2 m travelled (--window-m): 29 trials, 1 left out for a
+        gap in the ground truth, 1 partial window dropped (1.08 m)``, and where
+        and why each window was left out (the first :data:`WINDOWS_NAMED`):
+        the text under an estimate, import's, the report page's."""
+        partial = (
+            f", {units.plural(self.partial, 'partial window')} dropped ({self.dropped_m:.3g} m)"
+            if self.partial
+            else ""
+        )
+        lines = [
+            f"windows of {self.window_m:g} m travelled (--window-m): "
+            f"{units.plural(self.used, 'trial')}, {len(self.left_out)} left out for a gap in "
+            f"the ground truth{partial}"
+        ]
+        lines += [f"  - left out: {why}" for why in self.left_out[:WINDOWS_NAMED]]
+        if len(self.left_out) > WINDOWS_NAMED:
+            lines.append(f"  - and {len(self.left_out) - WINDOWS_NAMED} more")
+        return lines
 
 
 @dataclass(frozen=True)
