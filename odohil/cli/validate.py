@@ -30,6 +30,7 @@ from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.commands.validate import (
     chi_square_table,
     held_out,
+    held_out_lines,
     validation_document,
     validation_setup,
     verdict_lines,
@@ -163,8 +164,8 @@ def _print(
         out.print(line, highlight=False)
     out.print(drawn(chi_square_table(tested)))
     out.print(f"parameter uncertainty: {data['verdict']['parameter_uncertainty']}", highlight=False)
-    if measured.left_out:
-        out.print(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")
+    for line in held_out_lines(measured):
+        out.print(line, highlight=False)
 
 
 def register(app: typer.Typer) -> None:

@@ -170,3 +170,19 @@ def test_the_report_page_counts_the_windows_left_out(lab: Path, tmp_path: Path) 
         in page
     )
     assert "a gap in the ground truth of 1.6 s" in page  # where and why
+
+
+def test_validate_counts_the_held_out_windows_left_out(lab: Path) -> None:
+    # issue 30: validate on a held-out continuous log said only "28 trials of file:..."
+    args = ("validate", lab / "log.csv", "--robot", lab / "robot.toml", "--window-m", WINDOW)
+    done = odohil(*args, "--path", f"file:{lab / 'gap.csv'}")
+    assert done.exit_code == EXIT_OK, done.output
+    text = " ".join(done.output.split())
+    assert "28 trials of file:" in text
+    assert (
+        "held-out windows of 2 m travelled (--window-m): 28 trials, 1 left out for a gap in the "
+        "ground truth" in text
+    )
+    data = json.loads(odohil(*args, "--path", f"file:{lab / 'gap.csv'}", "--json").stdout)
+    assert data["windows"]["left_out_truth_gap"] == 1
+    assert data["windows"]["windows"] == data["n_trials"] == 28

@@ -57,6 +57,7 @@ __all__ = [
     "chi_square_table",
     "drive_folder",
     "held_out",
+    "held_out_lines",
     "validation_document",
     "validation_setup",
     "verdict_lines",
@@ -243,6 +244,7 @@ def validation_document(
         "source": measured.source,
         "n_trials": len(measured),
         "left_out_ambiguous": list(measured.left_out),
+        **({} if measured.windows is None else {"windows": measured.windows.to_json_dict()}),
         "trials": [
             {
                 "trial": n,
@@ -486,6 +488,18 @@ def verdict_lines(
     lines = [text, *(f"  {reason}" for reason in tested.reasons())]
     if calibration is not None:
         lines.append(sensitivity_text(tested, calibration))
+    return lines
+
+
+def held_out_lines(measured: ValidationTrials) -> list[str]:
+    """What is printed below the tests of the held-out trials: those left out
+    as ambiguous, and how a held-out continuous log's windows went."""
+    lines = []
+    if measured.left_out:
+        lines.append(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")
+    if measured.windows is not None:
+        head, *why = measured.windows.lines()
+        lines += [f"held-out {head}", *why]
     return lines
 
 

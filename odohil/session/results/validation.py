@@ -69,10 +69,10 @@ from odohil.session.results.outcome import (
     EstimateOutcome,
     estimate_source,
     estimate_state,
-    load_path_trials,
+    load_path_cut,
     source_kind,
 )
-from odohil.session.trials.logs import ImportOptions
+from odohil.session.trials.logs import ImportOptions, WindowCount
 from odohil.session.trials.pose_file import (
     file_format,
     read_path_rows,
@@ -355,6 +355,7 @@ class ValidationTrials:
             for a pose file of a named path).
         left_out: trials not tested (ambiguous), by number.
         source: where they came from.
+        windows: how a continuous log's windows went (``--window-m``), else None.
     """
 
     poses: FloatArray
@@ -366,6 +367,7 @@ class ValidationTrials:
     designs: tuple[Design, ...] = ()
     left_out: tuple[int, ...] = ()
     source: str = ""
+    windows: WindowCount | None = None
 
     def __len__(self) -> int:
         return int(self.poses.shape[0])
@@ -429,10 +431,13 @@ def trials_of_file(path: Path, description: RobotDescription | None) -> Validati
     return _from_trial_set(read_trials(path, description))
 
 
-def trials_of_paths(trials: Sequence[PathTrial], source: str) -> ValidationTrials:
+def trials_of_paths(
+    trials: Sequence[PathTrial], source: str, windows: WindowCount | None = None
+) -> ValidationTrials:
     """General-path trials (a general-path trial file, a recording) as
     validation trials: their own paths, measured pose changes and covariances,
-    labelled by family and direction."""
+    labelled by family and direction; ``windows``: how a continuous log's
+    windows went."""
     if not trials:
         raise MeasurementError(f"{source}: no usable trials")
     return ValidationTrials(
@@ -443,6 +448,7 @@ def trials_of_paths(trials: Sequence[PathTrial], source: str) -> ValidationTrial
         numbers=tuple(t.trial if t.trial is not None else i + 1 for i, t in enumerate(trials)),
         backward=(False,) * len(trials),
         source=source,
+        windows=windows,
     )
 
 
@@ -466,7 +472,8 @@ def held_out_trials(
         )
     if kind == "trials":
         return trials_of_file(path, description)
-    return trials_of_paths(load_path_trials([path], description, recording), str(path))
+    cut = load_path_cut([path], description, recording)
+    return trials_of_paths(cut.trials, str(path), cut.windows)
 
 
 def read_path_poses(file: Path, path: EncoderPath, label: str) -> ValidationTrials:
