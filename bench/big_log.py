@@ -22,7 +22,7 @@ wall time counts the others' load) and its peak resident memory (the child's
 ``ru_maxrss``), with the machine's load (``uptime``) before and after.
 
     python bench/big_log.py [--data ../shared/data/optiodom-june] [--repeat 3]
-        [--copies 7] [--optiodom] [--keep DIR]
+        [--copies 7] [--spins] [--optiodom] [--keep DIR]
 """
 
 from __future__ import annotations
@@ -48,11 +48,15 @@ DEFAULT_DATA = Path(os.environ.get("ODOHIL_OPTIODOM", ROOT.parent / "shared/data
 ROBOT = ROOT / "docs/examples/optiodom.toml"
 
 
-def one_copy(data: Path) -> list[Path]:
+def one_copy(data: Path, spins: bool = False) -> list[Path]:
     """The run files of one copy: every circle and every straight run (the
-    ivanjko runs the reader finds ``straight``; the others are spins)."""
+    ivanjko runs the reader finds ``straight``; the others are spins), or with
+    ``spins`` every circle and the first 30 ivanjko runs, spins included (62
+    trials a copy: the issue's 434 trials for seven copies)."""
     description = load_robot_description(ROBOT)
     ivanjko = run_files([data / "ivanjko"])
+    if spins:
+        return run_files([data / "circular"]) + ivanjko[:30]
     straight = [
         run
         for run in ivanjko
@@ -61,10 +65,10 @@ def one_copy(data: Path) -> list[Path]:
     return run_files([data / "circular"]) + straight
 
 
-def big_recording(data: Path, copies: int) -> Recording:
+def big_recording(data: Path, copies: int, spins: bool = False) -> Recording:
     """``copies`` copies of :func:`one_copy` as one recording, the labels of
     copy c prefixed ``cC/``, times running on."""
-    base = joined_runs(one_copy(data))
+    base = joined_runs(one_copy(data, spins))
     assert base.trial is not None
     span = float(base.t_s[-1] - base.t_s[0]) + 0.05
     times: list[np.ndarray] = []
@@ -83,10 +87,10 @@ def big_recording(data: Path, copies: int) -> Recording:
     )
 
 
-def optiodom_copies(data: Path, copies: int, folder: Path) -> Path:
+def optiodom_copies(data: Path, copies: int, folder: Path, spins: bool = False) -> Path:
     """``copies`` copies of :func:`one_copy`'s sessions as an optiodom folder
     (session names given a copy digit, the metadata's run count fixed)."""
-    runs = one_copy(data)
+    runs = one_copy(data, spins)
     sessions: dict[Path, list[Path]] = {}
     for run in runs:
         sessions.setdefault(run.parent, []).append(run)
@@ -143,6 +147,11 @@ def main() -> None:
     parser.add_argument("--copies", type=int, default=7)
     parser.add_argument("--repeat", type=int, default=1)
     parser.add_argument("--optiodom", action="store_true", help="also as an optiodom folder")
+    parser.add_argument(
+        "--spins",
+        action="store_true",
+        help="circles and the first 30 ivanjko runs, spins included (434 trials for 7 copies)",
+    )
     parser.add_argument("--keep", type=Path, help="build the log here and keep it")
     args = parser.parse_args()
     print(f"load before: {uptime()}")
@@ -150,7 +159,7 @@ def main() -> None:
     folder.mkdir(parents=True, exist_ok=True)
     try:
         log = folder / "big.csv"
-        recording = big_recording(args.data, args.copies)
+        recording = big_recording(args.data, args.copies, args.spins)
         write_csv_log(log, recording)
         assert recording.trial is not None
         trials = len(set(recording.trial) - {""})
@@ -160,7 +169,7 @@ def main() -> None:
         common = ["--robot", str(ROBOT), "--json"]
         report("CSV log", ["estimate", str(log), *common], args.repeat)
         if args.optiodom:
-            runs = optiodom_copies(args.data, args.copies, folder / "optiodom")
+            runs = optiodom_copies(args.data, args.copies, folder / "optiodom", args.spins)
             report("optiodom folder", ["estimate", str(runs), *common], args.repeat)
     finally:
         if args.keep is None:

@@ -52,7 +52,7 @@ and a path costs O(legs).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from typing import Any
 
@@ -70,6 +70,7 @@ _PANEL_RATE_LENGTH = 2.0
 error is below 1e-14; longer legs use the closed forms."""
 
 ComplexArray = npt.NDArray[np.complexfloating[Any, Any]]
+IntArray = npt.NDArray[np.intp]
 
 
 @dataclass(frozen=True)
@@ -332,6 +333,14 @@ class PathSet:
         spin_total_rad: (T,) |angle| spun over the path, rad.
         distance_m, signed_distance_m: (T,) per path, m.
         heading_offset_rad: (T,) net encoder turn minus winding, rad.
+        paths: the T paths.
+        leg_length_m, leg_sign: (U,) the distinct legs (length m, travel
+            sign) of all the paths, padding excluded: a leg's one-leg
+            integrals depend on nothing else (repeated paths share them).
+        leg_index: (T, M) each leg's index among the distinct legs, U for padding.
+        buckets: the paths grouped by leg count, (indices into the T paths,
+            their own PathSet padded to the group's longest path), when the
+            groups' padding is smaller than the whole set's; () for one group.
     """
 
     heading_rad: FloatArray
@@ -347,11 +356,35 @@ class PathSet:
     signed_distance_m: FloatArray
     heading_offset_rad: FloatArray
     paths: tuple[EncoderPath, ...]
+    leg_length_m: FloatArray
+    leg_sign: FloatArray
+    leg_index: IntArray
+    buckets: tuple[tuple[IntArray, PathSet], ...] = ()
 
     @classmethod
     def of(cls, paths: tuple[EncoderPath, ...]) -> PathSet:
-        """The padded tables of ``paths``."""
-        t, m = len(paths), max(p.legs.length_m.size for p in paths)
+        """The padded tables of ``paths``, grouped by leg count (:func:`_leg_buckets`)."""
+        whole = cls._padded(paths)
+        groups = _leg_buckets([p.legs.length_m.size for p in paths])
+        if len(groups) < 2:
+            return whole
+        buckets = []
+        for group in groups:
+            members = tuple(paths[i] for i in group)
+            top = max(p.legs.length_m.size for p in members)
+            # a multiple of 8 legs: numpy's pairwise sums over the legs then
+            # add each leg in the same place as in any other multiple of 8 up
+            # to 128 (the same sums, bit for bit, as the whole set's if its
+            # longest path has such a count)
+            width = -(-top // _SUM_BLOCK) * _SUM_BLOCK
+            buckets.append((np.array(group, dtype=np.intp), cls._padded(members, width)))
+        return replace(whole, buckets=tuple(buckets))
+
+    @classmethod
+    def _padded(cls, paths: tuple[EncoderPath, ...], width: int = 0) -> PathSet:
+        """The padded tables of ``paths``, one group, ``width`` legs wide (at
+        least the longest path's)."""
+        t, m = len(paths), max(width, *(p.legs.length_m.size for p in paths))
         tables = {
             name: np.zeros((t, m))
             for name in ("heading_rad", "sign", "length_m", "start_arc_m", "start_signed_m")
@@ -364,6 +397,13 @@ class PathSet:
                 table[i, :n] = getattr(path.legs, name)
             before[i, :, :n] = path.turns.before_rad
             spin_before[i, :n] = path.turns.spin_before_rad
+        length, sign = tables["length_m"], tables["sign"]
+        valid = length > 0
+        distinct, inverse = np.unique(
+            np.stack([length[valid], sign[valid]], axis=1), axis=0, return_inverse=True
+        )
+        index = np.full((t, m), distinct.shape[0], dtype=np.intp)
+        index[valid] = inverse.reshape(-1)
         return cls(
             before_rad=before,
             spin_before_rad=spin_before,
@@ -373,8 +413,39 @@ class PathSet:
             signed_distance_m=np.array([p.signed_distance_m for p in paths]),
             heading_offset_rad=np.array([p.net_turn_rad - p.winding_rad for p in paths]),
             paths=paths,
-            **tables,
+            leg_length_m=np.ascontiguousarray(distinct[:, 0]),
+            leg_sign=np.ascontiguousarray(distinct[:, 1]),
+            leg_index=index,
+            heading_rad=tables["heading_rad"],
+            sign=sign,
+            length_m=length,
+            start_arc_m=tables["start_arc_m"],
+            start_signed_m=tables["start_signed_m"],
         )
+
+
+_BUCKET_PADDING = 1.25
+"""A path joins the group of the longest path not yet grouped when that one
+has at most this many times its legs (at most a fifth of a group is padding)."""
+
+
+_SUM_BLOCK = 8
+"""numpy's pairwise summation adds blocks of 8 numbers (8 accumulators)."""
+
+
+def _leg_buckets(counts: Sequence[int]) -> list[list[int]]:
+    """Indices of the paths with ``counts`` legs, grouped (longest first): the
+    moments of a path do not depend on the padding, and a one-leg straight
+    run padded to a circle's 64 legs costs 64 legs."""
+    order = sorted(range(len(counts)), key=lambda i: -counts[i])
+    groups: list[list[int]] = []
+    top = 0
+    for i in order:
+        if not groups or counts[i] * _BUCKET_PADDING < top:
+            groups.append([])
+            top = counts[i]
+        groups[-1].append(i)
+    return [sorted(group) for group in groups]
 
 
 BATCH_COLUMNS = ("E_R", "E_T", "K_theta", "K_rho", *TURN_CLASSES, "K_spin")
@@ -433,35 +504,38 @@ def _distinct_pairs(pairs: FloatArray) -> tuple[FloatArray, list[int] | None]:
 def _all_leg_integrals(paths: PathSet, q: FloatArray) -> ComplexArray:
     """The seven one-leg integrals of every leg at every row of ``q``, (7, Q, T, M).
     They depend on a row only through E_R and K_theta, so each distinct
-    pair is done once (finite-difference rows mostly move other parameters)."""
+    pair is done once (finite-difference rows mostly move other parameters),
+    and on a leg only through its length and sign, so each distinct leg
+    (:attr:`PathSet.leg_length_m`) is done once; padding legs get 0."""
     pairs, inverse = _distinct_pairs(q[:, [0, 2]])
-    e_r = pairs[:, 0, None, None]
-    k = pairs[:, 1, None, None]
-    length = paths.length_m[None]
-    omega = e_r * paths.sign[None]
+    e_r = pairs[:, 0, None]
+    k = pairs[:, 1, None]
+    length = paths.leg_length_m[None]
+    omega = e_r * paths.leg_sign[None]
     shape = omega.shape
     kk = np.empty(shape)
     kk[...] = k
     ll = np.empty(shape)
     ll[...] = length
-    integrals = np.zeros((7, *shape), dtype=np.complex128)
+    # one more leg, never chosen, for the padding's index
+    integrals = np.zeros((7, shape[0], shape[1] + 1), dtype=np.complex128)
     load = (2.0 * np.abs(e_r) + 2.0 * k) * length
-    valid = ll > 0
     low = 0.0
     for high, nodes in _PANEL_NODES:
-        chosen = valid & (load > low) & (load <= high) if low else valid & (load <= high)
+        chosen = (load > low) & (load <= high) if low else load <= high
         low = high
         if not np.any(chosen):
             continue
-        integrals[:, chosen] = _panel_integrals(ll[chosen], omega[chosen], kk[chosen], nodes)
-    long_leg = valid & (load > _PANEL_RATE_LENGTH)
+        integrals[:, :, :-1][:, chosen] = _panel_integrals(
+            ll[chosen], omega[chosen], kk[chosen], nodes
+        )
+    long_leg = load > _PANEL_RATE_LENGTH
     if np.any(long_leg):
         exact = _long_leg_integrals(ll[long_leg], omega[long_leg], kk[long_leg])
-        for target, value in zip(integrals, exact, strict=True):
+        for target, value in zip(integrals[:, :, :-1], exact, strict=True):
             target[long_leg] = value
-    if inverse is None:
-        return integrals
-    gathered: ComplexArray = integrals[:, inverse]
+    rows = np.arange(shape[0]) if inverse is None else np.array(inverse)
+    gathered: ComplexArray = integrals[:, rows[:, None, None], paths.leg_index[None]]
     return gathered
 
 
@@ -484,6 +558,17 @@ def batch_moments(paths: PathSet, values: FloatArray) -> tuple[FloatArray, Float
         gives them (tests/science/test_turn_moments.py checks that they agree).
     """
     q = np.asarray(values, dtype=np.float64).reshape(-1, 9)
+    if not paths.buckets:
+        return _bucket_moments(paths, q)
+    means = np.empty((q.shape[0], len(paths.paths), 3))
+    covs = np.empty((q.shape[0], len(paths.paths), 3, 3))
+    for indices, bucket in paths.buckets:
+        means[:, indices], covs[:, indices] = _bucket_moments(bucket, q)
+    return means, covs
+
+
+def _bucket_moments(paths: PathSet, q: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """:func:`batch_moments` of one group of paths (``paths.buckets`` empty), q (Q, 9)."""
     e_r, gain, k, k_rho = (q[:, i, None, None] for i in range(4))
     gain = 1.0 + gain
     scales = q[:, 4:8]

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -100,6 +101,35 @@ def test_batch_moments_are_pose_moments() -> None:
             scale = path.distance_m
             assert np.allclose(means[q, i], exact.mean, rtol=1e-12, atol=1e-13 * scale)
             assert np.allclose(covs[q, i], exact.cov, rtol=1e-9, atol=1e-13 * scale**2)
+
+
+def test_grouped_batch_is_the_padded_batch() -> None:
+    """Paths grouped by leg count (a straight run is not padded to a circle's
+    legs) and repeated legs done once give the one padded table's moments, bit
+    for bit when its longest path has a multiple of 8 legs (issue 30)."""
+    paths = (
+        circle(True, legs=64),
+        EncoderPath((Leg(1.5),), name="straight"),
+        circle(False, legs=40),
+        square(True),
+        circle(True, legs=64),
+        EncoderPath((Leg(1.5),), name="straight"),
+        circle(False, legs=62),
+    )
+    grouped = PathSet.of(paths)
+    assert [list(indices) for indices, _ in grouped.buckets] == [[0, 4, 6], [2], [3], [1, 5]]
+    assert grouped.leg_length_m.size < sum(p.legs.length_m.size for p in paths)
+    values = np.array(
+        [
+            [*TRUTH.as_tuple(), *TURNS.scales, TURNS.k_spin],
+            [0.3, 0.1, 2.0, 1e-3, 0.1, -0.1, 0.2, 0.05, 0.5],  # long legs
+            [*TRUTH.as_tuple(), *TURNS.scales, TURNS.k_spin],
+        ]
+    )
+    means, covs = batch_moments(grouped, values)
+    padded_means, padded_covs = batch_moments(replace(grouped, buckets=()), values)
+    assert np.array_equal(means, padded_means)
+    assert np.array_equal(covs, padded_covs)
 
 
 def test_recovers_the_turn_errors_of_squares_and_circles() -> None:
