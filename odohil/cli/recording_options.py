@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from odohil.cli.options import EXCLUDE_HELP, Command, add_options, choices, keyword
 from odohil.cli.render import bad_inputs
+from odohil.session.progress import TerminalBar
 from odohil.session.results.outcome import Selection, parse_exclude
 from odohil.session.trials.logs import FORMATS, WINDOW_M_HELP, ImportOptions
 
@@ -79,6 +80,7 @@ def _resolve(values: dict[str, Any]) -> dict[str, Any]:
                 odom_topic=values.pop("odom_topic"),
                 truth_topic=values.pop("truth_topic"),
                 window_m=values.pop("window_m"),
+                progress=TerminalBar(),  # stderr, a terminal only, after 2 s
                 **{field: values.pop(name) for name, _, field, _ in _SECONDS},
             )
         }

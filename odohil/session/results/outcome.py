@@ -55,6 +55,7 @@ from odohil.session.journal.state import (
     session_path_trials,
     session_trials,
 )
+from odohil.session.progress import stage
 from odohil.session.trials.logs import Cut, ImportOptions, WindowCount, guess_format, read_cut
 from odohil.session.trials.logs.csv_log import TIME_COLUMN
 from odohil.session.trials.path_trial_file import is_path_trial_file, read_path_trials, summary_rows
@@ -594,10 +595,15 @@ def estimate_source(
         return estimate_path(files[0], description, exclude, method)  # type: ignore[arg-type]
     cut = load_path_cut(files, description, recording, selection)
     turns_exact = description.robot.turns_exact if description is not None else True
-    outcome = estimate_path_trials(
-        cut.trials, turns_exact, exclude, method, ", ".join(str(p) for p in files)
-    )
+    with stage(recording.progress if recording is not None else None, FITTING):
+        outcome = estimate_path_trials(
+            cut.trials, turns_exact, exclude, method, ", ".join(str(p) for p in files)
+        )
     return replace(outcome, windows=cut.windows)
+
+
+FITTING = "fitting"
+"""The progress stage of the fit of :func:`estimate_source` (one count: the fit)."""
 
 
 def path_export_refusals(

@@ -40,6 +40,7 @@ from odohil.errors import RecordingError
 from odohil.science.odometry_paths import integrate_ticks
 from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
+from odohil.session.progress import Progress, Tell, stage
 from odohil.session.trials.logs.files import finite_number, read_pieces, read_text
 from odohil.session.trials.logs.recording import (
     ImportOptions,
@@ -206,7 +207,9 @@ def _fast_rows(path: Path, text: str, chunk_chars: int = _CHUNK_CHARS) -> _Rows 
     return _Rows(names, t, odometry, truth, where, labels)
 
 
-def _piece_rows(path: Path, piece_bytes: int = _PIECE_BYTES) -> _Rows | None:
+def _piece_rows(
+    path: Path, piece_bytes: int = _PIECE_BYTES, tell: Tell | None = None
+) -> _Rows | None:
     """The rows of the log at ``path``, read a piece of a few MB at a time
     and parsed without a Python object per number (:func:`_piece_values`),
     or None for anything :func:`_fast_rows` or the slow reader must see (the
@@ -234,7 +237,11 @@ def _piece_rows(path: Path, piece_bytes: int = _PIECE_BYTES) -> _Rows | None:
         parts: list[FloatArray] = []
         labels: list[str] = []
         rows = 0
+        size, done = _size(path), 0
         for piece in chain([first[len(text[:offset].encode("utf-8")) :]], pieces):
+            if tell is not None:  # bytes parsed before this piece
+                tell(done, size)
+                done += len(piece)
             parsed = _piece_values(piece, len(names), label)
             if parsed is None:
                 return None
@@ -406,7 +413,14 @@ def _checked_rows(path: Path, text: str) -> _Rows:
     )
 
 
-def read_csv_log(path: Path, description: RobotDescription) -> Recording:
+def _size(path: Path) -> int:
+    """The file's size in bytes, at least 1 (a progress total; 1 for what is no file)."""
+    return max(path.stat().st_size, 1) if path.is_file() else 1
+
+
+def read_csv_log(
+    path: Path, description: RobotDescription, progress: Progress | None = None
+) -> Recording:
     """One odohil log CSV as a recording (module docstring).
 
     The usual log (no quotes, comments or blank lines among the rows, every
@@ -418,7 +432,8 @@ def read_csv_log(path: Path, description: RobotDescription) -> Recording:
         RecordingError: unreadable file, bad header, a bad value (the message
             names the line and the column), time not increasing.
     """
-    parsed = _piece_rows(path)
+    with stage(progress, f"reading {path.name}", _size(path)) as tell:
+        parsed = _piece_rows(path, tell=tell)
     if parsed is None:
         text = read_text(path)
         parsed = _fast_rows(path, text) or _checked_rows(path, text)
@@ -449,7 +464,7 @@ def read_csv_logs(paths: list[Path], description: RobotDescription, options: Imp
     """The trials of odohil log CSV files, numbered from 1 in file order."""
     cuts: list[Cut] = []
     for path in paths:
-        recording = read_csv_log(path, description)
+        recording = read_csv_log(path, description, options.progress)
         cuts.append(cut_of(recording, description, options, next_number(cuts)))
     return joined(cuts)
 

@@ -28,6 +28,7 @@ import math
 import operator
 import re
 import tomllib
+from dataclasses import replace
 from importlib.resources import files
 from pathlib import Path
 
@@ -39,6 +40,7 @@ from odohil.science.odometry_paths import integrate_ticks
 from odohil.science.paths import FloatArray
 from odohil.science.robot_description import RobotDescription
 from odohil.science.robot_facts import DRIVE_KEYS
+from odohil.session.progress import stage
 from odohil.session.trials.logs.files import finite_number, read_text
 from odohil.session.trials.logs.recording import (
     ImportOptions,
@@ -256,6 +258,14 @@ def read_optiodom(paths: list[Path], description: RobotDescription, options: Imp
     """The trials of optiodom run files and folders (module docstring), one
     per run, numbered from 1 in file order."""
     cuts: list[Cut] = []
-    for path in run_files(paths):
-        cuts.append(cut_of(read_run(path), description, options, next_number(cuts)))
+    runs = run_files(paths)
+    quiet = replace(options, progress=None)  # one stage: the runs, not each run's cut
+    with stage(options.progress, READING, len(runs)) as tell:
+        for done, path in enumerate(runs):
+            tell(done, len(runs))
+            cuts.append(cut_of(read_run(path), description, quiet, next_number(cuts)))
     return joined(cuts)
+
+
+READING = "reading runs"
+"""The progress stage of :func:`read_optiodom` (counts: run files)."""

@@ -42,6 +42,7 @@ from odohil.science.rest_cutting import (
     still_mask,
 )
 from odohil.science.robot_description import RobotDescription
+from odohil.session.progress import Progress, Tell, stage
 from odohil.units import wrap_angle
 
 IntArray = npt.NDArray[np.int64]
@@ -90,6 +91,8 @@ class ImportOptions:
             in place of rests and given cuts (a continuous log:
             odohil/session/trials/logs/windows.py); None: not.
         bounds: how odometry is compressed into legs and turns.
+        progress: told how far reading and cutting have gone
+            (odohil/session/progress.py); None: nobody. Not compared.
     """
 
     format: str | None = None
@@ -102,6 +105,7 @@ class ImportOptions:
     max_truth_gap_s: float = MAX_TRUTH_GAP_S
     window_m: float | None = None
     bounds: CompressionBounds = field(default_factory=CompressionBounds)
+    progress: Progress | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         for name, option in OPTION_NAMES.items():
@@ -340,12 +344,28 @@ def trials_of(
             end, the ground truth has a gap, or the recording holds no trial;
             the message names the file, the line and the field.
     """
+    with stage(options.progress, CUTTING) as tell:
+        return _trials_of(rec, description, options, first_number, tell)
+
+
+CUTTING = "cutting trials"
+"""The progress stage of :func:`trials_of` (counts: trials)."""
+
+
+def _trials_of(
+    rec: Recording,
+    description: RobotDescription,
+    options: ImportOptions,
+    first_number: int,
+    tell: Tell,
+) -> list[PathTrial]:
     trials: list[PathTrial] = []
     if rec.trial is not None:
         cuts = _given_cuts(rec)
         if not cuts:
             raise RecordingError(f"{rec.source}: trial: no row names a trial; no trial in the log")
-        for label, first, last in cuts:
+        for done, (label, first, last) in enumerate(cuts):
+            tell(done, len(cuts))
             if not _odometry_moved(rec, first, last):
                 raise RecordingError(
                     f"{rec.at(first)}-{int(rec.where[last])}: {rec.odometry_field}: the odometry "
