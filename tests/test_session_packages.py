@@ -29,7 +29,7 @@ FLOORS = [
 ]
 """The subpackages from the bottom up; two on one floor do not import each other."""
 
-GROUND = {"bounded_io", "signals", "table_text", "plugins", "addresses"}
+GROUND = {"bounded_io", "signals", "table_text", "plugins", "addresses", "progress"}
 """The modules directly in odohil/session/: they import nothing of the session."""
 
 FLOOR = {package: level for level, floor in enumerate(FLOORS) for package in floor}

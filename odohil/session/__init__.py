@@ -16,5 +16,6 @@ From the bottom up, each subpackage imports only those below it
 
 The ground modules import nothing of the session: bounded_io.py (reads within
 a size limit), signals.py (signals as exceptions), table_text.py, plugins.py
-(plug-ins by name) and addresses.py (the addresses a header journals).
+(plug-ins by name), addresses.py (the addresses a header journals) and
+progress.py (how far reading and fitting have gone; the terminal's bar).
 """
