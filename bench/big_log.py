@@ -7,10 +7,11 @@ times over, each copy's trials with their own labels (``c1/<session>_run-NN``
 with ``--optiodom``, as an optiodom folder of seven copies of the sessions.
 Per copy: all 32 circles (the long encoder paths: two or three laps, 43-64
 legs) and the 14 straight runs, so 46 trials: 322 trials and 505k rows in all
-(the issue's log: 434 trials, 476k rows). With the spins too the fit of this
-robot does not converge (the spins' centre drift, docs/recording.md) and the
-robust fit's Fisher scoring runs to its step limit: that measures the step
-limit, not the reading or the moments.
+(the issue's log: 434 trials, 476k rows). With ``--spins`` (the first 30
+ivanjko runs with every circle: 434 trials, 553k rows) the fit of this robot
+does not converge (the spins' centre drift, docs/recording.md; still so after
+joint_estimate's rescue change, BENCHMARKS.md) and the robust fit runs to its
+step limit: that measures the step limit, not the reading or the moments.
 
 Then runs the real command, a child process of the CLI as a user starts it
 (the process is the point: its start-up, its reading, its memory)::
