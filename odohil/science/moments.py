@@ -501,6 +501,16 @@ def _distinct_pairs(pairs: FloatArray) -> tuple[FloatArray, list[int] | None]:
     return np.array(list(first), dtype=np.float64).reshape(-1, 2), inverse
 
 
+def _distinct_rows(rows: FloatArray) -> tuple[FloatArray, list[int] | None]:
+    """The distinct rows of ``rows`` (Q, n), in order of first appearance, and
+    the index of each row's among them (None when every row is distinct)."""
+    first: dict[tuple[float, ...], int] = {}
+    inverse = [first.setdefault(tuple(row), len(first)) for row in rows.tolist()]
+    if len(first) == len(inverse):
+        return rows, None
+    return np.array(list(first), dtype=np.float64).reshape(-1, rows.shape[1]), inverse
+
+
 def _all_leg_integrals(paths: PathSet, q: FloatArray) -> ComplexArray:
     """The seven one-leg integrals of every leg at every row of ``q``, (7, Q, T, M).
     They depend on a row only through E_R and K_theta, so each distinct
@@ -569,18 +579,22 @@ def batch_moments(paths: PathSet, values: FloatArray) -> tuple[FloatArray, Float
 
 def _bucket_moments(paths: PathSet, q: FloatArray) -> tuple[FloatArray, FloatArray]:
     """:func:`batch_moments` of one group of paths (``paths.buckets`` empty), q (Q, 9)."""
-    e_r, gain, k, k_rho = (q[:, i, None, None] for i in range(4))
+    gain, k, k_rho = (q[:, i, None, None] for i in range(1, 4))
     gain = 1.0 + gain
     scales = q[:, 4:8]
     k_spin = q[:, 8, None, None]
     length, start, sign = paths.length_m[None], paths.start_arc_m[None], paths.sign[None]
+    # e^{i phase} depends on a row only through E_R and the e_turn: each
+    # distinct one once (finite-difference rows mostly move other parameters)
+    turning, again = _distinct_rows(q[:, [0, 4, 5, 6, 7]])
     phase = (
         paths.heading_rad[None]
-        + e_r * paths.start_signed_m[None]
-        + np.einsum("qc,tcm->qtm", scales, paths.before_rad)
+        + turning[:, 0, None, None] * paths.start_signed_m[None]
+        + np.einsum("qc,tcm->qtm", turning[:, 1:], paths.before_rad)
     )
+    rotation = np.exp(1j * phase)
     jump = k_spin * paths.spin_before_rad[None]
-    alpha = gain * sign * np.exp(1j * phase)
+    alpha = gain * sign * (rotation if again is None else rotation[again])
     v_start = k * start + jump
     v_end = v_start + k * length
     i_mean, i_tail, i_same_abs, i_stein, i_f, i_same_sq, i_noise = _all_leg_integrals(paths, q)
