@@ -225,16 +225,22 @@ class ParameterBelief:
         square would trip the slip check and the prior would pull the choice
         of pose (tests/science/test_turn_belief.py). Unless ``turns_exact``,
         the turn errors it does not pin (an estimate of straight runs pins
-        none; one split by direction pins one direction's) are
+        none; one split by direction pins one direction's; a K_spin no
+        larger than its widened deviation, as two or three squares fit it, at
+        0 with a deviation of 1e-5, which made e_turn look 5 times surer than
+        it was and tripped the check on clean squares) are
         :data:`UNKNOWN_TURNS`' (listed first, so that a pinned class's e_turn
         overrides the unknown one: odohil/science/moments.py
         ``turn_errors_from``)."""
         belief = cls._four_and_turns(result, priors)
         if turns_exact:
             return belief
-        pinned = {name for name, _, _ in belief.turns}
+        fitted = tuple(
+            t for t in belief.turns if t[0] != "K_spin" or t[1] > t[2]
+        )  # a K_spin not above its widened deviation sits at its floor: not pinned
+        pinned = {name for name, _, _ in fitted}
         unknown = tuple(t for t in UNKNOWN_TURNS if t[0] not in pinned)
-        return replace(belief, turns=unknown + belief.turns) if unknown else belief
+        return replace(belief, turns=unknown + fitted)
 
     @classmethod
     def _four_and_turns(cls, result: EstimateResult, priors: ParameterPriors) -> ParameterBelief:
