@@ -111,6 +111,15 @@ K_theta up to 1 deg^2/m and K_rho up to 1e-3 m lies within one deviation
 (the rates are raised by theirs), so its first clean trials do not trip the
 slip check as a Nomad 150's prior made them (issue 31, bench/slip_check.py)."""
 
+UNKNOWN_TURNS: tuple[tuple[str, float, float], ...] = (("e_turn", 0.0, 0.03), ("K_spin", 0.0, 1e-3))
+"""The turn errors (name, mean, standard deviation; SI: e_turn no unit, K_spin
+rad^2/rad) a robot whose turns are not exact (``turns_exact = false``: the
+Create 2) is predicted with where no estimate pins them: a turn scale within
++-3 % (the fake Create 2's is 1.2 %) and K_spin up to 1e-3 (its 2e-4) lie
+within one deviation. Predicted with exact turns, its first square is 2 pi
+e_turn (0.075 rad at 1.2 %) off in heading without its spins' spread, and
+trips the slip check on clean tape (issue 31, bench/slip_check_paths.py)."""
+
 
 @dataclass(frozen=True, eq=False)
 class ParameterBelief:
@@ -136,16 +145,18 @@ class ParameterBelief:
     turns: tuple[tuple[str, float, float], ...] = ()
 
     @classmethod
-    def from_priors(cls, priors: ParameterPriors) -> ParameterBelief:
+    def from_priors(cls, priors: ParameterPriors, *, turns_exact: bool = True) -> ParameterBelief:
         """The robot description's ``[priors]``; without them (``given`` False)
-        :data:`UNKNOWN_ROBOT_PAPER`."""
+        :data:`UNKNOWN_ROBOT_PAPER`; unless ``turns_exact``, the turns of
+        :data:`UNKNOWN_TURNS` (``[priors]`` say nothing of turns)."""
+        turns = () if turns_exact else UNKNOWN_TURNS
         if priors.given:
-            return cls(priors.mean, priors.cov(), "priors")
+            return cls(priors.mean, priors.cov(), "priors", turns=turns)
         mean = ErrorParameters.from_paper_units(*(m for m, _ in UNKNOWN_ROBOT_PAPER))
         sd = np.array(
             ErrorParameters.from_paper_units(*(s for _, s in UNKNOWN_ROBOT_PAPER)).as_tuple()
         )  # deviations scale as the values do
-        return cls(mean, np.diag(sd**2), "priors")
+        return cls(mean, np.diag(sd**2), "priors", turns=turns)
 
     @classmethod
     def from_estimate(
@@ -201,7 +212,9 @@ class ParameterBelief:
         return cls(ErrorParameters(*mean), cov, "estimate", floor)
 
     @classmethod
-    def from_result(cls, result: EstimateResult, priors: ParameterPriors) -> ParameterBelief:
+    def from_result(
+        cls, result: EstimateResult, priors: ParameterPriors, *, turns_exact: bool = True
+    ) -> ParameterBelief:
         """An estimate's values, standard errors and correlation (see
         :meth:`from_estimate`), and a general-path fit's turn errors (e_turn...,
         K_spin) where it pins them (a finite standard error, widened by
@@ -210,7 +223,28 @@ class ParameterBelief:
         one direction confound e_turn): a Create 2 square's prediction without them is off by 2 pi
         e_turn in heading and lacks its spins' spread, so nearly every clean
         square would trip the slip check and the prior would pull the choice
-        of pose (tests/science/test_turn_belief.py)."""
+        of pose (tests/science/test_turn_belief.py). Unless ``turns_exact``,
+        the turn errors it does not pin (an estimate of straight runs pins
+        none; one split by direction pins one direction's; a K_spin no
+        larger than its widened deviation, as two or three squares fit it, at
+        0 with a deviation of 1e-5, which made e_turn look 5 times surer than
+        it was and tripped the check on clean squares) are
+        :data:`UNKNOWN_TURNS`' (listed first, so that a pinned class's e_turn
+        overrides the unknown one: odohil/science/moments.py
+        ``turn_errors_from``)."""
+        belief = cls._four_and_turns(result, priors)
+        if turns_exact:
+            return belief
+        fitted = tuple(
+            t for t in belief.turns if t[0] != "K_spin" or t[1] > t[2]
+        )  # a K_spin not above its widened deviation sits at its floor: not pinned
+        pinned = {name for name, _, _ in fitted}
+        unknown = tuple(t for t in UNKNOWN_TURNS if t[0] not in pinned)
+        return replace(belief, turns=unknown + fitted)
+
+    @classmethod
+    def _four_and_turns(cls, result: EstimateResult, priors: ParameterPriors) -> ParameterBelief:
+        """:meth:`from_result` of a robot whose turns are exact."""
         names = [p.name for p in result.parameters]
         rows = [names.index(name) for name in PARAMETER_NAMES]
         correlation = result.correlation
@@ -660,6 +694,7 @@ __all__ = [
     "SCALE_RATIO",
     "SLIP_LEVEL",
     "UNKNOWN_ROBOT_PAPER",
+    "UNKNOWN_TURNS",
     "ParameterBelief",
     "PoseCheck",
     "PoseSelection",

@@ -615,12 +615,13 @@ class SessionEngine:
         if self.belief is not None:
             return self.belief
         priors = self.description.priors
+        exact = self.description.robot.turns_exact
         if self.latest_estimate is None:
-            return ParameterBelief.from_priors(priors)
+            return ParameterBelief.from_priors(priors, turns_exact=exact)
         try:
-            return ParameterBelief.from_result(self.latest_estimate, priors)
+            return ParameterBelief.from_result(self.latest_estimate, priors, turns_exact=exact)
         except OdohilError:
-            return ParameterBelief.from_priors(priors)
+            return ParameterBelief.from_priors(priors, turns_exact=exact)
 
     def _source_log(self, event: SourceEvent) -> TrialContext:
         """The :class:`~odohil.session.measure.protocol.MeasurementLog` given to the source."""

@@ -257,7 +257,10 @@ def run_session(
     assert chosen is not None, "the operator's source is the caller's to give"
     calibration = validation_calibration(opened.prepared.spec.calibration, opened.state)
     belief = None if calibration is None else (
-        ParameterBelief.from_result(calibration, opened.prepared.description.priors)
+        ParameterBelief.from_result(
+            calibration, opened.prepared.description.priors,
+            turns_exact=opened.prepared.description.robot.turns_exact,
+        )
     )  # fmt: skip
     engine = SessionEngine(
         opened.journal,

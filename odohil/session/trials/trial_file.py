@@ -359,7 +359,9 @@ class _RowParser:
                 self._priors[design] = self._prior(design)
             predicted = self._priors[design]
         else:
-            belief = ParameterBelief.from_priors(description.priors)
+            belief = ParameterBelief.from_priors(
+                description.priors, turns_exact=description.robot.turns_exact
+            )
             predicted = predictive_pose(design, belief, odometry_end)
         selection = select_pose(description, marks, odometry_end, predicted)
         solution = selection.solution

@@ -67,7 +67,9 @@ def prediction(ctx: TrialContext, description: RobotDescription) -> PosePrior:
     else from the description's ``[priors]`` and the encoders' end pose."""
     if ctx.predicted is not None:
         return ctx.predicted
-    belief = ParameterBelief.from_priors(description.priors)
+    belief = ParameterBelief.from_priors(
+        description.priors, turns_exact=description.robot.turns_exact
+    )
     return predictive_pose(ctx.design, belief, ctx.encoder_end_pose)
 
 
