@@ -39,7 +39,7 @@ def test_a_calibrated_robot_passes_at_the_level_when_the_spread_is_an_estimate()
     poses = simulate(PATH, TRUTH, sets * n, seed=rng, segment_m=0.004).pose_change
     poses += rng.multivariate_normal(np.zeros(3), MEASUREMENT_COV, size=poses.shape[0])
     covs = np.broadcast_to(MEASUREMENT_COV, (n, 3, 3))
-    rejected = np.zeros(N_TESTS)
+    rejected, verdicts = np.zeros(N_TESTS), 0
     true = np.array(TRUTH.as_tuple())
     for one in poses.reshape(sets, n, 3):
         values = true.copy()
@@ -49,8 +49,10 @@ def test_a_calibrated_robot_passes_at_the_level_when_the_spread_is_an_estimate()
         prediction = predict_path(PATH, ErrorParameters(*values))
         tested = validation_test(one, [prediction] * n, covs, np.diag(se**2), alpha=alpha)
         rejected += [not t.passed for t in tested.tests]
+        verdicts += not tested.passed
     rates = rejected / sets
     mc_se = math.sqrt(level * (1 - level) / sets)
+    assert verdicts / sets < alpha + 4 * math.sqrt(alpha * (1 - alpha) / sets)
     assert np.all(rates < level + 4 * mc_se), dict(
         zip([t.name for t in tested.tests], rates.round(4), strict=True)
     )
