@@ -409,7 +409,7 @@ def scale_dof(relative_sd: float) -> float:
     from nu squares has relative SD sqrt(2 / nu)); inf for an exact one."""
     if not relative_sd > 0:
         return math.inf
-    nu = 2.0 / relative_sd**2
+    nu = 2.0 / float(relative_sd) ** 2
     return math.inf if nu > SCALE_DOF_MAX else max(nu, 1.0)
 
 
@@ -425,15 +425,15 @@ def _test(
     """One test; a statistic whose predicted variance is itself an estimate of
     ``spread_dof`` degrees of freedom (:func:`scale_dof`) against dof F(dof,
     spread_dof) (module docstring, "The spread's own uncertainty")."""
-    threshold = distributions.chi2_estimated_scale_isf(level, dof, spread_dof)
+    threshold = float(distributions.chi2_estimated_scale_isf(level, dof, float(spread_dof)))
     return ChiSquareTest(
         name=name,
         statistic=statistic,
         dof=dof,
-        p_value=distributions.chi2_estimated_scale_sf(statistic, dof, spread_dof),
+        p_value=float(distributions.chi2_estimated_scale_sf(statistic, dof, float(spread_dof))),
         level=level,
         threshold=threshold,
-        passed=statistic <= threshold,
+        passed=bool(statistic <= threshold),
         mean=mean,
         stderr=stderr,
     )
