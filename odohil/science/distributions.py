@@ -172,6 +172,12 @@ def quadratic_form_sf(
 
     if x <= 0.0:
         return 1.0
+    # Q <= max(w) chi^2(sum h, sum nc): far beyond the bulk (a threshold of a
+    # spread with few degrees of freedom) that bound is the answer to 1e-12,
+    # where Imhof's integrand would oscillate too fast to integrate
+    bound = ncx2_sf(x / float(w.max()), float(h.sum()), float(nc.sum()))
+    if bound < 1e-12:
+        return bound
     quad = _integrate().quad
     # the bulk on doubling pieces from its scale up to u = 10 / max(w) (or
     # until r(u) has grown by e^30); beyond, sin(phase - x u / 2) is split into
