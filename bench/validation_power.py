@@ -169,7 +169,7 @@ def main() -> None:
             for row in _cell(robot, seed)]  # fmt: skip
     print(f"load {os.getloadavg()[0]:.2f}; {len(rows)} validations x 2; "
           f"{time.time() - start:.0f} s wall, {time.process_time() - cpu:.0f} s CPU")  # fmt: skip
-    print("| robot | path | seeds | planned trials (min-max) | planned power (min) "
+    print("| robot | path | seeds | planned trials (min-median-max) | planned power (min) "
           "| calibrated passes | wrong rejected |")  # fmt: skip
     print("|---|---|---|---|---|---|---|")
     for robot in _robots():
@@ -183,7 +183,8 @@ def main() -> None:
 
             print(
                 f"| {robot} | {vpath.text} | {k}{f' ({untrusted} untrusted)' if untrusted else ''}"
-                f" | {min(counts)}-{max(counts)} | {min(float(str(r['power'])) for r in mine):.3f}"
+                f" | {min(counts)}-{int(np.median(counts))}-{max(counts)}"
+                f" | {min(float(str(r['power'])) for r in mine):.3f}"
                 f" | {passed:.2f} (SE {_se(passed, k):.2f})"
                 f" | {rejected:.2f} (SE {_se(rejected, k):.2f}) |"
             )

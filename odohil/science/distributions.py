@@ -1,7 +1,8 @@
 """The few distribution functions the package needs, over ``scipy.special``.
 
 Each is the function ``scipy.stats`` would give (``chi2.sf``, ``chi2.isf``,
-``chi2.ppf``, ``norm.cdf``, ``norm.sf``, ``norm.isf``, ``t.ppf``, ``f.sf``),
+``chi2.ppf``, ``norm.cdf``, ``norm.sf``, ``norm.isf``, ``t.ppf``, ``f.sf``,
+``f.isf``),
 computed by the same ``scipy.special`` routine ``scipy.stats`` calls, so the
 numbers are the same (tests/science/test_distributions.py compares them on a
 grid); two more have no scipy.stats twin: the noncentral chi^2's
@@ -171,6 +172,12 @@ def quadratic_form_sf(
 
     if x <= 0.0:
         return 1.0
+    # Q <= max(w) chi^2(sum h, sum nc): far beyond the bulk (a threshold of a
+    # spread with few degrees of freedom) that bound is the answer to 1e-12,
+    # where Imhof's integrand would oscillate too fast to integrate
+    bound = ncx2_sf(x / float(w.max()), float(h.sum()), float(nc.sum()))
+    if bound < 1e-12:
+        return bound
     quad = _integrate().quad
     # the bulk on doubling pieces from its scale up to u = 10 / max(w) (or
     # until r(u) has grown by e^30); beyond, sin(phase - x u / 2) is split into
@@ -194,44 +201,28 @@ def quadratic_form_sf(
     return min(1.0, max(0.0, 0.5 + total / math.pi))
 
 
-_HERMITE = np.polynomial.hermite_e.hermegauss(32)
-"""Gauss-Hermite nodes and weights for the standard normal (probabilists')."""
+def f_isf(q: float, dof_num: float, dof_den: float) -> float:
+    """The x with P(X > x) = q for X ~ F(dof_num, dof_den), by the beta law of
+    dof_den / (dof_den + dof_num X) (accurate in the far tail, where 1 - q
+    would round); ``dof_den`` infinite is chi^2(dof_num) / dof_num."""
+    if not (dof_num > 0 and dof_den > 0):
+        return math.nan
+    if math.isinf(dof_den):
+        return chi2_isf(q, dof_num) / dof_num
+    w = float(_special().betaincinv(0.5 * dof_den, 0.5 * dof_num, q))
+    return math.inf if w <= 0.0 else dof_den * (1.0 - w) / (dof_num * w)
 
 
-def _mixture(dof: float, scale_sd: float) -> tuple[FloatArray, FloatArray]:
-    """The mixture's scales 1 + scale_sd z (clipped at 0.05) and weights."""
-    nodes, weights = _HERMITE
-    scales: FloatArray = np.maximum(1.0 + scale_sd * nodes, 0.05)
-    normalised: FloatArray = weights / np.sum(weights)
-    return scales, normalised
-
-
-def chi2_scale_mixture_sf(x: float, dof: float, scale_sd: float) -> float:
-    """P(X > x) for X = (1 + t) Y, Y ~ chi^2(dof), t ~ N(0, scale_sd^2)
-    independent (1 + t clipped at 0.05: a law of a scale known to a few per
-    cent, the case it is for); ``scale_sd`` 0 is :func:`chi2_sf`."""
-    if not scale_sd > 0:
+def chi2_estimated_scale_sf(x: float, dof: float, scale_dof: float) -> float:
+    """P(X > x) for X = Y / (V / scale_dof), Y ~ chi^2(dof), V ~ chi^2(scale_dof)
+    independent: a chi^2 statistic whose variance was divided by an estimate
+    of it from ``scale_dof`` squares (X / dof ~ F(dof, scale_dof)); an
+    infinite ``scale_dof`` is :func:`chi2_sf`."""
+    if math.isinf(scale_dof):
         return chi2_sf(x, dof)
-    scales, weights = _mixture(dof, scale_sd)
-    return float(np.sum(weights * chi2_sf_each(np.asarray(x / scales), dof)))
+    return f_sf(x / dof, dof, scale_dof) if dof > 0 else math.nan
 
 
-def chi2_scale_mixture_isf(q: float, dof: float, scale_sd: float) -> float:
-    """The x with :func:`chi2_scale_mixture_sf` (x, dof, scale_sd) = q: Newton's
-    steps from the plain chi^2 quantile (the mixture's tail is heavier, and
-    its survival convex there, so the steps rise to the root), to a relative
-    1e-10."""
-    if not scale_sd > 0:
-        return chi2_isf(q, dof)
-    scales, weights = _mixture(dof, scale_sd)
-    log_norm = 0.5 * dof * math.log(2.0) + math.lgamma(0.5 * dof)
-    x = chi2_isf(q, dof)
-    for _ in range(100):
-        y = x / scales
-        sf = float(np.sum(weights * chi2_sf_each(y, dof)))
-        density = weights * np.exp((0.5 * dof - 1.0) * np.log(y) - 0.5 * y - log_norm) / scales
-        step = (sf - q) / float(np.sum(density))
-        x += step
-        if abs(step) <= 1e-10 * x:
-            break
-    return x
+def chi2_estimated_scale_isf(q: float, dof: float, scale_dof: float) -> float:
+    """The x with :func:`chi2_estimated_scale_sf` (x, dof, scale_dof) = q."""
+    return dof * f_isf(q, dof, scale_dof) if dof > 0 else math.nan

@@ -49,12 +49,38 @@ probability ``power`` bounds what the verdict misses: it rejects whenever any
 test does, so it catches that error at least as often. A validation of few or
 noisy trials passes errors a user would call large; the number says how large.
 
-What the delta method leaves out: the dependence of C_i on theta-hat (an
-error in K_theta or K_rho scales the predicted spread rather than moving the
-mean). It is second order for the mean but not for the spread: with many
-validation trials the test becomes a test of K_theta and K_rho themselves,
-so a calibration whose K_theta is off by its own standard error can be
-rejected. docs/validation.md says how many trials keep the test honest.
+**The spread's own uncertainty** (issue 31). The predicted spread S_i =
+C_i(theta-hat) + R_i is an estimate too: an error e of the variance rates
+scales it, S_i(theta-hat) = S_i(theta) (1 + g^T e) to first order
+(:func:`nees_scale_dofs`), so a NEES given the calibration is chi-square
+times the ratio of the true spread to the predicted one. That ratio is not a
+normal variable around 1: a variance estimated from nu squares is chi^2(nu) /
+nu times the truth, and its reciprocal has a heavy upper tail (a K_rho that
+came out at half the truth doubles every x and y NEES). With the relative
+error's SD s = sqrt(g^T Sigma g) (Sigma the Wald covariance at the estimate:
+s does not shrink with a low estimate, the relative SE of a variance rate
+being about sqrt(2 / nu) whatever its value) the spread has nu = 2 / s^2
+degrees of freedom (Satterthwaite), and NEES / dof is F(dof, nu): the exact
+law when the spread is one variance estimated from nu squares, independent
+of the validation trials. The bias tests' W = A + B likewise
+(:func:`bias_scale_dofs`): A = sum S_i / n^2 carries the spread's error, B =
+J-bar Sigma J-bar^T the error of Sigma itself (the calibration's
+Satterthwaite degrees of freedom of each SE^2, ``parameter_dofs``); both
+follow the variance rates, so their errors are added as fully correlated
+(conservative), and z^2 is F(1, nu_W) (a Student t), the overall r-bar^T
+W^-1 r-bar / 3 F(3, nu_W). A normal scale mixture (1 + s z) chi-square with
+the same variance (the previous rule) has a light tail: at s = 0.3, 15
+trials, it rejected a calibrated robot's x NEES at 0.0067 where the level was
+0.00125 (tests/science/test_validation_level.py; BENCHMARKS.md, "Validation
+sized by power").
+
+What the first-order rule leaves out: the spread's dependence on the
+estimate beyond the linear term, and the NEES tests' share of B's error (B
+spans at most q of the 3n directions). With many validation trials the test
+becomes a test of K_theta and K_rho themselves, at the calibration's own
+precision: nu bounds how small a spread error any number of trials can
+tell from the calibration's. docs/validation.md says how many trials keep the
+test honest.
 """
 
 from __future__ import annotations
@@ -373,6 +399,20 @@ def _woodbury_nees(
     return nees, per_trial
 
 
+SCALE_DOF_MAX = 1e6
+"""A spread known to about 0.1 %: tested against the chi-square itself."""
+
+
+def scale_dof(relative_sd: float) -> float:
+    """The degrees of freedom of a predicted variance uncertain by the relative
+    standard deviation ``relative_sd`` (Satterthwaite: a variance estimated
+    from nu squares has relative SD sqrt(2 / nu)); inf for an exact one."""
+    if not relative_sd > 0:
+        return math.inf
+    nu = 2.0 / float(relative_sd) ** 2
+    return math.inf if nu > SCALE_DOF_MAX else max(nu, 1.0)
+
+
 def _test(
     name: str,
     statistic: float,
@@ -380,51 +420,89 @@ def _test(
     level: float,
     mean: tuple[float, ...] = (),
     stderr: tuple[float, ...] = (),
-    scale_sd: float = 0.0,
+    spread_dof: float = math.inf,
 ) -> ChiSquareTest:
-    """One test; a NEES whose predicted spread is itself uncertain by the
-    relative ``scale_sd`` (:func:`_spread_scale_sds`) against the scale mixture."""
-    if scale_sd**2 * dof < 1e-4:  # adds under 1e-4 of the chi-square's own variance
-        scale_sd = 0.0
-    threshold = distributions.chi2_scale_mixture_isf(level, dof, scale_sd)
+    """One test; a statistic whose predicted variance is itself an estimate of
+    ``spread_dof`` degrees of freedom (:func:`scale_dof`) against dof F(dof,
+    spread_dof) (module docstring, "The spread's own uncertainty")."""
+    threshold = float(distributions.chi2_estimated_scale_isf(level, dof, float(spread_dof)))
     return ChiSquareTest(
         name=name,
         statistic=statistic,
         dof=dof,
-        p_value=distributions.chi2_scale_mixture_sf(statistic, dof, scale_sd),
+        p_value=float(distributions.chi2_estimated_scale_sf(statistic, dof, float(spread_dof))),
         level=level,
         threshold=threshold,
-        passed=statistic <= threshold,
+        passed=bool(statistic <= threshold),
         mean=mean,
         stderr=stderr,
     )
 
 
-def _spread_scale_sds(
-    predictions: Sequence[PathPrediction], blocks: FloatArray, parameter_cov: FloatArray | None
+def nees_scale_dofs(
+    d_cov: FloatArray | None, blocks: FloatArray, parameter_cov: FloatArray | None
 ) -> tuple[float, ...]:
-    """The relative uncertainty of the predicted spread each NEES test (overall,
-    x, y, theta) divides by, from the estimate's (module docstring, "The
-    spread's own uncertainty"): the NEES given the estimate's error e is about
-    (1 + g^T e) chi-square(dof), g_j the mean over trials of
+    """The degrees of freedom of the predicted spread each NEES test (overall,
+    x, y, theta) divides by, from the estimate's uncertainty (module
+    docstring, "The spread's own uncertainty"): the spread's relative error
+    given the estimate's error e is g^T e, g_j the mean over trials of
     tr(S_i^-1 dC_i/d theta_j) / 3 (overall) or (dC_i/d theta_j)_aa / S_i,aa
-    (axis a); returns sqrt(g^T Sigma g) per test (zeros without the
-    covariance's Jacobian or the estimate's covariance)."""
-    derivatives = [p.cov_jacobian for p in predictions]
-    if parameter_cov is None or any(d is None for d in derivatives):
-        return (0.0,) * 4
-    d_cov = np.stack([d for d in derivatives if d is not None])  # (n, 3, 3, q)
+    (axis a); returns :func:`scale_dof` of sqrt(g^T Sigma g) per test (inf
+    without the covariance's Jacobian ``d_cov`` (n, 3, 3, q) or the estimate's
+    covariance)."""
+    if parameter_cov is None or d_cov is None:
+        return (math.inf,) * 4
     whitened = np.linalg.solve(blocks[:, None, :, :], np.moveaxis(d_cov, 3, 1))  # (n, q, 3, 3)
     rows = [np.trace(whitened, axis1=2, axis2=3).mean(axis=0) / 3.0]
     diagonal = np.diagonal(blocks, axis1=1, axis2=2)  # (n, 3)
     rows += [(d_cov[:, a, a, :] / diagonal[:, a : a + 1]).mean(axis=0) for a in range(3)]
     sigma = np.asarray(parameter_cov, dtype=np.float64)
-    return tuple(math.sqrt(max(float(g @ sigma @ g), 0.0)) for g in rows)
+    return tuple(scale_dof(math.sqrt(max(float(g @ sigma @ g), 0.0))) for g in rows)
 
 
-def _bias_tests(residuals: FloatArray, cov: FloatArray, level: float) -> list[ChiSquareTest]:
+def bias_scale_dofs(
+    bias_cov: FloatArray,
+    d_spread: FloatArray | None,
+    mean_jacobian: FloatArray,
+    parameter_cov: FloatArray | None,
+    parameter_dofs: Sequence[float] | None,
+) -> tuple[float, ...]:
+    """The degrees of freedom of W, the mean residual's predicted covariance,
+    for each bias test (overall, x, y, theta; module docstring). W = A + B,
+    A = sum S_i / n^2 the trials' spread, B = J-bar Sigma J-bar^T the
+    estimate's. A's error is dA e (``d_spread`` (3, 3, q): sum dC_i / n^2);
+    B's is Sigma's own, each SE^2 uncertain by sqrt(2 / nu_j) (``parameter_dofs``,
+    the calibration's degrees of freedom, inf when known), taken as fully
+    correlated, as are A's and B's errors (both follow the variance rates):
+    the relative SD of W_aa (or of tr(W^-1 W) / 3) is (sd_A + sd_B) / W."""
+    if parameter_cov is None:
+        return (math.inf,) * 4
+    sigma = np.asarray(parameter_cov, dtype=np.float64)
+    q = sigma.shape[0]
+    rel = np.zeros(q)
+    if parameter_dofs is not None:
+        rel = np.array([math.sqrt(2.0 / v) if v > 0 and math.isfinite(v) else 0.0
+                        for v in parameter_dofs])  # fmt: skip
+    scaled = sigma * 0.5 * (rel[:, None] + rel[None, :])
+    d_b = mean_jacobian @ scaled @ mean_jacobian.T  # B's error per unit z
+    w_inv = np.linalg.inv(bias_cov)
+    d_a = np.zeros((3, 3, q)) if d_spread is None else d_spread
+    h = [np.einsum("ij,jik->k", w_inv, d_a) / 3.0]
+    h += [d_a[a, a, :] / bias_cov[a, a] for a in range(3)]
+    spread_b = [abs(float(np.trace(w_inv @ d_b))) / 3.0]
+    spread_b += [abs(float(d_b[a, a])) / bias_cov[a, a] for a in range(3)]
+    return tuple(
+        scale_dof(math.sqrt(max(float(g @ sigma @ g), 0.0)) + b)
+        for g, b in zip(h, spread_b, strict=True)
+    )
+
+
+def _bias_tests(
+    residuals: FloatArray, cov: FloatArray, level: float, spread_dofs: Sequence[float]
+) -> list[ChiSquareTest]:
     """The mean residual's tests (module docstring): overall, then per axis;
-    ``cov`` is W, the mean residual's predicted covariance."""
+    ``cov`` is W, the mean residual's predicted covariance, ``spread_dofs``
+    its degrees of freedom per test (:func:`bias_scale_dofs`)."""
     mean = residuals.mean(axis=0)
     se = np.sqrt(np.diag(cov))
     try:
@@ -433,10 +511,12 @@ def _bias_tests(residuals: FloatArray, cov: FloatArray, level: float) -> list[Ch
         raise ParameterError("the mean residual's predicted covariance is singular") from exc
     values = tuple(float(v) for v in mean)
     errors = tuple(float(v) for v in se)
-    tests = [_test("bias", overall, 3, level, values, errors)]
+    tests = [_test("bias", overall, 3, level, values, errors, spread_dofs[0])]
     for a, name in enumerate(AXES):
         z2 = float(mean[a] ** 2 / cov[a, a])
-        tests.append(_test(f"bias {name}", z2, 1, level, (values[a],), (errors[a],)))
+        tests.append(
+            _test(f"bias {name}", z2, 1, level, (values[a],), (errors[a],), spread_dofs[a + 1])
+        )
     return tests
 
 
@@ -488,6 +568,7 @@ def validation_test(
     measurement_covs: FloatArray | None = None,
     parameter_cov: FloatArray | None = None,
     alpha: float = DEFAULT_ALPHA,
+    parameter_dofs: Sequence[float] | None = None,
 ) -> ValidationResult:
     """Test measured pose changes against the model's predictions (module docs).
 
@@ -500,6 +581,9 @@ def validation_test(
             parameters, more with turn errors), or None to leave the parameter
             uncertainty out.
         alpha: the verdict's false-rejection level, in (0, 0.5].
+        parameter_dofs: per parameter, the degrees of freedom of its variance
+            in ``parameter_cov`` (the calibration's Satterthwaite nu; inf or
+            None: known), for the bias tests' W (:func:`bias_scale_dofs`).
 
     Raises:
         ParameterError: shapes disagree, non-finite input, alpha out of range,
@@ -541,16 +625,28 @@ def validation_test(
     residuals = poses - means
     residuals[:, 2] = wrap_angles(residuals[:, 2])
     level = alpha / N_TESTS
-    scale_sds = _spread_scale_sds(predictions, blocks, parameter_cov)
+    derivatives = [p.cov_jacobian for p in predictions]
+    d_cov = None
+    if not any(d is None for d in derivatives):
+        d_cov = np.stack([d for d in derivatives if d is not None])  # (n, 3, 3, q)
+    if parameter_dofs is not None and len(parameter_dofs) != jacobians.shape[2]:
+        raise ParameterError(
+            f"{len(parameter_dofs)} degrees of freedom for {jacobians.shape[2]} parameters"
+        )
+    nees_dofs = nees_scale_dofs(d_cov, blocks, parameter_cov)
     overall, trial_nees = _woodbury_nees(residuals, blocks, loadings)
-    tests = [_test("overall", overall, 3 * n, level, scale_sd=scale_sds[0])]
+    tests = [_test("overall", overall, 3 * n, level, spread_dof=nees_dofs[0])]
     for a, name in enumerate(AXES):
         axis_nees, _ = _woodbury_nees(
             residuals[:, a : a + 1], blocks[:, a : a + 1, a : a + 1], loadings[:, a : a + 1, :]
         )
-        tests.append(_test(name, axis_nees, n, level, scale_sd=scale_sds[a + 1]))
+        tests.append(_test(name, axis_nees, n, level, spread_dof=nees_dofs[a + 1]))
     bias_cov = _bias_covariance(blocks, loadings)
-    bias = _bias_tests(residuals, bias_cov, level)
+    d_spread = None if d_cov is None else d_cov.sum(axis=0) / n**2
+    bias_dofs = bias_scale_dofs(
+        bias_cov, d_spread, jacobians.mean(axis=0), parameter_cov, parameter_dofs
+    )
+    bias = _bias_tests(residuals, bias_cov, level, bias_dofs)
     detectable = detectable_errors(jacobians.mean(axis=0), bias_cov, level)
     return ValidationResult(
         passed=all(t.passed for t in (*tests, *bias)),

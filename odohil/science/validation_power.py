@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,7 +48,14 @@ import numpy as np
 from odohil.errors import ParameterError
 from odohil.science import distributions
 from odohil.science.paths import FloatArray
-from odohil.science.validation import AXES, DETECTION_POWER, N_TESTS, PathPrediction
+from odohil.science.validation import (
+    AXES,
+    DETECTION_POWER,
+    N_TESTS,
+    PathPrediction,
+    bias_scale_dofs,
+    nees_scale_dofs,
+)
 from odohil.units import wrap_angles
 
 MAX_TRIALS = 10000
@@ -213,10 +220,15 @@ def verdict_power(
     measurement_cov: FloatArray | None = None,
     parameter_cov: FloatArray | None = None,
     level: float,
+    parameter_dofs: Sequence[float] | None = None,
 ) -> TestPower:
-    """The power of the eight tests of n trials of one path, each at ``level``,
-    when the robot's trials follow ``truth`` (its mean and covariance at the
-    true parameters) instead of ``prediction`` (module docstring): the best test."""
+    """The power of the eight tests of n trials of one path, each at ``level``
+    against the reference the test uses (the F law of a spread that is itself
+    an estimate, :func:`~odohil.science.validation.nees_scale_dofs` and
+    :func:`~odohil.science.validation.bias_scale_dofs`; ``parameter_dofs`` as
+    :func:`~odohil.science.validation.validation_test` takes them), when the
+    robot's trials follow ``truth`` (its mean and covariance at the true
+    parameters) instead of ``prediction`` (module docstring): the best test."""
     if n < 1:
         raise ParameterError(f"trials must be at least 1, got {n}")
     r = np.zeros((3, 3)) if measurement_cov is None else np.asarray(measurement_cov)
@@ -227,8 +239,16 @@ def verdict_power(
         g = j @ np.asarray(parameter_cov, dtype=np.float64) @ j.T
     d = truth.mean - prediction.mean
     d[2] = float(wrap_angles(np.array([d[2]]))[0])
+    d_cov = None if prediction.cov_jacobian is None else prediction.cov_jacobian[None]
+    nees_dofs = nees_scale_dofs(d_cov, s[None], parameter_cov)
+    bias_dofs = bias_scale_dofs(
+        s / n + g, None if d_cov is None else d_cov[0] / n, prediction.jacobian,
+        parameter_cov, parameter_dofs,
+    )  # fmt: skip
     out: list[tuple[str, float]] = []
-    for name, axes in (("overall", [0, 1, 2]), *((a, [k]) for k, a in enumerate(AXES))):
+    for t, (name, axes) in enumerate(
+        (("overall", [0, 1, 2]), *((a, [k]) for k, a in enumerate(AXES)))
+    ):
         ix = np.ix_(axes, axes)
         w0, _ = _form(s[ix], s_true[ix], np.zeros(len(axes)))
         w1, nc1 = _form(s[ix] + n * g[ix], s_true[ix] + n * g[ix],
@@ -239,12 +259,12 @@ def verdict_power(
             weights = np.concatenate([w0, w1])
             dofs = np.concatenate([np.full(k, n - 1.0), dofs])
             ncs = np.concatenate([np.zeros(k), nc1])
-        threshold = distributions.chi2_isf(level, k * n)
+        threshold = distributions.chi2_estimated_scale_isf(level, k * n, nees_dofs[t])
         out.append((name, distributions.quadratic_form_sf(threshold, weights, dofs, ncs)))
         wb, ncb = _form(s[ix] / n + g[ix], s_true[ix] / n + g[ix], d[axes])
         bias = "bias" if name == "overall" else f"bias {name}"
-        out.append((bias, distributions.quadratic_form_sf(
-            distributions.chi2_isf(level, len(axes)), wb, 1.0, ncb)))  # fmt: skip
+        bias_threshold = distributions.chi2_estimated_scale_isf(level, k, bias_dofs[t])
+        out.append((bias, distributions.quadratic_form_sf(bias_threshold, wb, 1.0, ncb)))
     test, power = max(out, key=lambda c: c[1])
     return TestPower(n, power, test)
 
@@ -258,6 +278,7 @@ def trials_to_catch(
     alpha: float,
     power: float = DETECTION_POWER,
     max_trials: int = MAX_TRIALS,
+    parameter_dofs: Sequence[float] | None = None,
 ) -> TrialPlan:
     """The fewest trials of one path whose best test (each at alpha / 8, as
     the verdict runs them) rejects with probability ``power`` a robot whose
@@ -273,6 +294,7 @@ def trials_to_catch(
         return verdict_power(
             prediction, truth, n,
             measurement_cov=measurement_cov, parameter_cov=parameter_cov, level=level,
+            parameter_dofs=parameter_dofs,
         )  # fmt: skip
 
     return _fewest(at, power, max_trials, at(max_trials).power)

@@ -136,8 +136,10 @@ def test_the_spread_power_is_the_discrete_models_rejection_rate() -> None:
 
 
 def test_the_verdicts_power_is_the_bias_power_when_only_the_mean_moves() -> None:
+    # the spread known (no cov_jacobian): both against the chi-square itself
     parameter_cov = np.diag([2e-3, 0.01, 1e-7, 1e-7]) ** 2
     shift = np.radians(0.3)
+    known = replace(PREDICTION, cov_jacobian=None)
     truth = PathPrediction(PREDICTION.mean + PREDICTION.jacobian[:, 0] * shift,
                            PREDICTION.cov, PREDICTION.jacobian)  # fmt: skip
     for n in (1, 4):
@@ -146,7 +148,7 @@ def test_the_verdicts_power_is_the_bias_power_when_only_the_mean_moves() -> None
             parameter_cov=parameter_cov, level=ALPHA / N_TESTS,
         )  # fmt: skip
         verdict = verdict_power(
-            PREDICTION, truth, n, measurement_cov=MEASUREMENT_COV,
+            known, truth, n, measurement_cov=MEASUREMENT_COV,
             parameter_cov=parameter_cov, level=ALPHA / N_TESTS,
         )  # fmt: skip
         assert verdict.power == pytest.approx(bias.power, abs=1e-6)

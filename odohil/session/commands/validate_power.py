@@ -59,6 +59,7 @@ from odohil.session.results.validation import (
     VARIANCE_RATES,
     ValidationPath,
     parameter_covariance,
+    parameter_dofs,
     predict_calibrated,
 )
 from odohil.session.text.outcome import DETECT_HELP, DETECT_SYNTAX, sizing_lines, test_words
@@ -233,9 +234,17 @@ def size_validation(
     prediction = predict_calibrated(path, calibration)
     r = expected_pose_cov(measure, description, prediction.mean)
     sigma = parameter_covariance(calibration)
+    nus = parameter_dofs(calibration)
     truths = [_truth(path, calibration, d) for d in found]
     plans = [
-        trials_to_catch(prediction, truth, measurement_cov=r, parameter_cov=sigma, alpha=alpha)
+        trials_to_catch(
+            prediction,
+            truth,
+            measurement_cov=r,
+            parameter_cov=sigma,
+            alpha=alpha,
+            parameter_dofs=nus,
+        )
         for truth in truths
     ]
     cannot = [(d, p) for d, p in zip(found, plans, strict=True) if p.trials is None]
@@ -258,7 +267,7 @@ def size_validation(
     for d, p, truth in zip(found, plans, truths, strict=True):
         at = verdict_power(
             prediction, truth, chosen, measurement_cov=r, parameter_cov=sigma,
-            level=alpha / N_TESTS,
+            level=alpha / N_TESTS, parameter_dofs=nus,
         )  # fmt: skip
         caught.append(Caught(d, p, at.power, at.test))
     if trials is not None and trials < needed:

@@ -97,6 +97,7 @@ __all__ = [
     "held_out_trials",
     "load_calibration",
     "parameter_covariance",
+    "parameter_dofs",
     "parse_validation_path",
     "predict_calibrated",
     "predictions_of",
@@ -569,7 +570,23 @@ def check_trials(
         trials.covs,
         parameter_covariance(calibration),
         alpha=alpha,
+        parameter_dofs=parameter_dofs(calibration),
     )
+
+
+def parameter_dofs(calibration: EstimateResult) -> tuple[float, ...]:
+    """Per parameter, the degrees of freedom of its variance: the interval's
+    (Satterthwaite for E_R, E_T and the turn errors), else a variance rate's
+    own 2 (K / SE)^2; inf where neither is known."""
+    out = []
+    for p in calibration.parameters:
+        if p.dof is not None and p.dof > 0:
+            out.append(float(p.dof))
+        elif p.name in VARIANCE_RATES and p.value > 0 and 0 < p.stderr < math.inf:
+            out.append(2.0 * (p.value / p.stderr) ** 2)
+        else:
+            out.append(math.inf)
+    return tuple(out)
 
 
 VARIANCE_RATES = ("K_theta", "K_rho", "K_spin")
