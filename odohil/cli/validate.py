@@ -163,8 +163,7 @@ def _print(
     for line in verdict_lines(tested, data["path"], calibration):
         out.print(line, highlight=False)
     out.print(drawn(chi_square_table(tested)))
-    out.print(f"parameter uncertainty: {data['verdict']['parameter_uncertainty']}", highlight=False)
-    for line in held_out_lines(measured):
+    for line in held_out_lines(measured, data["verdict"]["parameter_uncertainty"]):
         out.print(line, highlight=False)
 
 

@@ -491,10 +491,11 @@ def verdict_lines(
     return lines
 
 
-def held_out_lines(measured: ValidationTrials) -> list[str]:
-    """What is printed below the tests of the held-out trials: those left out
-    as ambiguous, and how a held-out continuous log's windows went."""
-    lines = []
+def held_out_lines(measured: ValidationTrials, uncertainty: str) -> list[str]:
+    """What is printed below the tests: how the calibration's ``uncertainty``
+    was taken (the verdict's ``parameter_uncertainty``), the held-out trials
+    left out as ambiguous, and how a held-out continuous log's windows went."""
+    lines = [f"parameter uncertainty: {uncertainty}"]
     if measured.left_out:
         lines.append(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")
     if measured.windows is not None:
