@@ -172,18 +172,30 @@ def test_validate_straight_and_cw_circles_against_ccw_circles_finds_the_heading_
     assert units.radians_to_degrees(heading["mean"][0]) == pytest.approx(2.49, abs=0.5)
 
 
-def test_validate_cw_circles_against_ccw_circles_finds_a_bias(tmp_path: Path) -> None:
+def test_validate_cw_circles_against_ccw_circles_finds_a_bias_short_of_the_level(
+    tmp_path: Path,
+) -> None:
     """Calibrated on the clockwise circles alone (E_R and e_turn share their one
-    radius, so the fit's uncertainty is wide), the fit does NOT predict the
-    counter-clockwise circles: the joint mean-residual test finds a bias."""
+    radius, so the fit's uncertainty is wide), the counter-clockwise circles
+    show a bias: the joint mean-residual statistic is 16.3 on 3 degrees of
+    freedom. Until stop 36 its threshold was chi-square's 15.8 (level 0.00125,
+    the 0.01 split over the eight tests) and it failed the validation, p about
+    0.001. Since issue 31's fix the threshold holds the calibration's own
+    uncertainty (its covariance is an estimate with few degrees of freedom:
+    F(3, nu_W), 20.5 here, docs/validation.md), and the same bias has p 0.004:
+    evidence, short of the validation's level. The validation says so with
+    its numbers; the estimate's misfit check distrusts the circles by direction
+    (tests/estimation/test_misfit_optiodom.py)."""
     cal = _trial_file(tmp_path / "cw.jsonl", [t for t in _kind("circular") if t.direction == "cw"])
     held = _trial_file(
         tmp_path / "ccw.jsonl", [t for t in _kind("circular") if t.direction == "ccw"]
     )
     result = invoke("validate", cal, "--path", f"file:{held}", "--robot", OPTIODOM_ROBOT, "--json")
-    assert result.exit_code == 3, result.output
-    verdict = json.loads(result.stdout)["verdict"]
-    assert not verdict["bias"]["overall"]["passed"], verdict["failed"]
+    assert result.exit_code == 0, result.output
+    bias = json.loads(result.stdout)["verdict"]["bias"]["overall"]
+    assert bias["statistic"] > 15.0, bias  # chi-square(3)'s 0.00125 point is 15.8
+    assert 0.00125 < bias["p_value"] < 0.01, bias
+    assert bias["threshold"] > bias["statistic"], bias
 
 
 def test_validate_a_recording_calibration_needs_the_robot(tmp_path: Path) -> None:

@@ -66,6 +66,7 @@ from odohil.science.estimators.likelihood import (
     ModelPoint,
     evaluate,
 )
+from odohil.science.estimators.memo import ResultMemo
 from odohil.science.estimators.misfit import MisfitCheck, labels_of, misfit_check
 from odohil.science.estimators.observations import align_heading
 from odohil.science.estimators.result import (
@@ -459,6 +460,19 @@ def _number(trials: Sequence[PathTrial]) -> list[PathTrial]:
     return [t if t.trial is not None else replace(t, trial=i + 1) for i, t in enumerate(trials)]
 
 
+_PATH_MEMO: ResultMemo[EstimateResult] = ResultMemo(16)
+"""The last estimates of :func:`estimate_paths` (odohil/science/estimators/memo.py)."""
+
+
+def _trial_key(trial: PathTrial) -> Hashable:
+    """Everything of one trial an estimate reads (arrays by their bytes)."""
+    pose, cov = trial.pose_change, trial.measurement_cov
+    return (
+        trial.path, pose.shape, pose.tobytes(), cov.shape, cov.tobytes(), trial.source,
+        trial.span_s, trial.trial, trial.family, trial.direction,
+    )  # fmt: skip
+
+
 def estimate_paths(
     trials: Sequence[PathTrial],
     *,
@@ -490,10 +504,33 @@ def estimate_paths(
             the same either way, and the profile intervals cost about half
             of the whole estimate).
 
+    The same trials with the same arguments are estimated once per process:
+    the last 16 results are kept by everything they read (:data:`_PATH_MEMO`).
+
     Raises:
         MeasurementError: an unknown method, an excluded number that is no
             trial's, or fewer trials than parameters.
     """
+    wanted = tuple(sorted(set(int(t) for t in exclude)))
+    key = (tuple(map(_trial_key, trials)), turns_exact, method, split_directions, wanted,
+           criteria, intervals)  # fmt: skip
+    return _PATH_MEMO.get(
+        key,
+        lambda: _estimate_paths(
+            trials, turns_exact, method, split_directions, wanted, criteria, intervals
+        ),
+    )
+
+
+def _estimate_paths(
+    trials: Sequence[PathTrial],
+    turns_exact: bool,
+    method: str,
+    split_directions: bool | None,
+    exclude: Iterable[int],
+    criteria: Criteria | None,
+    intervals: IntervalRule,
+) -> EstimateResult:
     if method not in PATH_METHODS:
         raise MeasurementError(f"method must be one of {PATH_METHODS}, got {method!r}")
     numbered = _number(trials)
