@@ -248,7 +248,8 @@ def run_session(
 ) -> RunOutcome:
     """Run the engine on ``opened`` (with ``source``, else the session's own;
     the live estimate by ``estimator``, else by the one recipe:
-    :class:`RecipeLiveEstimator`) to its :class:`RunOutcome`. The engine journals
+    :class:`RecipeLiveEstimator`; none for a validation, whose belief is its
+    calibration) to its :class:`RunOutcome`. The engine journals
     ``stopped`` and stops the robot before an error gets here; a
     KeyboardInterrupt (any signal of odohil/session/signals.py) ends the
     run as ``interrupted``."""
@@ -267,7 +268,13 @@ def run_session(
         opened.state,
         opened.robot,
         chosen,
-        estimator=estimator or RecipeLiveEstimator(lambda: engine.state, exclude),
+        # a validation's trials are measured under the calibration and tested
+        # against it: an estimate of its own trials so far is neither its
+        # belief nor its result, and it cost a fit per trial (every square of
+        # a validation of general paths: tests/create2/test_validate_turn_free.py)
+        estimator=None
+        if calibration is not None
+        else (estimator or RecipeLiveEstimator(lambda: engine.state, exclude)),
         observer=observer,
         motion=motion,
         connection=opened.prepared.settings,
