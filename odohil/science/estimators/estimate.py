@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import math
-import threading
-from collections import OrderedDict
 from collections.abc import Hashable, Iterable, Sequence
 from dataclasses import replace
 from typing import Literal
@@ -18,6 +16,7 @@ from odohil.science.estimators.checks import Criteria, design_misfit, model_chec
 from odohil.science.estimators.intervals import profile_interval, satterthwaite_dofs, t_interval
 from odohil.science.estimators.joint import JointFit, joint_estimate, start_phi
 from odohil.science.estimators.likelihood import GroupStats
+from odohil.science.estimators.memo import ResultMemo
 from odohil.science.estimators.observations import (
     DesignSummary,
     Observation,
@@ -275,8 +274,7 @@ def _numbered(observations: Sequence[Observation]) -> list[Observation]:
 
 _MEMO_SIZE = 16
 """Estimates kept by :func:`estimate` for repeated calls on the same trials."""
-_memo: OrderedDict[Hashable, EstimateResult] = OrderedDict()
-_memo_lock = threading.Lock()  # a live estimate may run beside the operator's dialogue
+_memo: ResultMemo[EstimateResult] = ResultMemo(_MEMO_SIZE)
 
 
 def _memo_key(
@@ -337,17 +335,10 @@ def estimate(
     """
     excluded, ambiguous_numbers = tuple(exclude), tuple(ambiguous)
     key = _memo_key(observations, method, criteria, excluded, ambiguous_numbers, turns_exact)
-    with _memo_lock:
-        kept = _memo.get(key)
-        if kept is not None:
-            _memo.move_to_end(key)
-            return kept
-    result = _estimate(observations, method, criteria, excluded, ambiguous_numbers, turns_exact)
-    with _memo_lock:
-        _memo[key] = result
-        while len(_memo) > _MEMO_SIZE:
-            _memo.popitem(last=False)
-    return result
+    return _memo.get(
+        key,
+        lambda: _estimate(observations, method, criteria, excluded, ambiguous_numbers, turns_exact),
+    )
 
 
 def _estimate(

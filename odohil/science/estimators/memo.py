@@ -31,6 +31,9 @@ class ResultMemo(Generic[Value]):
         self._kept: OrderedDict[Hashable, Value] = OrderedDict()
         self._lock = threading.Lock()  # a live estimate may run beside the operator's dialogue
 
+    def __len__(self) -> int:
+        return len(self._kept)
+
     def get(self, key: Hashable, compute: Callable[[], Value]) -> Value:
         """The result kept for ``key``, else ``compute()``'s, kept."""
         with self._lock:
