@@ -30,7 +30,7 @@ from odohil.science.validation import DEFAULT_ALPHA, ValidationResult
 from odohil.session.commands.validate import (
     chi_square_table,
     held_out,
-    held_out_lines,
+    lines_below_tests,
     validation_document,
     validation_setup,
     verdict_lines,
@@ -163,7 +163,7 @@ def _print(
     for line in verdict_lines(tested, data["path"], calibration):
         out.print(line, highlight=False)
     out.print(drawn(chi_square_table(tested)))
-    for line in held_out_lines(measured, data["verdict"]["parameter_uncertainty"]):
+    for line in lines_below_tests(measured, data["verdict"]["parameter_uncertainty"]):
         out.print(line, highlight=False)
 
 

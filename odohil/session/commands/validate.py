@@ -57,7 +57,7 @@ __all__ = [
     "chi_square_table",
     "drive_folder",
     "held_out",
-    "held_out_lines",
+    "lines_below_tests",
     "validation_document",
     "validation_setup",
     "verdict_lines",
@@ -491,7 +491,7 @@ def verdict_lines(
     return lines
 
 
-def held_out_lines(measured: ValidationTrials, uncertainty: str) -> list[str]:
+def lines_below_tests(measured: ValidationTrials, uncertainty: str) -> list[str]:
     """What is printed below the tests: how the calibration's ``uncertainty``
     was taken (the verdict's ``parameter_uncertainty``), the held-out trials
     left out as ambiguous, and how a held-out continuous log's windows went."""
@@ -499,8 +499,8 @@ def held_out_lines(measured: ValidationTrials, uncertainty: str) -> list[str]:
     if measured.left_out:
         lines.append(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")
     if measured.windows is not None:
-        head, *why = measured.windows.lines()
-        lines += [f"held-out {head}", *why]
+        lines.append(f"held-out {measured.windows.summary()}")
+        lines += [f"  - {line}" for line in measured.windows.named()]
     return lines
 
 

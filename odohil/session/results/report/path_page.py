@@ -80,13 +80,9 @@ def render_path_page(outcome: EstimateOutcome, exports: Sequence[ExportFile]) ->
         f"<h2>Verdict: {e(outcome.status)}</h2>",
     ]
     if outcome.windows is not None:  # how a continuous log's windows went (--window-m)
-        head, *why = outcome.windows.lines()
-        parts.append(f"<p>{e(head)}</p>")
-        parts += (
-            ["<ul>", *[f"<li>{e(w.strip().removeprefix('- '))}</li>" for w in why], "</ul>"]
-            if why
-            else []
-        )
+        named = outcome.windows.named()
+        parts.append(f"<p>{e(outcome.windows.summary())}</p>")
+        parts += ["<ul>", *[f"<li>{e(n)}</li>" for n in named], "</ul>"] if named else []
     result = outcome.result
     reasons = [outcome.problem] if result is None else list(result.verdict.reasons)
     parts += ["<ul>", *[f"<li>{e(r)}</li>" for r in reasons], "</ul>"] if reasons else []

@@ -91,25 +91,32 @@ class WindowCount:
             "partial_dropped_m": self.dropped_m,
         }
 
-    def lines(self) -> list[str]:
-        """``windows of 2 m travelled (--window-m): 29 trials, 1 left out for a
-        gap in the ground truth, 1 partial window dropped (1.08 m)``, and where
-        and why each window was left out (the first :data:`WINDOWS_NAMED`):
-        the text under an estimate, import's, the report page's."""
+    def summary(self) -> str:
+        """``windows of 2 m travelled (--window-m): 29 trials, 1 left out for
+        a gap in the ground truth, 1 partial window dropped (1.08 m)``."""
         partial = (
             f", {units.plural(self.partial, 'partial window')} dropped ({self.dropped_m:.3g} m)"
             if self.partial
             else ""
         )
-        lines = [
+        return (
             f"windows of {self.window_m:g} m travelled (--window-m): "
             f"{units.plural(self.used, 'trial')}, {len(self.left_out)} left out for a gap in "
             f"the ground truth{partial}"
-        ]
-        lines += [f"  - left out: {why}" for why in self.left_out[:WINDOWS_NAMED]]
+        )
+
+    def named(self) -> list[str]:
+        """``left out: WHERE AND WHY`` for the first :data:`WINDOWS_NAMED`
+        windows left out, then ``and N more``."""
+        named = [f"left out: {why}" for why in self.left_out[:WINDOWS_NAMED]]
         if len(self.left_out) > WINDOWS_NAMED:
-            lines.append(f"  - and {len(self.left_out) - WINDOWS_NAMED} more")
-        return lines
+            named.append(f"and {len(self.left_out) - WINDOWS_NAMED} more")
+        return named
+
+    def lines(self) -> list[str]:
+        """:meth:`summary`, then :meth:`named` as a list under it: the text
+        under an estimate and import's."""
+        return [self.summary(), *(f"  - {line}" for line in self.named())]
 
 
 @dataclass(frozen=True)
