@@ -499,8 +499,8 @@ def lines_below_tests(measured: ValidationTrials, uncertainty: str) -> list[str]
     if measured.left_out:
         lines.append(f"ambiguous trials left out: {', '.join(map(str, measured.left_out))}")
     if measured.windows is not None:
-        lines.append(f"held-out {measured.windows.summary()}")
-        lines += [f"  - {line}" for line in measured.windows.named()]
+        head, *named = measured.windows.lines()
+        lines += [f"held-out {head}", *named]
     return lines
 
 
