@@ -35,6 +35,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -49,28 +50,37 @@ DEFAULT_DATA = Path(os.environ.get("ODOHIL_OPTIODOM", ROOT.parent / "shared/data
 ROBOT = ROOT / "docs/examples/optiodom.toml"
 
 
-def one_copy(data: Path, spins: bool = False) -> list[Path]:
+def one_copy(data: Path, spins: bool = False, issue_size: bool = False) -> list[Path]:
     """The run files of one copy: every circle and every straight run (the
     ivanjko runs the reader finds ``straight``; the others are spins), or with
     ``spins`` every circle and the first 30 ivanjko runs, spins included (62
-    trials a copy: the issue's 434 trials for seven copies)."""
+    trials a copy: the issue's 434 trials for seven copies), or with
+    ``issue_size`` the first 20 circles and 42 straight runs (the 14 cycled):
+    62 trials and 68.6k rows a copy: 434 trials and 480k rows
+    for seven copies (the issue's 434 trials and 476k rows), of the paths the model fits."""
     description = load_robot_description(ROBOT)
     ivanjko = run_files([data / "ivanjko"])
+    circles = run_files([data / "circular"])
     if spins:
-        return run_files([data / "circular"]) + ivanjko[:30]
+        return circles + ivanjko[:30]
     straight = [
         run
         for run in ivanjko
         if trials_of(read_run(run), description, ImportOptions())[0].family == "straight"
     ]
-    return run_files([data / "circular"]) + straight
+    if issue_size:
+        return circles[:20] + [straight[i % len(straight)] for i in range(42)]
+    return circles + straight
 
 
-def big_recording(data: Path, copies: int, spins: bool = False) -> Recording:
+def big_recording(
+    data: Path, copies: int, spins: bool = False, issue_size: bool = False
+) -> Recording:
     """``copies`` copies of :func:`one_copy` as one recording, the labels of
     copy c prefixed ``cC/``, times running on."""
-    base = joined_runs(one_copy(data, spins))
+    base = joined_runs(one_copy(data, spins, issue_size))
     assert base.trial is not None
+    base = replace(base, trial=tuple(_repeats_labelled(base.trial)))
     span = float(base.t_s[-1] - base.t_s[0]) + 0.05
     times: list[np.ndarray] = []
     labels: list[str] = []
@@ -86,6 +96,20 @@ def big_recording(data: Path, copies: int, spins: bool = False) -> Recording:
         where=np.arange(2, 2 + len(t), dtype=np.int64),
         trial=tuple(labels),
     )
+
+
+def _repeats_labelled(labels: tuple[str, ...]) -> list[str]:
+    """The labels with a run that comes again (``issue_size``'s cycled
+    straight runs) told apart: its k-th repeat labelled ``<label>#k``."""
+    seen: dict[str, int] = {}
+    out: list[str] = []
+    previous = None
+    for label in labels:
+        if label and label != previous:
+            seen[label] = seen.get(label, -1) + 1
+        previous = label
+        out.append(f"{label}#{seen[label]}" if label and seen[label] else label)
+    return out
 
 
 def optiodom_copies(data: Path, copies: int, folder: Path, spins: bool = False) -> Path:
@@ -153,6 +177,11 @@ def main() -> None:
         action="store_true",
         help="circles and the first 30 ivanjko runs, spins included (434 trials for 7 copies)",
     )
+    parser.add_argument(
+        "--issue-size",
+        action="store_true",
+        help="20 circles and 42 straight runs a copy (434 trials, 480k rows for 7 copies)",
+    )
     parser.add_argument("--keep", type=Path, help="build the log here and keep it")
     args = parser.parse_args()
     print(f"load before: {uptime()}")
@@ -160,7 +189,7 @@ def main() -> None:
     folder.mkdir(parents=True, exist_ok=True)
     try:
         log = folder / "big.csv"
-        recording = big_recording(args.data, args.copies, args.spins)
+        recording = big_recording(args.data, args.copies, args.spins, args.issue_size)
         write_csv_log(log, recording)
         assert recording.trial is not None
         trials = len(set(recording.trial) - {""})
