@@ -38,6 +38,10 @@ from odohil.session.robots.registry import open_robot
 fakes.register_url_handlers()
 
 SETTINGS = DriveSettings()  # 0.5 m/s, 0.5 m/s^2, step_timeout_s 120 s
+BRISK = DriveSettings(acceleration_m_s2=2.0)
+"""The legs that run into their limit: 0.5 m/s reached in 0.25 s, so that the
+limit (2 x the profile + 3 s) is little more than its margin; the wait for
+it is the check."""
 
 
 def test_the_limit_follows_the_speed_profile_and_is_capped() -> None:
@@ -61,20 +65,20 @@ def test_the_limit_follows_the_speed_profile_and_is_capped() -> None:
 
 def test_a_create2_leg_that_cannot_end_is_stopped_at_its_limit() -> None:
     """The fake's wheels turn at 5 % of the commanded speed (``drag``): the
-    0.3 m leg would take 12 s; its limit is 2 x 1.55 + 3 s."""
+    0.3 m leg would take 12 s; its limit is 2 x (0.6 + 0.25) + 3 s."""
     with Create2Robot.connect("fakecreate2://?seed=1&fault=drag", open_wait_s=0.0) as robot:
-        robot.arm(SETTINGS)
+        robot.arm(BRISK)
         robot.zero()
         started = time.monotonic()
         with pytest.raises(OdohilTimeoutError) as raised:
-            robot.drive(Design(0.5, 0.3, "reverse"), SETTINGS)
+            robot.drive(Design(0.5, 0.3, "reverse"), BRISK)
         took = time.monotonic() - started
         truth = robot.transport.truth()  # type: ignore[attr-defined]
         assert not truth.moving  # stopped, and the stop confirmed before the error
     message = str(raised.value)
-    assert "leg 0.3 m (step 1 of 1) not done within its time limit of 6.1 s" in message, message
+    assert "leg 0.3 m (step 1 of 1) not done within its time limit of 4.7 s" in message, message
     assert "stop confirmed" in message
-    assert 6.05 <= took < 10.0  # the limit is 6.0996 s, printed as 6.1 s
+    assert 4.65 <= took < 8.6  # the limit is 4.7 s
     assert truth.travel_m < 0.3
 
 
@@ -104,19 +108,19 @@ def test_a_create2_at_a_time_scale_that_wraps_its_encoders_ends_the_leg_at_once(
 
 def test_a_nomad_step_that_never_reports_its_end_is_stopped_at_its_limit() -> None:
     """``stuck``: the fake reports the axis active for ever after the first
-    ``pr``; the 0.3 m leg (at 0.5 m/s, 0.5 m/s^2: 1.55 s) ends at 2 x 1.55 + 3 s."""
+    ``pr``; the 0.05 m leg (at 0.5 m/s, 2 m/s^2: 0.316 s) ends at 2 x 0.316 + 3 s."""
     with open_robot("nomad150", "fakerobot://?seed=1&fault=stuck:pr@1") as robot:
-        robot.arm(SETTINGS)
+        robot.arm(BRISK)
         robot.settle(5.0)
         started = time.monotonic()
         with pytest.raises(OdohilTimeoutError) as raised:
-            robot.drive(Design(0.5, 0.3), SETTINGS)
+            robot.drive(Design(0.5, 0.05), BRISK)
         took = time.monotonic() - started
         assert not robot.odometry().moving
     message = str(raised.value)
-    assert "leg 0.3 m (step 1 of 1) not done within its time limit of 6.1 s" in message, message
+    assert "leg 0.05 m (step 1 of 1) not done within its time limit of 3.6 s" in message, message
     assert "stop confirmed" in message
-    assert 6.05 <= took < 10.0  # the limit is 6.0996 s, printed as 6.1 s
+    assert 3.58 <= took < 7.55  # the limit is 3.6325 s, printed as 3.6 s
 
 
 def test_the_issues_run_on_a_wrapping_create2_ends_with_a_clear_error(tmp_path: Path) -> None:
