@@ -64,6 +64,12 @@ class FrameServer:
         tb: TracebackType | None,
     ) -> None:
         self._stop.set()
+        # wakes the accept thread at once (accept() fails on a listener shut
+        # down) instead of at its next 0.1 s timeout
+        try:
+            self._listener.shutdown(socket.SHUT_RDWR)
+        except OSError:
+            pass
         for thread in list(self._threads):
             thread.join(timeout=5.0)
         self._listener.close()
@@ -77,6 +83,8 @@ class FrameServer:
                 conn, _ = self._listener.accept()
             except TimeoutError:
                 continue
+            except OSError:  # shut down by __exit__
+                return
             self.clients += 1
             thread = threading.Thread(target=self._serve, args=(conn,), daemon=True)
             thread.start()
