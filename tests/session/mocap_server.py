@@ -10,6 +10,7 @@ that sends one line per frame to every client it accepts, bounded in time.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import socket
@@ -66,10 +67,8 @@ class FrameServer:
         self._stop.set()
         # wakes the accept thread at once (accept() fails on a listener shut
         # down) instead of at its next 0.1 s timeout
-        try:
+        with contextlib.suppress(OSError):
             self._listener.shutdown(socket.SHUT_RDWR)
-        except OSError:
-            pass
         for thread in list(self._threads):
             thread.join(timeout=5.0)
         self._listener.close()
