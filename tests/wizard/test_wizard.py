@@ -46,6 +46,11 @@ LABELS = distance_labels(DESCRIPTION)
 TIMEOUT_S = 90
 ORIGIN = (0.0, 0.0, 0.0)
 LOG = Path(os.environ["WIZARD_TEST_LOG"]) if os.environ.get("WIZARD_TEST_LOG") else None
+FAST = "400"
+"""The emulator's time scale where no keystroke must land during a motion (the typo,
+the squares, Ctrl-C at a distance prompt): the motions are not the check. The fake
+draws its errors per segment of distance, not per tick, so the trials are the same
+at any scale; the Ctrl-C cases mid-motion keep time scale 8."""
 
 
 def _env() -> dict[str, str]:
@@ -271,7 +276,7 @@ def test_a_typo_is_caught_and_only_that_distance_is_re_entered(tmp_path: Path) -
     robot = tmp_path / "robot.toml"
     robot.write_text(ROBOT_TOML)
     folder = tmp_path / "session"
-    args = ["--seed", "5", "--time-scale", "20", "--no-pacing"]
+    args = ["--seed", "5", "--time-scale", FAST, "--no-pacing"]
     with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
         child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", "k=1,l=3,n=4",
                         "--session", str(folder)])  # fmt: skip
@@ -396,7 +401,7 @@ def test_resumed_mid_trial_shows_its_context_and_back_corrects_the_last_value(
     # from the runner-up that two crosses leave (without, it asks a third)
     robot.write_text(ROBOT_TOML + "[priors]\n")
     folder = tmp_path / "session"
-    args = ["--seed", "4", "--time-scale", "20", "--no-pacing"]
+    args = ["--seed", "4", "--time-scale", FAST, "--no-pacing"]
     with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
         child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan", "k=1,l=1,n=2",
                         "--session", str(folder)])  # fmt: skip
@@ -466,7 +471,7 @@ def test_the_wizard_drives_a_plan_of_squares(tmp_path: Path) -> None:
     robot = tmp_path / "robot.toml"
     robot.write_text(ROBOT_TOML)
     folder = tmp_path / "session"
-    args = ["--seed", "6", "--time-scale", "20", "--no-pacing"]
+    args = ["--seed", "6", "--time-scale", FAST, "--no-pacing"]
     with EmulatorProcess(args, use_cli=True) as emu, TruthClient(emu.truth_socket) as truth:
         child = _spawn(["--port", emu.device, "--robot", str(robot), "--plan",
                         "path=square:0.5,cw,n=5", "--session", str(folder)])  # fmt: skip
