@@ -76,13 +76,13 @@ def test_reverse_trial_ends_where_it_started_and_close_leaves_the_oi_off(
     robot.arm(SETTINGS)
     robot.zero()
     seen: list[OdometrySample] = []
-    motion = robot.drive(Design(1, 1.0, "reverse"), SETTINGS, seen.append)
+    motion = robot.drive(Design(1, 0.5, "reverse"), SETTINGS, seen.append)
     assert list(motion.samples) == seen
     x, y, th = motion.end_pose
     assert abs(x) < 0.002  # a leg ends within a few counts; the next one makes up for it
     assert y == 0.0
     assert th == 0.0
-    assert max(s.x_m for s in motion.samples) == pytest.approx(1.0, abs=0.003)
+    assert max(s.x_m for s in motion.samples) == pytest.approx(0.5, abs=0.003)
     truth = process.truth()
     assert not truth.moving
     assert abs(truth.left_counts) < 5
@@ -125,8 +125,9 @@ def test_legs_through_the_encoder_wrap(connect: Connect, origin: str, backward: 
     process, robot = connect("--encoder-origin", origin)
     robot.arm(SETTINGS)
     robot.zero()
-    motion = robot.drive(Design(0.5, 1.0, backward=backward), SETTINGS)
-    want = -1.0 if backward else 1.0
+    # 0.5 m: 1124 counts, past the wrap from either origin
+    motion = robot.drive(Design(0.5, 0.5, backward=backward), SETTINGS)
+    want = -0.5 if backward else 0.5
     assert motion.end_pose[0] == pytest.approx(want, abs=0.003)
     truth = process.truth()
     counts = truth.left_counts - int(origin)
@@ -139,11 +140,11 @@ def test_odometry_uses_the_description_constants(connect: Connect) -> None:
     process, robot = connect(geometry=geometry)
     robot.arm(SETTINGS)
     robot.zero()
-    motion = robot.drive(Design(0.5, 1.0), SETTINGS)
-    # the robot's own counts say 1 m at 1.01 x the diameter
-    assert motion.end_pose[0] == pytest.approx(1.0, abs=0.003)
+    motion = robot.drive(Design(0.5, 0.5), SETTINGS)
+    # the robot's own counts say 0.5 m at 1.01 x the diameter
+    assert motion.end_pose[0] == pytest.approx(0.5, abs=0.003)
     counts = process.truth().left_counts
-    assert counts == pytest.approx(COUNTS_PER_M / 1.01, abs=8)
+    assert counts == pytest.approx(0.5 * COUNTS_PER_M / 1.01, abs=8)
 
 
 def test_mode_plus_one_robot_is_detected(connect: Connect) -> None:
