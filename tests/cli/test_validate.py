@@ -18,10 +18,7 @@ alpha = 1 %.
 
 from __future__ import annotations
 
-import fcntl
 import json
-import os
-import shutil
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +30,7 @@ from odohil.cli.app import app
 from odohil.science.parameters import NOMAD150
 from odohil.science.paths import Design
 from odohil.science.simulator import simulate
+from tests.once import made_once
 from tests.session.test_trust_runs import readme_robot
 
 CALIBRATION_PLAN = "k=1,l=3,n=12;k=10,l=0.5,n=12"
@@ -84,22 +82,11 @@ def calibrated(factory: pytest.TempPathFactory, seed: int, folder: Path) -> Path
 
     The module's quick tests and the seed-1 cell both want seed 1's calibration,
     and each xdist worker would otherwise run it again (the same seeded run: the
-    same journal). The first caller runs it, asserting its exit status, in a
-    folder all workers share (under a lock); every caller gets its own copy.
+    same journal): tests/once.py.
     """
-    root = factory.getbasetemp()
-    if os.environ.get("PYTEST_XDIST_WORKER"):
-        root = root.parent  # the controller's folder, above every worker's
-    shared = root / f"validate-calibration-{seed}"
-    with open(root / f"validate-calibration-{seed}.lock", "w", encoding="utf-8") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        done = shared / "done"
-        if not done.exists():
-            shutil.rmtree(shared, ignore_errors=True)
-            shared.mkdir()
-            calibrate(shared, seed)
-            done.touch()
-    shutil.copytree(shared, folder, dirs_exist_ok=True, ignore=shutil.ignore_patterns("done"))
+    made_once(
+        factory, f"validate-calibration-{seed}", lambda shared: calibrate(shared, seed), folder
+    )
     return folder / "calibration"
 
 

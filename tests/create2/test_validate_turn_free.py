@@ -34,6 +34,7 @@ from odohil.session.commands.validate import validation_setup
 from odohil.session.trials.logs import ImportOptions
 from odohil.session.wizard.validate import guided_validation
 from tests.cli.test_validate_paths import odohil
+from tests.once import made_once
 
 TRIANGLES_PLAN = (
     "k=1,l=2,n=10,variant=reverse;k=0.5,l=2,n=10,variant=reverse;"
@@ -61,8 +62,16 @@ def calibrate(folder: Path, plan: str) -> Path:
 
 @pytest.fixture(scope="module")
 def turn_free(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Calibrated on the demo's reverse designs only: no turn error fitted."""
-    return calibrate(tmp_path_factory.mktemp("turn-free"), TURN_FREE_PLAN)
+    """Calibrated on the demo's reverse designs only: no turn error fitted;
+    once a test run, however many xdist workers take this module's tests
+    (tests/once.py), each worker with a copy of its own."""
+    folder = made_once(
+        tmp_path_factory,
+        "turn-free-calibration",
+        lambda shared: calibrate(shared, TURN_FREE_PLAN),
+        tmp_path_factory.mktemp("turn-free"),
+    )
+    return folder / "calibration"
 
 
 def says_what_to_do(text: str) -> None:

@@ -6,9 +6,10 @@ What the outcome means for the exit status is odohil/cli/exit_codes.py's."""
 from __future__ import annotations
 
 import contextlib
+import functools
 import signal
 from collections.abc import Callable, Collection
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -52,8 +53,7 @@ class RunOutcome:
         state: the session as journaled at the end (read back from disk when
             the run did not finish: a signal may land between a record and
             the state it makes).
-        estimate: the final estimate and verdict (finished) or the partial
-            one of the trials done, by the one recipe.
+        estimated: computes :attr:`estimate` (at its first reading, once).
         stop: what the engine checked on the way out (None when it finished).
         message: what ended it ("Ctrl-C", "SIGTERM received", the error).
         cause: for a stop unconfirmed, what the run had ended on.
@@ -63,11 +63,22 @@ class RunOutcome:
     status: RunStatus
     folder: Path
     state: SessionState
-    estimate: EstimateOutcome
+    estimated: Callable[[], EstimateOutcome] = field(repr=False, compare=False)
     stop: StopOutcome | None = None
     message: str = ""
     cause: str = ""
     signal: int | None = None
+
+    @functools.cached_property
+    def estimate(self) -> EstimateOutcome:
+        """The final estimate and verdict (finished) or the partial one of the
+        trials done, by the one recipe: computed when first read, since a
+        caller may have no use for it (a validation session's own trials:
+        ``odohil validate`` tests them against the calibration, and their
+        estimate with profile intervals cost seconds per validation of
+        general paths), and the same value whenever it is read (a pure
+        function of :attr:`state`)."""
+        return self.estimated()
 
     def to_json_dict(self, exit_code: int) -> dict[str, Any]:
         """The ``--json`` object of a session command: the status with the
@@ -296,7 +307,8 @@ def run_session(
         return _ended("interrupted", engine, exclude, interrupt_text(exc), signal=signum)
     except OdohilError as exc:
         return _ended("error", engine, exclude, str(exc))
-    return RunOutcome("finished", opened.journal.folder, state, final_estimate(state, exclude))
+    finished = functools.partial(final_estimate, state, exclude)
+    return RunOutcome("finished", opened.journal.folder, state, finished)
 
 
 def _ended(
@@ -310,6 +322,6 @@ def _ended(
     state = engine.state
     with contextlib.suppress(OdohilError):
         state = load_session(engine.journal.folder).state
-    estimate = final_estimate(state, exclude)
+    estimated = functools.partial(final_estimate, state, exclude)
     folder = engine.journal.folder
-    return RunOutcome(status, folder, state, estimate, engine.stop_outcome, message, cause, signal)
+    return RunOutcome(status, folder, state, estimated, engine.stop_outcome, message, cause, signal)
