@@ -12,6 +12,8 @@ ivanjko runs with every circle: 434 trials, 553k rows) the fit of this robot
 does not converge (the spins' centre drift, docs/recording.md; still so after
 joint_estimate's rescue change, BENCHMARKS.md) and the robust fit runs to its
 step limit: that measures the step limit, not the reading or the moments.
+With ``--issue-size`` (20 circles and 42 straight runs a copy, the 14 cycled)
+the log is the issue's size, 434 trials and 480k rows, of paths the model fits.
 
 Then runs the real command, a child process of the CLI as a user starts it
 (the process is the point: its start-up, its reading, its memory)::
@@ -23,7 +25,7 @@ wall time counts the others' load) and its peak resident memory (the child's
 ``ru_maxrss``), with the machine's load (``uptime``) before and after.
 
     python bench/big_log.py [--data ../shared/data/optiodom-june] [--repeat 3]
-        [--copies 7] [--spins] [--optiodom] [--keep DIR]
+        [--copies 7] [--spins | --issue-size] [--optiodom] [--keep DIR]
 """
 
 from __future__ import annotations
