@@ -11,15 +11,20 @@ odohil without running any of its code, so no handler can stop the robot.
 - the read end of a pipe whose only write end odohil holds.
 
 It reads the pipe and nothing else: while odohil lives it sends no byte on the
-line. When the pipe closes, either odohil said ``end`` first
-(:meth:`Guardian.release`: a clean close, the backend has stopped the robot
-itself) and the guardian exits without a byte; or it did not, which means the
-driving process is gone (the kernel closes every descriptor of a dead
-process, however it died), and the guardian writes the robot's stop bytes
-(the backend declares them, from its protocol layer) on the line, waits for
-them to leave, says so on stderr and exits. It never outlives the session:
-it ends when the pipe closes, one way or the other. It runs in a session of
-its own, so a Ctrl-C or hang-up of the terminal reaches odohil, not it.
+line. :func:`start_guardian` returns only once the guardian says it is ready
+(:data:`READY_WORD` on its stdout, its terminal signals ignored, about to read
+the pipe): a guardian still starting would send the stop of a process killed
+at once late, into the next session's motion on the same line, and one that
+cannot start at all is found before anything moves. When the pipe closes,
+either odohil said ``end`` first (:meth:`Guardian.release`: a clean close, the
+backend has stopped the robot itself) and the guardian exits without a byte;
+or it did not, which means the driving process is gone (the kernel closes
+every descriptor of a dead process, however it died), and the guardian writes
+the robot's stop bytes (the backend declares them, from its protocol layer) on
+the line, waits for them to leave, says so on stderr and exits. It never
+outlives the session: it ends when the pipe closes, one way or the other. It
+runs in a session of its own, so a Ctrl-C or hang-up of the terminal reaches
+odohil, not it.
 
 What it cannot cover: a line without a file descriptor (the in-process fakes
 ``fakerobot://`` and ``fakecreate2://``, which die with the process, and
@@ -48,6 +53,11 @@ RELEASE_TIMEOUT_S = 1.0
 """How long :meth:`Guardian.release` waits for the guardian to exit, s."""
 GUARDIAN_DEADLINE_S = 2
 """The guardian's own bound on sending the stop (a line that never drains), s."""
+READY_WORD = b"ready"
+"""What the guardian writes on its stdout once it waits on the pipe."""
+READY_TIMEOUT_S = 10.0
+"""How long :func:`start_guardian` waits for :data:`READY_WORD`, s (an
+interpreter's start on a loaded machine takes a second or two)."""
 
 
 class Guardian:
@@ -114,7 +124,8 @@ def start_guardian(port: object, stop_bytes: bytes) -> Guardian | None:
     descriptor to share (see :func:`line_fd`).
 
     Raises:
-        SafetyError: the guardian process could not be started.
+        SafetyError: the guardian process could not be started, or did not
+            say it was ready within :data:`READY_TIMEOUT_S`.
     """
     fd = line_fd(port)
     if fd is None or not stop_bytes:
@@ -133,7 +144,7 @@ def start_guardian(port: object, stop_bytes: bytes) -> Guardian | None:
             ],
             pass_fds=(fd, read_end),
             stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
             start_new_session=True,
         )
     except BaseException as exc:
@@ -145,7 +156,47 @@ def start_guardian(port: object, stop_bytes: bytes) -> Guardian | None:
         raise
     finally:
         os.close(read_end)
-    return Guardian(process, write_end)
+    guardian = Guardian(process, write_end)
+    try:
+        _wait_ready(process)
+    except BaseException:
+        guardian.release()  # says ``end``: a guardian that did start sends nothing
+        with contextlib.suppress(OSError):
+            process.kill()
+        process.wait()
+        raise
+    return guardian
+
+
+def _wait_ready(process: subprocess.Popen[bytes]) -> None:
+    """Until the guardian writes :data:`READY_WORD` (its stdout then closed).
+
+    Raises:
+        SafetyError: it ended or stayed silent for :data:`READY_TIMEOUT_S`.
+    """
+    assert process.stdout is not None
+    fd = process.stdout.fileno()
+    said = b""
+    deadline = time.monotonic() + READY_TIMEOUT_S
+    try:
+        while len(said) < len(READY_WORD):
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([fd], [], [], left)[0]:
+                raise SafetyError(
+                    f"the guardian process did not say it was ready within "
+                    f"{READY_TIMEOUT_S:g} s; nothing moved"
+                )
+            chunk = os.read(fd, len(READY_WORD) - len(said))
+            if not chunk:
+                raise SafetyError(
+                    f"the guardian process ended before it was ready (exit "
+                    f"{process.poll()}); nothing moved"
+                )
+            said += chunk
+    finally:
+        process.stdout.close()
+    if said != READY_WORD:
+        raise SafetyError(f"the guardian process said {said!r}, not ready; nothing moved")
 
 
 # -- the guardian process ----------------------------------------------------------
@@ -181,6 +232,11 @@ def main(argv: list[str]) -> int:
     line, pipe, stop_hex, owner = argv
     for name in ("SIGINT", "SIGHUP", "SIGQUIT", "SIGTSTP"):
         signal.signal(getattr(signal, name), signal.SIG_IGN)
+    # SIGPIPE: the owner may be gone before it reads the word (its end closed)
+    signal.signal(signal.SIGPIPE, signal.SIG_IGN)
+    with contextlib.suppress(OSError):
+        os.write(1, READY_WORD)
+    os.close(1)
     started = time.monotonic()
     try:
         sent = guard(int(line), int(pipe), bytes.fromhex(stop_hex))

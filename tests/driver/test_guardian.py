@@ -25,6 +25,7 @@ import pytest
 import fakes
 from odohil.driver.guardian import line_fd, start_guardian
 from odohil.driver.port import open_serial_url
+from odohil.errors import SafetyError
 
 STOP = bytes.fromhex("0102030405")
 """Stand-in stop bytes: the guardian sends whatever the backend declares."""
@@ -207,3 +208,49 @@ def test_the_in_process_fakes_have_no_line_to_guard() -> None:
             assert start_guardian(port, STOP) is None
         finally:
             port.close()
+
+
+def _ignored_signals(pid: int) -> int:
+    """The mask of signals ``pid`` ignores (/proc/PID/status SigIgn)."""
+    with open(f"/proc/{pid}/status", encoding="ascii") as status:
+        for row in status:
+            if row.startswith("SigIgn:"):
+                return int(row.split()[1], 16)
+    raise AssertionError(f"no SigIgn in /proc/{pid}/status")
+
+
+def test_the_guardian_is_waiting_when_start_guardian_returns() -> None:
+    """Armed means armed: once start_guardian returns, the guardian runs its own
+    code (its terminal signals ignored, the pipe read), not an interpreter still
+    starting. A guardian still starting would send a process killed at once its
+    stop late: seen in CI (tests/session/test_cli.py's kill -9 loop) as a stale
+    stop that ended the next session's turn on the same line."""
+    with _pty() as (device, master):
+        port = open_serial_url(device, 115200)
+        try:
+            guardian = start_guardian(port, STOP)
+            assert guardian is not None
+            mask = _ignored_signals(guardian.pid)
+            for name in ("SIGINT", "SIGHUP", "SIGQUIT", "SIGTSTP"):
+                assert mask & (1 << (getattr(signal, name) - 1)), f"{name} not yet ignored"
+            guardian.release()
+        finally:
+            port.close()
+        assert _read_for(master, 0.1) == b""
+
+
+def test_a_guardian_that_cannot_start_is_refused_before_anything_moves(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """An interpreter that cannot start (here: no standard library under its
+    PYTHONHOME) never says it is ready: start_guardian raises SafetyError,
+    nothing sent on the line, no guardian left."""
+    with _pty() as (device, master):
+        port = open_serial_url(device, 115200)
+        try:
+            monkeypatch.setenv("PYTHONHOME", "/nonexistent-odohil-test")
+            with pytest.raises(SafetyError, match=r"ended before it was ready.*nothing moved"):
+                start_guardian(port, STOP)
+        finally:
+            port.close()
+        assert _read_for(master, 0.1) == b""
