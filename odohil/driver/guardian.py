@@ -160,10 +160,9 @@ def start_guardian(port: object, stop_bytes: bytes) -> Guardian | None:
     try:
         _wait_ready(process)
     except BaseException:
-        guardian.release()  # says ``end``: a guardian that did start sends nothing
-        with contextlib.suppress(OSError):
-            process.kill()
-        process.wait()
+        # ``end``, then its exit awaited (killed after RELEASE_TIMEOUT_S): a
+        # guardian that did start sends nothing
+        guardian.release()
         raise
     return guardian
 
